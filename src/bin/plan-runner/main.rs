@@ -1,0 +1,58 @@
+//! `plan-runner`: check, analyse, simulate, run and convert GSPN plans.
+//!
+//! Exit codes: 0 ok, 1 failure, 2 bad input, 130 interrupted.
+
+mod analyze;
+mod check;
+mod common;
+mod convert;
+mod import_thesis;
+mod run;
+mod simulate;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Multi-robot plans as generalized stochastic Petri nets.
+#[derive(Parser, Debug)]
+#[command(name = "plan-runner", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Load a net or a plan, print a summary and warnings.
+    Check(check::Args),
+    /// Analyse the state space, steady state and transient behaviour of a net.
+    Analyze(analyze::Args),
+    /// Play the token game: one seeded trace, or Monte-Carlo estimates over many runs.
+    Simulate(simulate::Args),
+    /// Execute a plan (or a bare net) on agents.
+    Run(run::Args),
+    /// Convert a net between formats (chosen by the output's extension).
+    Convert(convert::Args),
+    /// Turn a thesis framework execution input (JSON) into a plan.toml next to its net.
+    ImportThesis(import_thesis::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Check(a) => check::main(a),
+        Command::Analyze(a) => analyze::main(a),
+        Command::Simulate(a) => simulate::main(a),
+        Command::Run(a) => run::main(a),
+        Command::Convert(a) => convert::main(a),
+        Command::ImportThesis(a) => import_thesis::main(a),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(common::exit_code_for(&e))
+        }
+    }
+}

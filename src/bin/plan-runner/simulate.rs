@@ -1,0 +1,14 @@
+//! `plan-runner simulate` (being written).
+
+use std::process::ExitCode;
+
+/// Arguments of `simulate`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct Args {
+    /// Input file.
+    file: std::path::PathBuf,
+}
+
+pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    anyhow::bail!("{}: `simulate` is not implemented yet", args.file.display())
+}

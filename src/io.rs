@@ -1,0 +1,312 @@
+//! Readers and writers: PIPE XML (the thesis format), PNML (ISO P/T plus the `<timed>` /
+//! `<rate>` extension), GreatSPN PNPRO, plan files (TOML), and exports (DOT).
+//!
+//! Every reader streams the file through quick-xml (no DOM) and reports bad input as a
+//! [`LoadError`] carrying the file, the line and column, and the offending name.
+
+pub mod dot;
+pub mod pipe;
+pub mod plan;
+pub mod pnml;
+pub mod pnpro;
+pub mod thesis;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use crate::net::{Net, NetError};
+
+/// A 1-based line and column in a file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Span {
+    /// Line, from 1.
+    pub line: u32,
+    /// Column in characters, from 1.
+    pub column: u32,
+}
+
+impl Span {
+    /// The line and column of byte `offset` in `text` (clamped to its end).
+    pub fn locate(text: &[u8], offset: usize) -> Span {
+        let offset = offset.min(text.len());
+        let before = &text[..offset];
+        let line = before.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        // Count characters, not bytes, so a column matches what an editor shows.
+        let column = String::from_utf8_lossy(&text[line_start..offset])
+            .chars()
+            .count() as u32
+            + 1;
+        Span { line, column }
+    }
+}
+
+impl fmt::Display for Span {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}", self.line, self.column)
+    }
+}
+
+/// A file we could not load: where, and what was wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadError {
+    /// The file.
+    pub path: PathBuf,
+    /// Where in the file, when known.
+    pub span: Option<Span>,
+    /// What was wrong.
+    pub kind: LoadErrorKind,
+}
+
+impl LoadError {
+    /// An error at a known position.
+    pub fn at(path: impl Into<PathBuf>, span: Span, kind: LoadErrorKind) -> Self {
+        LoadError {
+            path: path.into(),
+            span: Some(span),
+            kind,
+        }
+    }
+
+    /// An error about the file as a whole.
+    pub fn file(path: impl Into<PathBuf>, kind: LoadErrorKind) -> Self {
+        LoadError {
+            path: path.into(),
+            span: None,
+            kind,
+        }
+    }
+}
+
+impl fmt::Display for LoadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.span {
+            Some(s) => write!(f, "{}:{}: {}", self.path.display(), s, self.kind),
+            None => write!(f, "{}: {}", self.path.display(), self.kind),
+        }
+    }
+}
+
+impl std::error::Error for LoadError {}
+
+/// What was wrong with a file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LoadErrorKind {
+    /// The file could not be read.
+    #[error("cannot read: {0}")]
+    Io(String),
+    /// The file is empty (or only whitespace).
+    #[error("the file is empty")]
+    Empty,
+    /// Neither the extension nor the content tells which format this is.
+    #[error("unknown format `{0}`: expected .xml (PIPE), .pnml, .PNPRO or .toml (plan)")]
+    UnknownFormat(String),
+    /// The XML itself is malformed or truncated.
+    #[error("malformed XML: {0}")]
+    Xml(String),
+    /// An arc (or rule) names a node that does not exist.
+    #[error("{what} `{name}` does not exist")]
+    UnknownNode {
+        /// "place", "transition", "node", "page", "parameter"...
+        what: &'static str,
+        /// The missing name.
+        name: String,
+    },
+    /// Two nodes share an id or a name.
+    #[error("duplicate {what} `{name}`")]
+    Duplicate {
+        /// "place", "transition", "id"...
+        what: &'static str,
+        /// The repeated name.
+        name: String,
+    },
+    /// A value that should be a number is not one.
+    #[error("{what} of `{name}`: `{value}` is not a number")]
+    NotANumber {
+        /// What the value is ("rate", "initial marking", "arc weight"...).
+        what: &'static str,
+        /// The node it belongs to.
+        name: String,
+        /// The text found.
+        value: String,
+    },
+    /// A number out of its allowed range (negative marking, zero rate, NaN...).
+    #[error("{what} of `{name}` is {value}: {expected}")]
+    OutOfRange {
+        /// What the value is.
+        what: &'static str,
+        /// The node it belongs to.
+        name: String,
+        /// The value, as written.
+        value: String,
+        /// What was expected, e.g. "must be a finite number > 0".
+        expected: &'static str,
+    },
+    /// A required element or attribute is missing.
+    #[error("{what} is missing{}", name.as_ref().map(|n| format!(" on `{n}`")).unwrap_or_default())]
+    Missing {
+        /// What is missing.
+        what: String,
+        /// The node it should belong to, when there is one.
+        name: Option<String>,
+    },
+    /// Valid input that we do not read (a PNML dialect, a coloured net...), with what exactly.
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+    /// An expression (PNPRO rates, markings, multiplicities) could not be evaluated.
+    #[error("expression `{expr}` of `{name}`: {reason}")]
+    Expression {
+        /// The expression text.
+        expr: String,
+        /// The node it belongs to.
+        name: String,
+        /// Why it failed (unknown identifier, syntax...).
+        reason: String,
+    },
+    /// A semantic check on the finished net failed.
+    #[error("{0}")]
+    Net(#[from] NetError),
+    /// A plan or input file is wrong in some other way, described in full.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// The file formats gspn knows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// PIPE-style XML, as written by the thesis framework (`.xml`).
+    Pipe,
+    /// ISO/IEC 15909-2 PNML P/T nets, optionally with `<timed>`/`<rate>` (`.pnml`).
+    Pnml,
+    /// GreatSPN editor project (`.PNPRO`).
+    Pnpro,
+    /// Graphviz DOT (write only).
+    Dot,
+    /// A gspn plan (`.toml`).
+    Plan,
+}
+
+impl Format {
+    /// The name used in CLI output and JSON (`"pipe"`, `"pnml"`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Pipe => "pipe",
+            Format::Pnml => "pnml",
+            Format::Pnpro => "pnpro",
+            Format::Dot => "dot",
+            Format::Plan => "plan",
+        }
+    }
+
+    /// The format an extension names, case-insensitively; `None` when unknown.
+    pub fn from_extension(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "xml" => Some(Format::Pipe),
+            "pnml" => Some(Format::Pnml),
+            "pnpro" => Some(Format::Pnpro),
+            "dot" | "gv" => Some(Format::Dot),
+            "toml" => Some(Format::Plan),
+            _ => None,
+        }
+    }
+}
+
+/// Options every net reader takes.
+#[derive(Clone, Debug, Default)]
+pub struct ReadOptions {
+    /// The page (PNPRO `<gspn name>`) to read; `None` = the first one.
+    pub page: Option<String>,
+    /// Template parameters (`--param NAME=VALUE`), overriding the file's `last-binding`.
+    pub params: Vec<(String, String)>,
+}
+
+/// A net read from a file, with the format it was in and non-fatal remarks.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The net.
+    pub net: Net,
+    /// The format it was read from.
+    pub format: Format,
+    /// Things the reader accepted but the user should know (ignored elements, defaults used).
+    pub warnings: Vec<String>,
+}
+
+/// Reads the net in `path`, choosing the reader from the extension and, for XML, the content
+/// (an `.xml` file in the ISO PNML namespace is read as PNML; a `.pnml` file in PIPE's
+/// dialect as PIPE).
+pub fn read_net(path: &Path, opts: &ReadOptions) -> Result<Loaded, LoadError> {
+    let bytes =
+        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(LoadError::file(path, LoadErrorKind::Empty));
+    }
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_string();
+    let format = match Format::from_extension(path) {
+        Some(Format::Pipe) | Some(Format::Pnml) => sniff_xml(&bytes),
+        Some(Format::Pnpro) => Format::Pnpro,
+        Some(f @ (Format::Dot | Format::Plan)) => {
+            return Err(LoadError::file(
+                path,
+                LoadErrorKind::Invalid(format!("a {} file is not a net file", f.name())),
+            ));
+        }
+        None => return Err(LoadError::file(path, LoadErrorKind::UnknownFormat(ext))),
+    };
+    match format {
+        Format::Pipe => pipe::read(path, &bytes, opts),
+        Format::Pnml => pnml::read(path, &bytes, opts),
+        Format::Pnpro => pnpro::read(path, &bytes, opts),
+        Format::Dot | Format::Plan => unreachable!("filtered above"),
+    }
+}
+
+/// Tells ISO PNML (namespace `pnml.org`) from PIPE's `<pnml>` dialect by the first few KB.
+fn sniff_xml(bytes: &[u8]) -> Format {
+    let head = &bytes[..bytes.len().min(4096)];
+    let head = String::from_utf8_lossy(head);
+    if head.contains("pnml.org") {
+        Format::Pnml
+    } else {
+        Format::Pipe
+    }
+}
+
+/// Writes `net` to `path` in `format`.
+pub fn write_net(net: &Net, path: &Path, format: Format) -> Result<(), LoadError> {
+    let text = match format {
+        Format::Pnpro => pnpro::write(net),
+        Format::Pnml => pnml::write(net),
+        Format::Dot => dot::write(net),
+        Format::Pipe => pipe::write(net),
+        Format::Plan => {
+            return Err(LoadError::file(
+                path,
+                LoadErrorKind::Invalid("a plan is not written from a net".into()),
+            ));
+        }
+    };
+    std::fs::write(path, text).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locate_counts_lines_and_characters() {
+        let text = "ab\ncdé\nxyz".as_bytes();
+        assert_eq!(Span::locate(text, 0), Span { line: 1, column: 1 });
+        assert_eq!(Span::locate(text, 3), Span { line: 2, column: 1 });
+        // 'é' is two bytes but one column.
+        assert_eq!(Span::locate(text, 7), Span { line: 2, column: 4 });
+        assert_eq!(Span::locate(text, 9), Span { line: 3, column: 2 });
+    }
+}

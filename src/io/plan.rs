@@ -1,0 +1,1 @@
+//! Plan files (TOML): the net, roles of places, policy, stop conditions (being written).

@@ -1,0 +1,1 @@
+//! The thesis framework's JSON execution inputs, turned into plans (being written).

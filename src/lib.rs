@@ -1,0 +1,30 @@
+//! # gspn — multi-robot plans as generalized stochastic Petri nets
+//!
+//! Model a multi-robot plan as a GSPN, check it, analyse it, simulate it, execute it on
+//! agents or robots, and watch it run.
+//!
+//! # Layout
+//!
+//! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
+//! - [`io`]: readers and writers — PIPE XML, PNML, GreatSPN PNPRO, DOT, plan files.
+//! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded.
+//!
+//! The everyday types are in [`prelude`].
+
+#![warn(missing_docs, missing_debug_implementations, unreachable_pub)]
+#![deny(unused_must_use)]
+
+pub mod analysis;
+pub mod io;
+pub mod net;
+pub mod policy;
+pub mod runtime;
+pub mod sim;
+
+/// The everyday types, for `use gspn::prelude::*`.
+pub mod prelude {
+    pub use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, read_net};
+    pub use crate::net::{
+        ArcKind, Marking, Net, NetBuilder, PlaceId, Servers, Timing, TransitionId,
+    };
+}

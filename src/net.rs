@@ -1,0 +1,532 @@
+//! The net model: places, transitions, arcs, markings, enabling and firing.
+//!
+//! Pure data and arithmetic: no async, no I/O. A [`Net`] is built once through a
+//! [`NetBuilder`] (which validates it) and is then immutable; the hot paths see dense
+//! [`PlaceId`] / [`TransitionId`] indices, never names.
+//!
+//! # Semantics
+//!
+//! - Input arcs need at least `w` tokens; inhibitor arcs need fewer than `w` tokens.
+//! - The enabling degree of `t` is `min over input places of ⌊m(p)/w⌋` (1 for a transition
+//!   without input places).
+//! - An exponential transition fires at `rate × min(servers, degree)`.
+//! - A place with a capacity refuses a firing that would leave more tokens than it allows.
+//!
+//! ```
+//! use gspn::net::{NetBuilder, Servers};
+//! let mut b = NetBuilder::new("cycle");
+//! let p1 = b.place("P1", 2);
+//! let p2 = b.place("P2", 0);
+//! let t1 = b.exponential("T1", 1.0, Servers::Single);
+//! let t2 = b.immediate("t2", 1.0, 1);
+//! b.input(p1, t1, 1);
+//! b.output(t1, p2, 1);
+//! b.input(p2, t2, 1);
+//! b.output(t2, p1, 1);
+//! let net = b.build().unwrap();
+//! let mut m = net.initial_marking();
+//! assert!(net.is_enabled(&m, t1));
+//! net.fire(&mut m, t1);
+//! assert_eq!(m.as_slice(), &[1, 1]);
+//! assert!(net.is_vanishing(&m));
+//! ```
+
+mod builder;
+mod marking;
+
+pub use builder::{NetBuilder, NetError};
+pub use marking::Marking;
+
+use serde::{Deserialize, Serialize};
+
+/// Dense index of a place in its [`Net`].
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct PlaceId(pub u32);
+
+/// Dense index of a transition in its [`Net`].
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct TransitionId(pub u32);
+
+impl PlaceId {
+    /// The index into per-place arrays.
+    #[inline]
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+impl TransitionId {
+    /// The index into per-transition arrays.
+    #[inline]
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// A point on the drawing canvas, in the unit of the file it came from.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Position {
+    /// Horizontal coordinate.
+    pub x: f64,
+    /// Vertical coordinate (grows downwards, as in every editor we read).
+    pub y: f64,
+}
+
+/// A place: a name, an initial marking and an optional capacity.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Place {
+    /// Name shown to users; unique in the net.
+    pub name: String,
+    /// Tokens in the initial marking.
+    pub initial: u32,
+    /// Most tokens the place may hold; `None` for unbounded.
+    pub capacity: Option<u32>,
+    /// Position on the canvas, when the file gave one.
+    pub position: Option<Position>,
+}
+
+/// How many firings of an exponential transition run concurrently.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Servers {
+    /// One server: the rate does not grow with the enabling degree.
+    Single,
+    /// As many servers as the enabling degree.
+    Infinite,
+    /// `k` servers (k ≥ 1).
+    K(u32),
+}
+
+impl Servers {
+    /// How many servers work when the enabling degree is `degree`.
+    #[inline]
+    pub fn active(self, degree: u32) -> u32 {
+        match self {
+            Servers::Single => degree.min(1),
+            Servers::Infinite => degree,
+            Servers::K(k) => degree.min(k),
+        }
+    }
+}
+
+/// Whether a transition fires at once (immediate) or after an exponential delay.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Timing {
+    /// Fires in zero time; among enabled immediate transitions only those of the highest
+    /// priority may fire, chosen with probability ∝ weight.
+    Immediate {
+        /// Relative weight (≥ 0; 0 = a decision left to the policy).
+        weight: f64,
+        /// Priority level (≥ 1).
+        priority: u32,
+    },
+    /// Fires after an exponentially distributed delay.
+    Exponential {
+        /// Rate per server (> 0, finite).
+        rate: f64,
+        /// Server semantics.
+        servers: Servers,
+    },
+}
+
+/// A transition: a name and its timing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Transition {
+    /// Name shown to users; unique in the net.
+    pub name: String,
+    /// Immediate or exponential, with its parameters.
+    pub timing: Timing,
+    /// Position on the canvas, when the file gave one.
+    pub position: Option<Position>,
+}
+
+impl Transition {
+    /// True for immediate transitions.
+    #[inline]
+    pub fn is_immediate(&self) -> bool {
+        matches!(self.timing, Timing::Immediate { .. })
+    }
+}
+
+/// What an arc does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum ArcKind {
+    /// Place → transition: needs and consumes `weight` tokens.
+    Input,
+    /// Transition → place: produces `weight` tokens.
+    Output,
+    /// Place —o transition: the transition needs fewer than `weight` tokens.
+    Inhibitor,
+}
+
+/// An arc between a place and a transition, as drawn in the file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Arc {
+    /// Input, output or inhibitor.
+    pub kind: ArcKind,
+    /// The place end.
+    pub place: PlaceId,
+    /// The transition end.
+    pub transition: TransitionId,
+    /// Multiplicity (≥ 1).
+    pub weight: u32,
+    /// Bend points, in drawing order from source to target.
+    pub points: Vec<Position>,
+}
+
+/// A validated, immutable Petri net with the indices that make firing cheap.
+#[derive(Clone, Debug)]
+pub struct Net {
+    name: String,
+    places: Vec<Place>,
+    transitions: Vec<Transition>,
+    arcs: Vec<Arc>,
+    /// Per transition: (place, weight) consumed.
+    pre: Vec<Vec<(PlaceId, u32)>>,
+    /// Per transition: (place, weight) produced.
+    post: Vec<Vec<(PlaceId, u32)>>,
+    /// Per transition: (place, weight) of inhibitor arcs.
+    inhib: Vec<Vec<(PlaceId, u32)>>,
+    /// Per transition: net change (place, delta) with delta ≠ 0.
+    delta: Vec<Vec<(PlaceId, i64)>>,
+    /// Per transition: the transitions whose enabling its firing can change (itself included
+    /// when it changes one of its own places).
+    affects: Vec<Vec<TransitionId>>,
+    /// Per place: capacities, dense, `u32::MAX` when unbounded.
+    capacity: Vec<u32>,
+    has_capacity: bool,
+    has_immediate: bool,
+}
+
+impl Net {
+    /// The net's name (from the file, or the file stem).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// All places, indexed by [`PlaceId`].
+    pub fn places(&self) -> &[Place] {
+        &self.places
+    }
+
+    /// All transitions, indexed by [`TransitionId`].
+    pub fn transitions(&self) -> &[Transition] {
+        &self.transitions
+    }
+
+    /// All arcs, in file order.
+    pub fn arcs(&self) -> &[Arc] {
+        &self.arcs
+    }
+
+    /// Number of places.
+    pub fn place_count(&self) -> usize {
+        self.places.len()
+    }
+
+    /// Number of transitions.
+    pub fn transition_count(&self) -> usize {
+        self.transitions.len()
+    }
+
+    /// The place with this id.
+    pub fn place(&self, p: PlaceId) -> &Place {
+        &self.places[p.index()]
+    }
+
+    /// The transition with this id.
+    pub fn transition(&self, t: TransitionId) -> &Transition {
+        &self.transitions[t.index()]
+    }
+
+    /// Every place id, in order.
+    pub fn place_ids(&self) -> impl ExactSizeIterator<Item = PlaceId> + use<> {
+        (0..self.places.len() as u32).map(PlaceId)
+    }
+
+    /// Every transition id, in order.
+    pub fn transition_ids(&self) -> impl ExactSizeIterator<Item = TransitionId> + use<> {
+        (0..self.transitions.len() as u32).map(TransitionId)
+    }
+
+    /// Looks a place up by name (edges only: files, CLI, viewer).
+    pub fn place_by_name(&self, name: &str) -> Option<PlaceId> {
+        self.places
+            .iter()
+            .position(|p| p.name == name)
+            .map(|i| PlaceId(i as u32))
+    }
+
+    /// Looks a transition up by name (edges only: files, CLI, viewer).
+    pub fn transition_by_name(&self, name: &str) -> Option<TransitionId> {
+        self.transitions
+            .iter()
+            .position(|t| t.name == name)
+            .map(|i| TransitionId(i as u32))
+    }
+
+    /// The initial marking.
+    pub fn initial_marking(&self) -> Marking {
+        Marking::from(self.places.iter().map(|p| p.initial).collect::<Vec<_>>())
+    }
+
+    /// Input places of `t` with their weights.
+    #[inline]
+    pub fn inputs(&self, t: TransitionId) -> &[(PlaceId, u32)] {
+        &self.pre[t.index()]
+    }
+
+    /// Output places of `t` with their weights.
+    #[inline]
+    pub fn outputs(&self, t: TransitionId) -> &[(PlaceId, u32)] {
+        &self.post[t.index()]
+    }
+
+    /// Inhibitor places of `t` with their thresholds.
+    #[inline]
+    pub fn inhibitors(&self, t: TransitionId) -> &[(PlaceId, u32)] {
+        &self.inhib[t.index()]
+    }
+
+    /// Net token change per place when `t` fires (zero entries left out).
+    #[inline]
+    pub fn delta(&self, t: TransitionId) -> &[(PlaceId, i64)] {
+        &self.delta[t.index()]
+    }
+
+    /// Transitions whose enabling can change when `t` fires.
+    #[inline]
+    pub fn affected_by(&self, t: TransitionId) -> &[TransitionId] {
+        &self.affects[t.index()]
+    }
+
+    /// True when the net has at least one immediate transition.
+    pub fn has_immediate(&self) -> bool {
+        self.has_immediate
+    }
+
+    /// Capacity of a place as a number (`u32::MAX` when unbounded).
+    #[inline]
+    pub fn capacity_of(&self, p: PlaceId) -> u32 {
+        self.capacity[p.index()]
+    }
+
+    /// Enabling degree of `t` in `m`, ignoring inhibitors and capacities: how many times its
+    /// input arcs could be satisfied at once (1 for a transition with no input place).
+    #[inline]
+    pub fn enabling_degree(&self, m: &[u32], t: TransitionId) -> u32 {
+        let pre = &self.pre[t.index()];
+        if pre.is_empty() {
+            return 1;
+        }
+        let mut d = u32::MAX;
+        for &(p, w) in pre {
+            d = d.min(m[p.index()] / w);
+            if d == 0 {
+                return 0;
+            }
+        }
+        d
+    }
+
+    /// True when `t` may fire in `m`: inputs satisfied, inhibitors below threshold, and no
+    /// capacity exceeded by the result.
+    #[inline]
+    pub fn is_enabled(&self, m: &[u32], t: TransitionId) -> bool {
+        let i = t.index();
+        for &(p, w) in &self.pre[i] {
+            if m[p.index()] < w {
+                return false;
+            }
+        }
+        for &(p, w) in &self.inhib[i] {
+            if m[p.index()] >= w {
+                return false;
+            }
+        }
+        if self.has_capacity {
+            for &(p, d) in &self.delta[i] {
+                if d > 0 && m[p.index()] as i64 + d > self.capacity[p.index()] as i64 {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Enabling degree counting inhibitors and capacities: 0 when `t` is not enabled.
+    #[inline]
+    pub fn enabled_degree(&self, m: &[u32], t: TransitionId) -> u32 {
+        if self.is_enabled(m, t) {
+            self.enabling_degree(m, t)
+        } else {
+            0
+        }
+    }
+
+    /// Firing rate of exponential transition `t` in `m` (`rate × min(servers, degree)`);
+    /// 0 when `t` is not enabled or is immediate.
+    #[inline]
+    pub fn exp_rate(&self, m: &[u32], t: TransitionId) -> f64 {
+        match self.transitions[t.index()].timing {
+            Timing::Exponential { rate, servers } => {
+                let d = self.enabled_degree(m, t);
+                rate * servers.active(d) as f64
+            }
+            Timing::Immediate { .. } => 0.0,
+        }
+    }
+
+    /// Fires `t` in place: subtracts inputs, adds outputs. The caller checks enabling; firing
+    /// a disabled transition is a logic error (checked in debug builds).
+    #[inline]
+    pub fn fire(&self, m: &mut [u32], t: TransitionId) {
+        debug_assert!(self.is_enabled(m, t), "fired a disabled transition");
+        for &(p, d) in &self.delta[t.index()] {
+            let v = &mut m[p.index()];
+            *v = (*v as i64 + d) as u32;
+        }
+    }
+
+    /// The marking reached by firing `t` from `m`, or `None` when `t` is not enabled.
+    pub fn fire_checked(&self, m: &Marking, t: TransitionId) -> Option<Marking> {
+        if !self.is_enabled(m, t) {
+            return None;
+        }
+        let mut next = m.clone();
+        self.fire(&mut next, t);
+        Some(next)
+    }
+
+    /// True when some immediate transition is enabled in `m` (time cannot pass there).
+    pub fn is_vanishing(&self, m: &[u32]) -> bool {
+        self.has_immediate
+            && self
+                .transition_ids()
+                .any(|t| self.transitions[t.index()].is_immediate() && self.is_enabled(m, t))
+    }
+
+    /// Transitions that may fire in `m` under GSPN rules: in a vanishing marking, the enabled
+    /// immediate transitions of the highest enabled priority; otherwise every enabled
+    /// exponential transition.
+    pub fn firable(&self, m: &[u32]) -> Vec<TransitionId> {
+        let mut best = 0u32;
+        let mut out = Vec::new();
+        for t in self.transition_ids() {
+            if let Timing::Immediate { priority, .. } = self.transitions[t.index()].timing
+                && self.is_enabled(m, t)
+            {
+                if priority > best {
+                    best = priority;
+                    out.clear();
+                }
+                if priority == best {
+                    out.push(t);
+                }
+            }
+        }
+        if !out.is_empty() {
+            return out;
+        }
+        self.transition_ids()
+            .filter(|&t| !self.transitions[t.index()].is_immediate() && self.is_enabled(m, t))
+            .collect()
+    }
+
+    /// Renders a marking as `name=k,...` with empty places left out (the fixtures' notation).
+    pub fn format_marking(&self, m: &[u32]) -> String {
+        let mut s = String::new();
+        for (i, &k) in m.iter().enumerate() {
+            if k > 0 {
+                if !s.is_empty() {
+                    s.push(',');
+                }
+                s.push_str(&self.places[i].name);
+                s.push('=');
+                s.push_str(&k.to_string());
+            }
+        }
+        s
+    }
+
+    /// Total tokens in the initial marking.
+    pub fn initial_tokens(&self) -> u64 {
+        self.places.iter().map(|p| p.initial as u64).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cyc3(servers: Servers) -> Net {
+        let mut b = NetBuilder::new("cyc3");
+        let p1 = b.place("P1", 2);
+        let p2 = b.place("P2", 0);
+        let p3 = b.place("P3", 0);
+        let t1 = b.exponential("T1", 1.0, servers);
+        let t2 = b.immediate("t2", 1.0, 1);
+        let t3 = b.exponential("T3", 2.0, servers);
+        b.input(p1, t1, 1);
+        b.output(t1, p2, 1);
+        b.input(p2, t2, 1);
+        b.output(t2, p3, 1);
+        b.input(p3, t3, 1);
+        b.output(t3, p1, 1);
+        b.build().unwrap()
+    }
+
+    #[test]
+    fn exponential_rate_follows_server_semantics() {
+        let single = cyc3(Servers::Single);
+        let infinite = cyc3(Servers::Infinite);
+        let m = single.initial_marking();
+        let t1 = single.transition_by_name("T1").unwrap();
+        assert_eq!(single.exp_rate(&m, t1), 1.0);
+        assert_eq!(infinite.exp_rate(&m, t1), 2.0);
+        assert_eq!(Servers::K(3).active(5), 3);
+    }
+
+    #[test]
+    fn inhibitor_and_capacity_disable() {
+        let mut b = NetBuilder::new("n");
+        let p = b.place("p", 1);
+        let q = b.place_with_capacity("q", 0, Some(1));
+        let t = b.exponential("t", 1.0, Servers::Single);
+        let u = b.immediate("u", 1.0, 1);
+        b.inhibitor(p, u, 1);
+        b.output(t, q, 2);
+        b.output(u, q, 1);
+        let net = b.build().unwrap();
+        let m = net.initial_marking();
+        assert!(!net.is_enabled(&m, t), "capacity 1 refuses 2 tokens");
+        assert!(!net.is_enabled(&m, u), "inhibited by p");
+    }
+
+    #[test]
+    fn affects_lists_only_transitions_sharing_changed_places() {
+        let net = cyc3(Servers::Single);
+        let t1 = net.transition_by_name("T1").unwrap();
+        let names: Vec<_> = net
+            .affected_by(t1)
+            .iter()
+            .map(|&t| net.transition(t).name.as_str())
+            .collect();
+        assert_eq!(names, vec!["T1", "t2"]);
+    }
+
+    #[test]
+    fn firable_respects_priority() {
+        let mut b = NetBuilder::new("n");
+        let p = b.place("p", 1);
+        let a = b.immediate("a", 1.0, 1);
+        let c = b.immediate("c", 1.0, 2);
+        let e = b.exponential("e", 1.0, Servers::Single);
+        for t in [a, c, e] {
+            b.input(p, t, 1);
+        }
+        let net = b.build().unwrap();
+        assert_eq!(net.firable(&net.initial_marking()), vec![c]);
+    }
+}

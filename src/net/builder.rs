@@ -1,0 +1,380 @@
+//! Building and validating a [`Net`].
+
+use rustc_hash::FxHashMap;
+
+use super::{
+    Arc, ArcKind, Net, Place, PlaceId, Position, Servers, Timing, Transition, TransitionId,
+};
+
+/// Why a net could not be built. Readers check the same things earlier, with the file
+/// position; these errors are the last line for nets built in code.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NetError {
+    /// Two places or two transitions share a name (names must be unique per kind).
+    #[error("duplicate {kind} name `{name}`")]
+    Duplicate {
+        /// "place" or "transition".
+        kind: &'static str,
+        /// The repeated name.
+        name: String,
+    },
+    /// A rate is zero, negative, NaN or infinite.
+    #[error("transition `{transition}`: rate {rate} must be a finite number > 0")]
+    BadRate {
+        /// The transition's name.
+        transition: String,
+        /// The offending rate.
+        rate: f64,
+    },
+    /// A weight is negative, NaN or infinite.
+    #[error("transition `{transition}`: weight {weight} must be a finite number ≥ 0")]
+    BadWeight {
+        /// The transition's name.
+        transition: String,
+        /// The offending weight.
+        weight: f64,
+    },
+    /// Priority 0, or `K(0)` servers.
+    #[error("transition `{transition}`: {what} must be ≥ 1")]
+    BadCount {
+        /// The transition's name.
+        transition: String,
+        /// What was zero.
+        what: &'static str,
+    },
+    /// An arc with multiplicity 0.
+    #[error("arc between `{place}` and `{transition}` has weight 0")]
+    ZeroWeight {
+        /// The place end.
+        place: String,
+        /// The transition end.
+        transition: String,
+    },
+    /// The initial marking exceeds a place's capacity.
+    #[error("place `{place}`: initial marking {initial} exceeds its capacity {capacity}")]
+    OverCapacity {
+        /// The place's name.
+        place: String,
+        /// Its initial tokens.
+        initial: u32,
+        /// Its capacity.
+        capacity: u32,
+    },
+}
+
+/// Collects places, transitions and arcs, then validates them into a [`Net`].
+#[derive(Debug, Clone)]
+pub struct NetBuilder {
+    name: String,
+    places: Vec<Place>,
+    transitions: Vec<Transition>,
+    arcs: Vec<Arc>,
+}
+
+impl NetBuilder {
+    /// An empty net called `name`.
+    pub fn new(name: impl Into<String>) -> Self {
+        NetBuilder {
+            name: name.into(),
+            places: Vec::new(),
+            transitions: Vec::new(),
+            arcs: Vec::new(),
+        }
+    }
+
+    /// Renames the net.
+    pub fn set_name(&mut self, name: impl Into<String>) {
+        self.name = name.into();
+    }
+
+    /// Adds an unbounded place with `initial` tokens.
+    pub fn place(&mut self, name: impl Into<String>, initial: u32) -> PlaceId {
+        self.place_with_capacity(name, initial, None)
+    }
+
+    /// Adds a place with an optional capacity.
+    pub fn place_with_capacity(
+        &mut self,
+        name: impl Into<String>,
+        initial: u32,
+        capacity: Option<u32>,
+    ) -> PlaceId {
+        self.add_place(Place {
+            name: name.into(),
+            initial,
+            capacity,
+            position: None,
+        })
+    }
+
+    /// Adds a fully described place.
+    pub fn add_place(&mut self, place: Place) -> PlaceId {
+        self.places.push(place);
+        PlaceId(self.places.len() as u32 - 1)
+    }
+
+    /// Adds an immediate transition.
+    pub fn immediate(
+        &mut self,
+        name: impl Into<String>,
+        weight: f64,
+        priority: u32,
+    ) -> TransitionId {
+        self.add_transition(Transition {
+            name: name.into(),
+            timing: Timing::Immediate { weight, priority },
+            position: None,
+        })
+    }
+
+    /// Adds an exponential transition.
+    pub fn exponential(
+        &mut self,
+        name: impl Into<String>,
+        rate: f64,
+        servers: Servers,
+    ) -> TransitionId {
+        self.add_transition(Transition {
+            name: name.into(),
+            timing: Timing::Exponential { rate, servers },
+            position: None,
+        })
+    }
+
+    /// Adds a fully described transition.
+    pub fn add_transition(&mut self, t: Transition) -> TransitionId {
+        self.transitions.push(t);
+        TransitionId(self.transitions.len() as u32 - 1)
+    }
+
+    /// Sets a place's position.
+    pub fn set_place_position(&mut self, p: PlaceId, pos: Position) {
+        self.places[p.index()].position = Some(pos);
+    }
+
+    /// Sets a transition's position.
+    pub fn set_transition_position(&mut self, t: TransitionId, pos: Position) {
+        self.transitions[t.index()].position = Some(pos);
+    }
+
+    /// Adds an input arc `p → t` of weight `w`.
+    pub fn input(&mut self, p: PlaceId, t: TransitionId, w: u32) {
+        self.arc(ArcKind::Input, p, t, w, Vec::new());
+    }
+
+    /// Adds an output arc `t → p` of weight `w`.
+    pub fn output(&mut self, t: TransitionId, p: PlaceId, w: u32) {
+        self.arc(ArcKind::Output, p, t, w, Vec::new());
+    }
+
+    /// Adds an inhibitor arc `p —o t` of threshold `w`.
+    pub fn inhibitor(&mut self, p: PlaceId, t: TransitionId, w: u32) {
+        self.arc(ArcKind::Inhibitor, p, t, w, Vec::new());
+    }
+
+    /// Adds an arc of any kind, with bend points.
+    pub fn arc(
+        &mut self,
+        kind: ArcKind,
+        p: PlaceId,
+        t: TransitionId,
+        w: u32,
+        points: Vec<Position>,
+    ) {
+        self.arcs.push(Arc {
+            kind,
+            place: p,
+            transition: t,
+            weight: w,
+            points,
+        });
+    }
+
+    /// Looks up a place added so far.
+    pub fn find_place(&self, name: &str) -> Option<PlaceId> {
+        self.places
+            .iter()
+            .position(|p| p.name == name)
+            .map(|i| PlaceId(i as u32))
+    }
+
+    /// Looks up a transition added so far.
+    pub fn find_transition(&self, name: &str) -> Option<TransitionId> {
+        self.transitions
+            .iter()
+            .position(|t| t.name == name)
+            .map(|i| TransitionId(i as u32))
+    }
+
+    /// Places added so far.
+    pub fn places(&self) -> &[Place] {
+        &self.places
+    }
+
+    /// Transitions added so far.
+    pub fn transitions(&self) -> &[Transition] {
+        &self.transitions
+    }
+
+    /// Validates and indexes the net.
+    pub fn build(self) -> Result<Net, NetError> {
+        let NetBuilder {
+            name,
+            places,
+            transitions,
+            arcs,
+        } = self;
+        check_unique("place", places.iter().map(|p| p.name.as_str()))?;
+        check_unique("transition", transitions.iter().map(|t| t.name.as_str()))?;
+        for p in &places {
+            if let Some(c) = p.capacity
+                && p.initial > c
+            {
+                return Err(NetError::OverCapacity {
+                    place: p.name.clone(),
+                    initial: p.initial,
+                    capacity: c,
+                });
+            }
+        }
+        for t in &transitions {
+            match t.timing {
+                Timing::Exponential { rate, servers } => {
+                    if !(rate.is_finite() && rate > 0.0) {
+                        return Err(NetError::BadRate {
+                            transition: t.name.clone(),
+                            rate,
+                        });
+                    }
+                    if servers == Servers::K(0) {
+                        return Err(NetError::BadCount {
+                            transition: t.name.clone(),
+                            what: "servers",
+                        });
+                    }
+                }
+                Timing::Immediate { weight, priority } => {
+                    if !(weight.is_finite() && weight >= 0.0) {
+                        return Err(NetError::BadWeight {
+                            transition: t.name.clone(),
+                            weight,
+                        });
+                    }
+                    if priority == 0 {
+                        return Err(NetError::BadCount {
+                            transition: t.name.clone(),
+                            what: "priority",
+                        });
+                    }
+                }
+            }
+        }
+        let nt = transitions.len();
+        let np = places.len();
+        let mut pre = vec![Vec::new(); nt];
+        let mut post = vec![Vec::new(); nt];
+        let mut inhib = vec![Vec::new(); nt];
+        for a in &arcs {
+            if a.weight == 0 {
+                return Err(NetError::ZeroWeight {
+                    place: places[a.place.index()].name.clone(),
+                    transition: transitions[a.transition.index()].name.clone(),
+                });
+            }
+            let list: &mut Vec<(PlaceId, u32)> = match a.kind {
+                ArcKind::Input => &mut pre[a.transition.index()],
+                ArcKind::Output => &mut post[a.transition.index()],
+                ArcKind::Inhibitor => &mut inhib[a.transition.index()],
+            };
+            // Parallel arcs of the same kind add up (inhibitors: the tightest threshold).
+            match list.iter_mut().find(|(p, _)| *p == a.place) {
+                Some((_, w)) if a.kind == ArcKind::Inhibitor => *w = (*w).min(a.weight),
+                Some((_, w)) => *w += a.weight,
+                None => list.push((a.place, a.weight)),
+            }
+        }
+        let mut delta = Vec::with_capacity(nt);
+        for t in 0..nt {
+            let mut d: Vec<(PlaceId, i64)> = Vec::new();
+            for &(p, w) in &pre[t] {
+                d.push((p, -(w as i64)));
+            }
+            for &(p, w) in &post[t] {
+                match d.iter_mut().find(|(q, _)| *q == p) {
+                    Some((_, v)) => *v += w as i64,
+                    None => d.push((p, w as i64)),
+                }
+            }
+            d.retain(|&(_, v)| v != 0);
+            d.sort_by_key(|&(p, _)| p);
+            delta.push(d);
+        }
+        // Which transitions read each place (input or inhibitor arcs, or capacity-bound outputs).
+        let capacity: Vec<u32> = places
+            .iter()
+            .map(|p| p.capacity.unwrap_or(u32::MAX))
+            .collect();
+        let has_capacity = places.iter().any(|p| p.capacity.is_some());
+        let mut readers: Vec<Vec<TransitionId>> = vec![Vec::new(); np];
+        for t in 0..nt {
+            let tid = TransitionId(t as u32);
+            let mut touch = |p: PlaceId| {
+                let r = &mut readers[p.index()];
+                if r.last() != Some(&tid) {
+                    r.push(tid);
+                }
+            };
+            for &(p, _) in pre[t].iter().chain(&inhib[t]) {
+                touch(p);
+            }
+            if has_capacity {
+                for &(p, _) in &post[t] {
+                    if capacity[p.index()] != u32::MAX {
+                        touch(p);
+                    }
+                }
+            }
+        }
+        let mut affects = Vec::with_capacity(nt);
+        for d in &delta {
+            let mut a: Vec<TransitionId> = d
+                .iter()
+                .flat_map(|&(p, _)| readers[p.index()].iter().copied())
+                .collect();
+            a.sort_unstable();
+            a.dedup();
+            affects.push(a);
+        }
+        let has_immediate = transitions.iter().any(Transition::is_immediate);
+        Ok(Net {
+            name,
+            places,
+            transitions,
+            arcs,
+            pre,
+            post,
+            inhib,
+            delta,
+            affects,
+            capacity,
+            has_capacity,
+            has_immediate,
+        })
+    }
+}
+
+fn check_unique<'a>(
+    kind: &'static str,
+    names: impl Iterator<Item = &'a str>,
+) -> Result<(), NetError> {
+    let mut seen = FxHashMap::default();
+    for n in names {
+        if seen.insert(n, ()).is_some() {
+            return Err(NetError::Duplicate {
+                kind,
+                name: n.to_string(),
+            });
+        }
+    }
+    Ok(())
+}

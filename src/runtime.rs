@@ -1,0 +1,1 @@
+//! The actor runtime: supervisor, agents, places, actions, events, journal (being written).

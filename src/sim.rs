@@ -1,0 +1,1 @@
+//! The token game: exact GSPN semantics on virtual time, seeded (being written).
