@@ -454,6 +454,82 @@ impl Net {
     pub fn initial_tokens(&self) -> u64 {
         self.places.iter().map(|p| p.initial as u64).sum()
     }
+
+    /// The differences between two nets, compared by name (places, transitions, initial
+    /// marking, capacity, timing, and arcs as a set of `(kind, place, transition, weight)`).
+    /// Positions and the net's name are not compared. Empty when the nets are the same;
+    /// round-trip tests use it.
+    pub fn diff(&self, other: &Net) -> Vec<String> {
+        let mut out = Vec::new();
+        for p in &self.places {
+            match other.place_by_name(&p.name).map(|q| other.place(q)) {
+                None => out.push(format!("place {} missing", p.name)),
+                Some(q) => {
+                    if q.initial != p.initial {
+                        out.push(format!(
+                            "place {}: marking {} vs {}",
+                            p.name, p.initial, q.initial
+                        ));
+                    }
+                    if q.capacity != p.capacity {
+                        out.push(format!(
+                            "place {}: capacity {:?} vs {:?}",
+                            p.name, p.capacity, q.capacity
+                        ));
+                    }
+                }
+            }
+        }
+        for q in &other.places {
+            if self.place_by_name(&q.name).is_none() {
+                out.push(format!("place {} added", q.name));
+            }
+        }
+        for t in &self.transitions {
+            match other
+                .transition_by_name(&t.name)
+                .map(|u| other.transition(u))
+            {
+                None => out.push(format!("transition {} missing", t.name)),
+                Some(u) if u.timing != t.timing => out.push(format!(
+                    "transition {}: {:?} vs {:?}",
+                    t.name, t.timing, u.timing
+                )),
+                Some(_) => {}
+            }
+        }
+        for u in &other.transitions {
+            if self.transition_by_name(&u.name).is_none() {
+                out.push(format!("transition {} added", u.name));
+            }
+        }
+        let arcs = |n: &Net| {
+            let mut v: Vec<(u8, String, String, u32)> = n
+                .arcs
+                .iter()
+                .map(|a| {
+                    (
+                        a.kind as u8,
+                        n.place(a.place).name.clone(),
+                        n.transition(a.transition).name.clone(),
+                        a.weight,
+                    )
+                })
+                .collect();
+            v.sort();
+            v
+        };
+        let (a, b) = (arcs(self), arcs(other));
+        if a != b {
+            for x in a.iter().filter(|x| !b.contains(x)) {
+                out.push(format!("arc {x:?} missing"));
+            }
+            for x in b.iter().filter(|x| !a.contains(x)) {
+                out.push(format!("arc {x:?} added"));
+            }
+        }
+        out
+    }
 }
 
 #[cfg(test)]
