@@ -33,6 +33,7 @@
 
 mod builder;
 mod marking;
+pub mod predicate;
 
 pub use builder::{NetBuilder, NetError};
 pub use marking::Marking;
