@@ -132,7 +132,11 @@ pub fn read_input(path: &Path) -> Result<ThesisInput, LoadError> {
     }
     let text = String::from_utf8(bytes).map_err(|e| {
         let at = Span::locate(e.as_bytes(), e.utf8_error().valid_up_to());
-        LoadError::at(path, at, LoadErrorKind::Invalid("the file is not UTF-8".into()))
+        LoadError::at(
+            path,
+            at,
+            LoadErrorKind::Invalid("the file is not UTF-8".into()),
+        )
     })?;
     Reader { path, text: &text }.input()
 }
@@ -229,7 +233,10 @@ pub fn plan_text(
                 },
             ));
         }
-        order.push(net.place_by_name(&p.name).ok_or_else(|| unknown("place", p))?);
+        order.push(
+            net.place_by_name(&p.name)
+                .ok_or_else(|| unknown("place", p))?,
+        );
     }
     let covers_net = order.len() == net.place_count();
 
@@ -244,13 +251,17 @@ pub fn plan_text(
     );
     let _ = writeln!(out, "net = {}", toml_str(net_file));
     if let Some(sync) = input.full_synchronization {
-        let _ = writeln!(out, "# full_synchronization = {sync} (gspn always synchronises fully)");
+        let _ = writeln!(
+            out,
+            "# full_synchronization = {sync} (gspn always synchronises fully)"
+        );
     }
 
     // Roles.
     let mut resources: Vec<&Named> = Vec::new();
     for r in &input.resources {
-        net.place_by_name(&r.name).ok_or_else(|| unknown("place", r))?;
+        net.place_by_name(&r.name)
+            .ok_or_else(|| unknown("place", r))?;
         if !resources.iter().any(|q| q.name == r.name) {
             resources.push(r);
         }
@@ -274,7 +285,12 @@ pub fn plan_text(
             ));
             continue;
         }
-        let _ = write!(out, "\n[places.{}]\naction = {}", toml_key(&a.place.name), toml_str(&a.action));
+        let _ = write!(
+            out,
+            "\n[places.{}]\naction = {}",
+            toml_key(&a.place.name),
+            toml_str(&a.action)
+        );
         match &a.action_type {
             Some(t) => {
                 let _ = writeln!(out, "   # {t} action server (place_to_client_mapping)");
@@ -420,8 +436,7 @@ fn resolve_choice(
 /// A TOML key: bare when it can be, else a quoted string.
 fn toml_key(s: &str) -> String {
     if !s.is_empty()
-        && s
-            .bytes()
+        && s.bytes()
             .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
     {
         s.to_string()
@@ -478,7 +493,10 @@ impl Reader<'_> {
                 JsonValue::Other(at) => {
                     return Err(self.invalid(
                         *at,
-                        format!("`{}` must be a string (a Python literal in quotes)", key.text),
+                        format!(
+                            "`{}` must be a string (a Python literal in quotes)",
+                            key.text
+                        ),
                     ));
                 }
             };
@@ -557,7 +575,10 @@ impl Reader<'_> {
             }),
             other => Err(self.invalid(
                 s.file_offset(v.at),
-                format!("{what}: expected a name in quotes, found {}", other.describe()),
+                format!(
+                    "{what}: expected a name in quotes, found {}",
+                    other.describe()
+                ),
             )),
         }
     }
@@ -569,7 +590,10 @@ impl Reader<'_> {
             }
             other => Err(self.invalid(
                 s.file_offset(v.at),
-                format!("{what}: expected a tuple or list of names, found {}", other.describe()),
+                format!(
+                    "{what}: expected a tuple or list of names, found {}",
+                    other.describe()
+                ),
             )),
         }
     }
@@ -622,7 +646,11 @@ impl Reader<'_> {
         Ok(())
     }
 
-    fn policy(&self, s: &JsonStr, warnings: &mut Vec<String>) -> Result<Vec<PolicyEntry>, LoadError> {
+    fn policy(
+        &self,
+        s: &JsonStr,
+        warnings: &mut Vec<String>,
+    ) -> Result<Vec<PolicyEntry>, LoadError> {
         let v = self.literal(s)?;
         let mut entries = Vec::new();
         for (k, choice) in self.dict(s, &v, "policy_dictionary")? {
@@ -663,7 +691,12 @@ impl Reader<'_> {
         Ok(entries)
     }
 
-    fn key_item(&self, s: &JsonStr, v: &Py, warnings: &mut Vec<String>) -> Result<KeyItem, LoadError> {
+    fn key_item(
+        &self,
+        s: &JsonStr,
+        v: &Py,
+        warnings: &mut Vec<String>,
+    ) -> Result<KeyItem, LoadError> {
         let at = s.file_offset(v.at);
         match &v.kind {
             PyKind::Int(i) => u32::try_from(*i).map(KeyItem::Count).map_err(|_| {

@@ -130,9 +130,9 @@ impl Parser<'_> {
                     "None" => PyKind::None,
                     word => {
                         self.i = start;
-                        return Err(self.err(&format!(
-                            "`{word}` is not a literal (strings need quotes)"
-                        )));
+                        return Err(
+                            self.err(&format!("`{word}` is not a literal (strings need quotes)"))
+                        );
                     }
                 }
             }
@@ -249,7 +249,10 @@ impl Parser<'_> {
         {
             self.i += 1;
         }
-        let s: String = self.s[start..self.i].chars().filter(|&c| c != '_').collect();
+        let s: String = self.s[start..self.i]
+            .chars()
+            .filter(|&c| c != '_')
+            .collect();
         if let Ok(v) = s.parse::<i64>() {
             return Ok(PyKind::Int(v));
         }
