@@ -8,6 +8,9 @@
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
 //! - [`io`]: readers and writers — PIPE XML, PNML, GreatSPN PNPRO, DOT, plan files.
 //! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded.
+//! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.
+//! - [`check`]: summary and structural warnings (dead transitions, isolated places, policy
+//!   rules that can never apply) for `plan-runner check`.
 //!
 //! The everyday types are in [`prelude`].
 
@@ -15,6 +18,7 @@
 #![deny(unused_must_use)]
 
 pub mod analysis;
+pub mod check;
 pub mod io;
 pub mod net;
 pub mod policy;

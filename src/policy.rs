@@ -335,6 +335,38 @@ impl Policy {
     }
 }
 
+impl Policy {
+    /// The distribution to fire with in marking `m` over `firable` (the immediate
+    /// transitions that may fire now): the policy's when a rule applies, else the net's
+    /// weights, normalised (uniform when every weight is 0 — weight 0 leaves the choice to a
+    /// policy, and none was given). Empty only when `firable` is.
+    pub fn distribution_or_weights(
+        &self,
+        net: &Net,
+        m: &[u32],
+        firable: &[TransitionId],
+    ) -> Vec<(TransitionId, f64)> {
+        if let Some(d) = self.distribution(net, m, firable) {
+            return d;
+        }
+        let weight = |t: TransitionId| match net.transition(t).timing {
+            Timing::Immediate { weight, .. } => weight,
+            Timing::Exponential { .. } => 0.0,
+        };
+        let total: f64 = firable.iter().map(|&t| weight(t)).sum();
+        if total > 0.0 {
+            firable
+                .iter()
+                .filter(|&&t| weight(t) > 0.0)
+                .map(|&t| (t, weight(t) / total))
+                .collect()
+        } else {
+            let u = 1.0 / firable.len() as f64;
+            firable.iter().map(|&t| (t, u)).collect()
+        }
+    }
+}
+
 fn check_choice(net: &Net, rule: usize, choose: &[(TransitionId, f64)]) -> Result<(), PolicyError> {
     if choose.is_empty() {
         return Err(PolicyError::Empty { rule });

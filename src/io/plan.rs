@@ -6,6 +6,9 @@
 //! seed = 42
 //! time_scale = 0.0                    # 0 = virtual time, as fast as possible; 1 = real time
 //!
+//! [params]                            # PNPRO template parameters (--param overrides)
+//! N = 3
+//!
 //! [places."p1:Check_Temperature_L1"]
 //! action = "check_temperature"        # or: role = "resource"
 //! timeout = 30.0
@@ -145,6 +148,10 @@ pub struct PlanFile {
     pub net: Spanned<String>,
     /// The page of the net file to read (PNPRO files may hold several).
     pub page: Option<String>,
+    /// Template parameters of the net (PNPRO `<template>`), overriding the file's
+    /// `last-binding`; `--param NAME=VALUE` on the command line overrides these.
+    #[serde(default)]
+    pub params: BTreeMap<String, ParamValue>,
     /// Seed for every random choice; the same seed repeats a run exactly.
     pub seed: Option<u64>,
     /// Scale of time: 0 = virtual time as fast as possible, 1 = real time, 0.5 = twice as fast.
@@ -162,6 +169,28 @@ pub struct PlanFile {
     pub policy: Vec<Spanned<RuleFile>>,
     /// When the run ends.
     pub stop: Option<StopFile>,
+}
+
+/// The value of a net parameter: a number or an expression the net reader evaluates.
+#[derive(Clone, Debug, PartialEq, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum ParamValue {
+    /// An integer, e.g. `N = 3`.
+    Int(i64),
+    /// A real number, e.g. `rate = 0.5`.
+    Float(f64),
+    /// An expression or any other text, passed to the reader as written.
+    Text(String),
+}
+
+impl std::fmt::Display for ParamValue {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ParamValue::Int(i) => write!(f, "{i}"),
+            ParamValue::Float(x) => write!(f, "{x:?}"),
+            ParamValue::Text(t) => f.write_str(t),
+        }
+    }
 }
 
 /// The role of one place.
@@ -224,7 +253,8 @@ pub fn json_schema() -> String {
 }
 
 /// Reads and checks the plan in `path`, and the net it names. `opts.page` (the CLI's
-/// `--page`) overrides the plan's `page`; `opts.params` go to the net reader.
+/// `--page`) overrides the plan's `page`; `opts.params` override the plan's `params` of the
+/// same name, and both go to the net reader.
 pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
@@ -234,9 +264,16 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
     let file = PlanFile::parse(path, &text)?;
     let net_path = file.net_path(path);
     let page = opts.page.clone().or_else(|| file.page.clone());
+    let mut params: Vec<(String, String)> = file
+        .params
+        .iter()
+        .filter(|(k, _)| !opts.params.iter().any(|(o, _)| o == *k))
+        .map(|(k, v)| (k.clone(), v.to_string()))
+        .collect();
+    params.extend(opts.params.iter().cloned());
     let net_opts = ReadOptions {
         page: page.clone(),
-        params: opts.params.clone(),
+        params,
     };
     if !net_path.is_file() {
         return Err(LoadError::at(

@@ -1,0 +1,256 @@
+//! `plan-runner check`: a summary of a net or a plan, and warnings about parts that can never
+//! do anything.
+//!
+//! The warnings come from structural facts ([`Structure`]: place bounds from P-invariants and
+//! from which transitions can ever produce or consume), never from a state-space search, so
+//! checking is fast on any net and every warning is a proof:
+//!
+//! - a **transition that can never fire**: an input place that never gets enough tokens (no
+//!   producer and too few initial tokens, or a structural bound below the arc weight), or an
+//!   inhibitor place that always holds too many tokens;
+//! - an **isolated place** (no arc at all);
+//! - a **policy rule that can never apply**: its pattern asks for a count outside a place's
+//!   bounds, contradicts a P-invariant, or none of its transitions can be enabled in a marking
+//!   that matches it.
+//!
+//! ```
+//! use gspn::check::Report;
+//! use gspn::io::Format;
+//! use gspn::net::{NetBuilder, Servers};
+//! let mut b = NetBuilder::new("n");
+//! let p = b.place("P", 1);
+//! b.place("Lonely", 0);
+//! let t = b.exponential("T", 1.0, Servers::Single);
+//! b.input(p, t, 2);
+//! let report = Report::for_net(&b.build().unwrap(), Format::Pipe, &[]);
+//! assert_eq!((report.places, report.transitions, report.tokens), (2, 1, 1));
+//! assert_eq!(report.warnings.len(), 2);
+//! ```
+
+pub mod structure;
+
+use serde::Serialize;
+
+pub use self::structure::Structure;
+use crate::io::Format;
+use crate::io::plan::Plan;
+use crate::net::{ArcKind, Net, PlaceId, Timing};
+use crate::policy::{Pattern, Rule};
+
+/// What `check` reports. Serialised as JSON with exactly these keys.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    /// The file's format: `pipe`, `pnml`, `pnpro` or `plan`.
+    pub format: String,
+    /// Places.
+    pub places: usize,
+    /// Transitions.
+    pub transitions: usize,
+    /// Immediate transitions.
+    pub immediate: usize,
+    /// Exponential transitions.
+    pub exponential: usize,
+    /// Arcs of every kind (input, output and inhibitor).
+    pub arcs: usize,
+    /// Inhibitor arcs (counted in `arcs` too).
+    pub inhibitor_arcs: usize,
+    /// Tokens in the initial marking.
+    pub tokens: u64,
+    /// Warnings, one sentence each.
+    pub warnings: Vec<String>,
+}
+
+impl Report {
+    /// The report for a net read in `format`; `remarks` (the reader's warnings) come first.
+    pub fn for_net(net: &Net, format: Format, remarks: &[String]) -> Report {
+        let structure = Structure::of(net);
+        let mut warnings = remarks.to_vec();
+        warnings.extend(net_warnings(net, &structure));
+        Report::new(net, format.name(), warnings)
+    }
+
+    /// The report for a plan: the net's warnings, the plan's remarks, and the policy rules
+    /// that can never apply.
+    pub fn for_plan(plan: &Plan) -> Report {
+        let net = &plan.net;
+        let structure = Structure::of(net);
+        let mut warnings = plan.warnings.clone();
+        warnings.extend(net_warnings(net, &structure));
+        for (i, rule) in plan.policy.rules().iter().enumerate() {
+            if let Some(why) = rule_never_applies(net, &structure, rule) {
+                let line = plan
+                    .rule_spans
+                    .get(i)
+                    .map_or_else(String::new, |s| format!(" (line {})", s.line));
+                warnings.push(format!(
+                    "policy rule {}{line} can never apply: {why}",
+                    i + 1
+                ));
+            }
+        }
+        Report::new(net, Format::Plan.name(), warnings)
+    }
+
+    fn new(net: &Net, format: &str, warnings: Vec<String>) -> Report {
+        let immediate = net
+            .transitions()
+            .iter()
+            .filter(|t| t.is_immediate())
+            .count();
+        Report {
+            format: format.to_string(),
+            places: net.place_count(),
+            transitions: net.transition_count(),
+            immediate,
+            exponential: net.transition_count() - immediate,
+            arcs: net.arcs().len(),
+            inhibitor_arcs: net
+                .arcs()
+                .iter()
+                .filter(|a| a.kind == ArcKind::Inhibitor)
+                .count(),
+            tokens: net.initial_tokens(),
+            warnings,
+        }
+    }
+}
+
+fn is_isolated(net: &Net, p: PlaceId) -> bool {
+    !net.arcs().iter().any(|a| a.place == p)
+}
+
+/// Warnings about the net alone: dead transitions and isolated places.
+pub fn net_warnings(net: &Net, s: &Structure) -> Vec<String> {
+    let mut out = Vec::new();
+    for t in net.transition_ids() {
+        if s.may_fire[t.index()] {
+            continue;
+        }
+        let name = &net.transition(t).name;
+        let starved = net
+            .inputs(t)
+            .iter()
+            .find(|&&(p, w)| s.upper[p.index()].is_some_and(|u| u < w as u64));
+        let why = if let Some(&(p, w)) = starved {
+            let place = net.place(p);
+            let u = s.upper[p.index()].unwrap_or_default();
+            let producers = net.transition_ids().any(|u| {
+                s.may_fire[u.index()] && net.delta(u).iter().any(|&(q, d)| q == p && d > 0)
+            });
+            if producers {
+                format!(
+                    "input place `{}` holds at most {u} token(s), the arc needs {w}",
+                    place.name
+                )
+            } else {
+                format!(
+                    "input place `{}` has {} token(s), no transition that can fire adds to it, and the arc needs {w}",
+                    place.name, place.initial
+                )
+            }
+        } else if let Some(&(p, w)) = net
+            .inhibitors(t)
+            .iter()
+            .find(|&&(p, w)| s.lower[p.index()] >= w as u64)
+        {
+            format!(
+                "inhibitor place `{}` always holds at least {} token(s), the inhibitor arc's threshold is {w}",
+                net.place(p).name,
+                s.lower[p.index()]
+            )
+        } else {
+            "its input places are only fed by transitions that can never fire".to_string()
+        };
+        out.push(format!("transition `{name}` can never fire: {why}"));
+    }
+    for p in net.place_ids() {
+        if is_isolated(net, p) {
+            out.push(format!(
+                "place `{}` is isolated: no arc touches it",
+                net.place(p).name
+            ));
+        }
+    }
+    out
+}
+
+/// Why `rule` can never apply in `net`, or `None` when it might.
+pub fn rule_never_applies(net: &Net, s: &Structure, rule: &Rule) -> Option<String> {
+    let fixed: Vec<(PlaceId, u32)> = match &rule.pattern {
+        Pattern::Exact(m) => m
+            .iter()
+            .enumerate()
+            .map(|(i, &k)| (PlaceId(i as u32), k))
+            .collect(),
+        Pattern::Partial(v) => v.clone(),
+    };
+    for &(p, k) in &fixed {
+        if !s.allows(p, k) {
+            let upper = s.upper[p.index()].map_or("∞".to_string(), |u| u.to_string());
+            return Some(format!(
+                "it asks for {k} token(s) in `{}`, which always holds between {} and {upper}",
+                net.place(p).name,
+                s.lower[p.index()]
+            ));
+        }
+    }
+    // A P-invariant whose places the pattern all fixes must keep its value.
+    for y in &s.invariants {
+        let support: Vec<usize> = (0..y.len()).filter(|&i| y[i] > 0).collect();
+        let values: Option<u64> = support.iter().try_fold(0u64, |acc, &i| {
+            let k = rule.pattern.required(PlaceId(i as u32))?;
+            Some(acc + y[i] * k as u64)
+        });
+        let total: u64 = net
+            .places()
+            .iter()
+            .zip(y)
+            .map(|(p, &w)| p.initial as u64 * w)
+            .sum();
+        if let Some(v) = values
+            && v != total
+        {
+            let names: Vec<String> = support
+                .iter()
+                .map(|&i| {
+                    let coef = if y[i] == 1 {
+                        String::new()
+                    } else {
+                        format!("{}·", y[i])
+                    };
+                    format!("{coef}{}", net.places()[i].name)
+                })
+                .collect();
+            return Some(format!(
+                "its marking has {} = {v}, but every reachable marking has {total}",
+                names.join(" + ")
+            ));
+        }
+    }
+    let compatible = rule.choose.iter().any(|&(t, prob)| {
+        prob > 0.0
+            && s.may_fire[t.index()]
+            && matches!(net.transition(t).timing, Timing::Immediate { .. })
+            && net
+                .inputs(t)
+                .iter()
+                .all(|&(p, w)| rule.pattern.required(p).is_none_or(|k| k >= w))
+            && net
+                .inhibitors(t)
+                .iter()
+                .all(|&(p, w)| rule.pattern.required(p).is_none_or(|k| k < w))
+    });
+    if !compatible {
+        let names: Vec<String> = rule
+            .choose
+            .iter()
+            .filter(|&&(_, p)| p > 0.0)
+            .map(|&(t, _)| format!("`{}`", net.transition(t).name))
+            .collect();
+        return Some(format!(
+            "none of {} can be enabled in a marking that matches it",
+            names.join(", ")
+        ));
+    }
+    None
+}
