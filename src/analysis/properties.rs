@@ -1,0 +1,1 @@
+//! Behavioural properties of a net read off its state space.
