@@ -1,0 +1,344 @@
+//! The tangible reachability graph of a GSPN, vanishing markings eliminated.
+//!
+//! [`StateSpace::build`] searches every reachable marking breadth-first (packed markings in
+//! a hash-indexed store, both cores when the frontier is large), then eliminates the
+//! vanishing ones ([`vanishing`](crate::analysis::vanishing)): tangible states are numbered
+//! `0..tangible_count()` and each carries its [`Move`]s, ready for a CTMC. The full graph
+//! (vanishing markings included) stays available for [`properties`](crate::analysis::properties).
+//!
+//! Before searching, places without a structural bound (P-invariants, capacities) send the
+//! net through [`karp_miller`](crate::analysis::coverability::karp_miller), so an unbounded
+//! net ends with [`AnalysisError::Unbounded`] instead of running forever.
+//!
+//! ```
+//! use gspn::analysis::state_space::{Options, StateSpace};
+//! use gspn::net::{NetBuilder, Servers};
+//! // cyc3: P1 (2 tokens) → T1 → P2 → t2 (immediate) → P3 → T3 → P1
+//! let mut b = NetBuilder::new("cyc3");
+//! let (p1, p2, p3) = (b.place("P1", 2), b.place("P2", 0), b.place("P3", 0));
+//! let t1 = b.exponential("T1", 1.0, Servers::Single);
+//! let t2 = b.immediate("t2", 1.0, 1);
+//! let t3 = b.exponential("T3", 2.0, Servers::Single);
+//! b.input(p1, t1, 1); b.output(t1, p2, 1);
+//! b.input(p2, t2, 1); b.output(t2, p3, 1);
+//! b.input(p3, t3, 1); b.output(t3, p1, 1);
+//! let net = b.build().unwrap();
+//! let ss = StateSpace::build(&net, &Options::default()).unwrap();
+//! assert_eq!((ss.tangible_count(), ss.vanishing_count()), (3, 2));
+//! assert_eq!(ss.marking(0), vec![2, 0, 0]);
+//! ```
+
+pub(crate) mod explore;
+mod packing;
+pub(crate) mod table;
+
+use thiserror::Error;
+
+use crate::analysis::coverability::{Coverability, karp_miller};
+use crate::analysis::invariants::structural_bounds;
+use crate::analysis::vanishing::eliminate;
+use crate::net::{Net, TransitionId};
+use packing::{Layout, MarkingStore};
+use table::MoveTable;
+
+/// How to build a state space.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Most markings (tangible and vanishing) to store before giving up (default 10,000,000).
+    pub max_states: usize,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+    /// Threads to use; 0 = all available cores.
+    pub threads: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            max_states: 10_000_000,
+            progress: false,
+            threads: 0,
+        }
+    }
+}
+
+/// Why a state space could not be built.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[non_exhaustive]
+pub enum AnalysisError {
+    /// More markings than `Options::max_states`.
+    #[error("more than {limit} reachable markings (raise --max-states)")]
+    TooManyStates {
+        /// The limit that was hit.
+        limit: usize,
+    },
+    /// The net is unbounded: these places can hold arbitrarily many tokens.
+    #[error("the net is unbounded: places {} can grow without limit", places.join(", "))]
+    Unbounded {
+        /// Names of the unbounded places.
+        places: Vec<String>,
+    },
+    /// A loop of immediate transitions that time can never leave.
+    #[error(
+        "timeless trap: a loop of immediate transitions with no way out, through marking {marking}"
+    )]
+    TimelessTrap {
+        /// One marking of the loop, as `p=k,...`.
+        marking: String,
+    },
+}
+
+/// One way out of a tangible state: exponential `transition` fires at `rate`, and the
+/// vanishing markings after it (if any) lead to tangible state `to` with probability `prob`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Move {
+    /// The exponential transition that fires.
+    pub transition: TransitionId,
+    /// Its rate in the source state (`Net::exp_rate`).
+    pub rate: f64,
+    /// The tangible state reached.
+    pub to: u32,
+    /// Probability of reaching `to` (1 without vanishing markings in between).
+    pub prob: f64,
+}
+
+/// Expected firings of an immediate transition on the vanishing paths after a tangible state
+/// fires an exponential transition.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImmediateFlow {
+    /// The tangible state.
+    pub state: u32,
+    /// The exponential transition fired from it.
+    pub transition: TransitionId,
+    /// The immediate transition.
+    pub immediate: TransitionId,
+    /// Expected number of its firings before the next tangible state.
+    pub expected: f64,
+}
+
+/// The tangible reachability graph, and the full graph it came from.
+///
+/// Markings are numbered tangible first (`0..tangible_count()`, the CTMC's states), then
+/// vanishing (`tangible_count()..reachable_count()`); "global" ids range over both.
+#[derive(Debug)]
+pub struct StateSpace {
+    places: usize,
+    store: MarkingStore,
+    tangible: usize,
+    moves: MoveTable,
+    /// Full graph over global ids; `None` when there are no vanishing markings (then it is
+    /// `moves`).
+    graph: Option<MoveTable>,
+    initial: Vec<(u32, f64)>,
+    initial_global: u32,
+    flows: Vec<ImmediateFlow>,
+    parent: Vec<(u32, u32)>,
+    dead: Vec<u32>,
+}
+
+/// Coverability nodes to try before searching a net that has places without a structural
+/// bound: scaled so the Karp–Miller tree stays around 20 MB.
+fn km_limit(places: usize) -> usize {
+    (5_000_000 / places.max(1)).clamp(1000, 200_000)
+}
+
+impl StateSpace {
+    /// Builds the state space of `net`.
+    pub fn build(net: &Net, opts: &Options) -> Result<StateSpace, AnalysisError> {
+        let mut bounds = structural_bounds(net);
+        if bounds.iter().any(Option::is_none) {
+            match karp_miller(net, km_limit(net.place_count()).min(opts.max_states)) {
+                Coverability::Unbounded(places) => {
+                    return Err(AnalysisError::Unbounded {
+                        places: places
+                            .into_iter()
+                            .map(|p| net.place(p).name.clone())
+                            .collect(),
+                    });
+                }
+                Coverability::Bounded(max) => {
+                    bounds = max.into_iter().map(|b| Some(b as u64)).collect();
+                }
+                Coverability::Undecided => {}
+            }
+        }
+        let initial: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
+        let layout = Layout::new(&bounds, &initial);
+        let threads = match opts.threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n,
+        };
+        let raw = explore::explore(net, layout, opts.max_states, threads, opts.progress)?;
+        Ok(Self::from_raw(net, raw)?)
+    }
+
+    fn from_raw(net: &Net, raw: explore::Raw) -> Result<StateSpace, AnalysisError> {
+        let n = raw.store.len();
+        let places = net.place_count();
+        let tangible = raw.tangible.iter().filter(|&&t| t).count();
+        if tangible == n {
+            let dead = (0..n as u32)
+                .filter(|&s| raw.moves.group(s as usize).is_empty())
+                .collect();
+            return Ok(StateSpace {
+                places,
+                store: raw.store,
+                tangible,
+                moves: raw.moves,
+                graph: None,
+                initial: vec![(0, 1.0)],
+                initial_global: 0,
+                flows: Vec::new(),
+                parent: raw.parent,
+                dead,
+            });
+        }
+        let mut order: Vec<u32> = Vec::with_capacity(n);
+        order.extend((0..n as u32).filter(|&i| raw.tangible[i as usize]));
+        order.extend((0..n as u32).filter(|&i| !raw.tangible[i as usize]));
+        let mut new_id = vec![0u32; n];
+        for (new, &old) in order.iter().enumerate() {
+            new_id[old as usize] = new as u32;
+        }
+        let elim = eliminate(net, &raw, &order, &new_id, tangible)?;
+        let explore::Raw {
+            mut store,
+            mut moves,
+            parent,
+            ..
+        } = raw;
+        store.permute(&order);
+        moves.renumber(&order, &new_id);
+        let parent = order
+            .iter()
+            .map(|&old| {
+                let (p, t) = parent[old as usize];
+                (if p == u32::MAX { p } else { new_id[p as usize] }, t)
+            })
+            .collect();
+        let dead = (0..tangible as u32)
+            .filter(|&s| moves.group(s as usize).is_empty())
+            .collect();
+        Ok(StateSpace {
+            places,
+            store,
+            tangible,
+            moves: elim.moves,
+            graph: Some(moves),
+            initial: elim.initial,
+            initial_global: new_id[0],
+            flows: elim.flows,
+            parent,
+            dead,
+        })
+    }
+
+    /// Number of tangible states (the CTMC's states `0..tangible_count()`).
+    pub fn tangible_count(&self) -> usize {
+        self.tangible
+    }
+
+    /// Number of vanishing markings met during the search.
+    pub fn vanishing_count(&self) -> usize {
+        self.store.len() - self.tangible
+    }
+
+    /// Number of reachable markings, tangible and vanishing.
+    pub fn reachable_count(&self) -> usize {
+        self.store.len()
+    }
+
+    /// Arcs of the full reachability graph: one per (marking, fired transition), vanishing
+    /// markings included (the Model Checking Contest's count for nets without immediates).
+    pub fn edge_count(&self) -> usize {
+        self.graph().total()
+    }
+
+    /// Arcs between tangible states after elimination: one per (state, exponential
+    /// transition, tangible target).
+    pub fn tangible_edge_count(&self) -> usize {
+        self.moves.total()
+    }
+
+    /// The marking of tangible state `s`.
+    pub fn marking(&self, s: usize) -> Vec<u32> {
+        self.global_marking(s)
+    }
+
+    /// The marking with global id `g` (tangible `0..tangible_count()`, then vanishing).
+    pub fn global_marking(&self, g: usize) -> Vec<u32> {
+        let mut m = vec![0u32; self.places];
+        self.store.get(g, &mut m);
+        m
+    }
+
+    /// Unpacks the marking with global id `g` into `out` (one count per place).
+    pub fn marking_into(&self, g: usize, out: &mut [u32]) {
+        self.store.get(g, out);
+    }
+
+    /// Initial distribution over tangible states (a vanishing initial marking is resolved).
+    pub fn initial(&self) -> &[(u32, f64)] {
+        &self.initial
+    }
+
+    /// Global id of the initial marking (0 when it is tangible).
+    pub fn initial_global(&self) -> usize {
+        self.initial_global as usize
+    }
+
+    /// Moves out of tangible state `s`. Several moves per (s, transition) when vanishing
+    /// markings lie between; their `prob` then sum to 1.
+    pub fn moves(&self, s: usize) -> &[Move] {
+        self.moves.group(s)
+    }
+
+    /// Expected immediate firings after each (tangible state, exponential transition); empty
+    /// for nets without immediate transitions.
+    pub fn immediate_flows(&self) -> &[ImmediateFlow] {
+        &self.flows
+    }
+
+    /// Tangible states where nothing can fire (dead markings), ascending.
+    pub fn dead_states(&self) -> &[u32] {
+        &self.dead
+    }
+
+    /// Arcs out of global marking `g` in the full graph: (transition fired, global target).
+    /// For vanishing markings these are the firable immediate transitions (weight 0 ones
+    /// included).
+    pub fn successors(&self, g: usize) -> impl Iterator<Item = (TransitionId, u32)> + '_ {
+        self.graph().group(g).iter().map(|m| (m.transition, m.to))
+    }
+
+    /// Probability of each arc out of vanishing marking `g` (global id), in the order of
+    /// [`successors`](Self::successors).
+    pub fn vanishing_probabilities(&self, g: usize) -> impl Iterator<Item = f64> + '_ {
+        self.graph().group(g).iter().map(|m| m.prob)
+    }
+
+    /// One shortest firing sequence from the initial marking to global marking `g`.
+    pub fn path_to(&self, g: usize) -> Vec<TransitionId> {
+        let mut path = Vec::new();
+        let mut v = g as u32;
+        while self.parent[v as usize].0 != u32::MAX {
+            let (p, t) = self.parent[v as usize];
+            path.push(TransitionId(t));
+            v = p;
+        }
+        path.reverse();
+        path
+    }
+
+    /// Approximate heap bytes held (markings and arcs).
+    pub fn heap_bytes(&self) -> usize {
+        self.moves.heap_bytes()
+            + self.graph.as_ref().map_or(0, MoveTable::heap_bytes)
+            + self.store.len() * 8 * self.store.layout.words()
+            + self.parent.len() * 8
+    }
+
+    fn graph(&self) -> &MoveTable {
+        self.graph.as_ref().unwrap_or(&self.moves)
+    }
+}

@@ -1,0 +1,317 @@
+//! Breadth-first search of the reachability graph, tangible and vanishing markings alike.
+//!
+//! Markings get ids in discovery order, so processing ids in order *is* the breadth-first
+//! queue, and the parent recorded at discovery gives a shortest firing sequence. Successors
+//! of a block of states are computed into a [`Block`] (unpack, enabling, firing, packing,
+//! hashing), then inserted in order by one thread. With several threads, worker threads
+//! compute blocks while the main thread inserts, so the numbering is the same as the
+//! sequential search.
+
+use std::sync::mpsc;
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+use super::packing::{Layout, MarkingStore};
+use super::table::MoveTable;
+use super::{AnalysisError, Move};
+use crate::net::{Net, Timing, TransitionId};
+
+/// States per block handed between threads.
+const BLOCK: usize = 1024;
+/// Frontiers smaller than this are expanded on the calling thread.
+const PAR_MIN: usize = 2 * BLOCK;
+
+/// The reachability graph as found: ids in discovery order.
+#[derive(Debug)]
+pub(crate) struct Raw {
+    pub(crate) store: MarkingStore,
+    /// Per id: tangible (no immediate transition enabled).
+    pub(crate) tangible: Vec<bool>,
+    /// Per id: moves out. Tangible sources carry the rate (prob 1); vanishing sources carry
+    /// the firing probability (rate 0).
+    pub(crate) moves: MoveTable,
+    /// Per id: the marking it was first reached from and the transition fired (`u32::MAX`
+    /// for the initial marking).
+    pub(crate) parent: Vec<(u32, u32)>,
+}
+
+/// Which transitions may fire, precomputed from the net.
+#[derive(Debug)]
+struct Rules {
+    /// Immediate transitions by decreasing priority: (transition, weight, priority).
+    immediates: Vec<(TransitionId, f64, u32)>,
+    exponentials: Vec<TransitionId>,
+}
+
+impl Rules {
+    fn new(net: &Net) -> Rules {
+        let mut immediates = Vec::new();
+        let mut exponentials = Vec::new();
+        for t in net.transition_ids() {
+            match net.transition(t).timing {
+                Timing::Immediate { weight, priority } => immediates.push((t, weight, priority)),
+                Timing::Exponential { .. } => exponentials.push(t),
+            }
+        }
+        immediates.sort_by_key(|&(t, _, p)| (std::cmp::Reverse(p), t));
+        Rules {
+            immediates,
+            exponentials,
+        }
+    }
+}
+
+/// Successors of consecutive states `first..first + count.len()`.
+#[derive(Debug, Default)]
+struct Block {
+    first: usize,
+    count: Vec<u32>,
+    tangible: Vec<bool>,
+    /// (transition, rate or probability, hash of the target).
+    items: Vec<(u32, f64, u64)>,
+    /// Packed targets, `words` per item.
+    keys: Vec<u64>,
+    /// A target did not fit the layout: (state, place, value). States before it are done.
+    overflow: Option<(usize, usize, u32)>,
+}
+
+/// Computes the successors of the states whose packed words are `frontier`.
+fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: usize) -> Block {
+    let w = layout.words();
+    let n = frontier.len() / w;
+    let mut b = Block {
+        first,
+        count: Vec::with_capacity(n),
+        tangible: Vec::with_capacity(n),
+        items: Vec::with_capacity(n * 4),
+        keys: Vec::with_capacity(n * 4 * w),
+        overflow: None,
+    };
+    let mut m = vec![0u32; net.place_count()];
+    let mut next = vec![0u32; net.place_count()];
+    let mut key = vec![0u64; w];
+    let mut fire: Vec<(TransitionId, f64)> = Vec::new();
+    for i in 0..n {
+        layout.unpack(&frontier[i * w..(i + 1) * w], &mut m);
+        let tangible = firable(net, rules, &m, &mut fire);
+        let (items_len, keys_len) = (b.items.len(), b.keys.len());
+        for &(t, v) in &fire {
+            next.copy_from_slice(&m);
+            net.fire(&mut next, t);
+            if let Err(p) = layout.pack(&next, &mut key) {
+                b.items.truncate(items_len);
+                b.keys.truncate(keys_len);
+                b.overflow = Some((first + i, p, next[p]));
+                return b;
+            }
+            b.items.push((t.0, v, MarkingStore::hash(&key)));
+            b.keys.extend_from_slice(&key);
+        }
+        b.count.push(fire.len() as u32);
+        b.tangible.push(tangible);
+    }
+    b
+}
+
+/// Fills `out` with what may fire in `m` and its rate (tangible) or probability (vanishing);
+/// returns whether `m` is tangible.
+fn firable(net: &Net, rules: &Rules, m: &[u32], out: &mut Vec<(TransitionId, f64)>) -> bool {
+    out.clear();
+    let mut level = None;
+    for &(t, w, pr) in &rules.immediates {
+        if level.is_some_and(|l| pr < l) {
+            break;
+        }
+        if net.is_enabled(m, t) {
+            level = Some(pr);
+            out.push((t, w));
+        }
+    }
+    if level.is_some() {
+        let sum: f64 = out.iter().map(|&(_, w)| w).sum();
+        let k = out.len() as f64;
+        for (_, w) in out.iter_mut() {
+            *w = if sum > 0.0 { *w / sum } else { 1.0 / k };
+        }
+        return false;
+    }
+    for &t in &rules.exponentials {
+        let r = net.exp_rate(m, t);
+        if r > 0.0 {
+            out.push((t, r));
+        }
+    }
+    true
+}
+
+/// The search's mutable state, owned by the inserting thread.
+struct Search {
+    raw: Raw,
+    max_states: usize,
+    group: Vec<Move>,
+    bar: Option<ProgressBar>,
+}
+
+impl Search {
+    /// Inserts a block's targets; `Some(overflow)` when the block stopped early.
+    fn insert(&mut self, b: &Block) -> Result<Option<(usize, usize, u32)>, AnalysisError> {
+        let w = self.raw.store.layout.words();
+        let mut it = 0;
+        for (i, &cnt) in b.count.iter().enumerate() {
+            let src = (b.first + i) as u32;
+            let tangible = b.tangible[i];
+            self.group.clear();
+            for _ in 0..cnt {
+                let (t, v, h) = b.items[it];
+                let key = &b.keys[it * w..(it + 1) * w];
+                let (to, new) = self.raw.store.insert_hashed(key, h);
+                if new {
+                    if self.raw.store.len() > self.max_states {
+                        return Err(AnalysisError::TooManyStates {
+                            limit: self.max_states,
+                        });
+                    }
+                    self.raw.parent.push((src, t));
+                }
+                let (rate, prob) = if tangible { (v, 1.0) } else { (0.0, v) };
+                self.group.push(Move {
+                    transition: TransitionId(t),
+                    rate,
+                    to,
+                    prob,
+                });
+                it += 1;
+            }
+            self.raw.tangible.push(tangible);
+            self.raw.moves.push_group(&self.group);
+        }
+        if let Some(bar) = &self.bar {
+            bar.set_position(self.raw.store.len() as u64);
+        }
+        Ok(b.overflow)
+    }
+}
+
+/// Searches the whole reachability graph from the initial marking.
+pub(crate) fn explore(
+    net: &Net,
+    layout: Layout,
+    max_states: usize,
+    threads: usize,
+    progress: bool,
+) -> Result<Raw, AnalysisError> {
+    let rules = Rules::new(net);
+    let mut store = MarkingStore::new(layout, net.place_count());
+    let mut m0 = net.initial_marking().into_vec();
+    let mut key = vec![0u64; store.layout.words()];
+    while let Err(p) = store.layout.pack(&m0, &mut key) {
+        store.layout = store.layout.widened(p, m0[p]);
+        key = vec![0u64; store.layout.words()];
+    }
+    store.insert(&key);
+    m0.clear();
+    let bar = progress.then(|| {
+        let bar = ProgressBar::new_spinner();
+        if let Ok(style) =
+            ProgressStyle::with_template("{spinner} {pos} markings ({per_sec}) {elapsed}")
+        {
+            bar.set_style(style);
+        }
+        bar
+    });
+    let mut s = Search {
+        raw: Raw {
+            store,
+            tangible: Vec::new(),
+            moves: MoveTable::default(),
+            parent: vec![(u32::MAX, u32::MAX)],
+        },
+        max_states: max_states.max(1),
+        group: Vec::new(),
+        bar,
+    };
+    let mut cursor = 0;
+    while cursor < s.raw.store.len() {
+        let hi = s.raw.store.len();
+        let w = s.raw.store.layout.words();
+        let layout = s.raw.store.layout.clone();
+        let frontier: Vec<u64> = (cursor..hi)
+            .flat_map(|id| s.raw.store.packed(id).iter().copied())
+            .collect();
+        let overflow = if threads <= 1 || hi - cursor < PAR_MIN {
+            let mut over = None;
+            for (k, chunk) in frontier.chunks(BLOCK * w).enumerate() {
+                let b = generate(net, &rules, &layout, chunk, cursor + k * BLOCK);
+                over = s.insert(&b)?;
+                if over.is_some() {
+                    break;
+                }
+            }
+            over
+        } else {
+            expand_parallel(net, &rules, &layout, &frontier, cursor, threads, &mut s)?
+        };
+        match overflow {
+            Some((state, p, value)) => {
+                let wider = s.raw.store.layout.widened(p, value);
+                s.raw.store.relayout(wider);
+                cursor = state;
+            }
+            None => cursor = hi,
+        }
+    }
+    if let Some(bar) = &s.bar {
+        bar.finish_and_clear();
+    }
+    s.raw.moves.shrink();
+    s.raw.store.drop_index();
+    Ok(s.raw)
+}
+
+/// Expands a large frontier: `threads - 1` workers compute blocks round-robin, the calling
+/// thread inserts them in order.
+fn expand_parallel(
+    net: &Net,
+    rules: &Rules,
+    layout: &Layout,
+    frontier: &[u64],
+    first: usize,
+    threads: usize,
+    s: &mut Search,
+) -> Result<Option<(usize, usize, u32)>, AnalysisError> {
+    let w = layout.words();
+    let chunks: Vec<&[u64]> = frontier.chunks(BLOCK * w).collect();
+    let workers = (threads - 1).max(1);
+    std::thread::scope(|scope| {
+        let mut rxs = Vec::with_capacity(workers);
+        for k in 0..workers {
+            let (tx, rx) = mpsc::sync_channel::<Block>(4);
+            rxs.push(rx);
+            let chunks = &chunks;
+            scope.spawn(move || {
+                for (j, chunk) in chunks.iter().enumerate().skip(k).step_by(workers) {
+                    let b = generate(net, rules, layout, chunk, first + j * BLOCK);
+                    let stop = b.overflow.is_some();
+                    if tx.send(b).is_err() || stop {
+                        return;
+                    }
+                }
+            });
+        }
+        let mut result = Ok(None);
+        for j in 0..chunks.len() {
+            let Ok(b) = rxs[j % workers].recv() else {
+                break;
+            };
+            match s.insert(&b) {
+                Ok(None) => {}
+                other => {
+                    result = other;
+                    break;
+                }
+            }
+        }
+        drop(rxs);
+        result
+    })
+}
