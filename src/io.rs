@@ -9,6 +9,7 @@ pub mod pipe;
 pub mod plan;
 pub mod pnml;
 pub mod pnpro;
+pub mod prism;
 pub mod thesis;
 
 use std::fmt;
