@@ -17,9 +17,9 @@ use super::{AnalysisError, Move};
 use crate::net::{Net, Timing, TransitionId};
 
 /// States per block handed between threads.
-const BLOCK: usize = 2048;
+const BLOCK: usize = 1024;
 /// Frontiers smaller than this are expanded on the calling thread.
-const PAR_MIN: usize = 4 * BLOCK;
+const PAR_MIN: usize = 2 * BLOCK;
 
 /// The reachability graph as found: ids in discovery order.
 #[derive(Debug)]
