@@ -7,10 +7,15 @@
 //!   [`vanishing`] markings eliminated; [`coverability`] (Karp–Miller) stops unbounded nets;
 //!   [`properties`] (bounds, deadlocks, liveness, reversibility) and [`invariants`] (Farkas)
 //!   read it; [`scc`] is the shared Tarjan.
+//! - [`ctmc`]: the chain over tangible states and its solvers (steady state by sparse LU or
+//!   Gauss–Seidel, limiting distribution of non-ergodic chains, transient by uniformization);
+//!   [`measures`] turns a distribution into mean tokens, throughputs, waiting times and
+//!   predicate probabilities ([`Solver`](measures::Solver)).
 
 pub mod coverability;
 pub mod ctmc;
 pub mod invariants;
+pub mod measures;
 pub mod properties;
 pub mod scc;
 pub mod state_space;

@@ -10,6 +10,7 @@ pub mod pipe;
 pub mod plan;
 pub mod pnml;
 pub mod pnpro;
+pub mod prism;
 pub mod thesis;
 mod xml;
 

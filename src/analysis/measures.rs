@@ -1,0 +1,186 @@
+//! Performance measures of a GSPN from a distribution over its tangible states: mean tokens
+//! and token distribution per place, P(place non-empty), throughput of every transition
+//! (immediate ones through the vanishing paths), mean waiting time per place (Little's law)
+//! and the probability of a marking predicate — in steady state or at transient times.
+//!
+//! ```
+//! use gspn::analysis::measures::{Solver, SolverOptions};
+//! use gspn::analysis::state_space::{Options, StateSpace};
+//! use gspn::net::{NetBuilder, Servers, predicate::Predicate};
+//! // cyc3 (single server): π over (2,0,0), (1,0,1), (0,0,2) is (4,2,1)/7.
+//! let mut b = NetBuilder::new("cyc3");
+//! let (p1, p2, p3) = (b.place("P1", 2), b.place("P2", 0), b.place("P3", 0));
+//! let t1 = b.exponential("T1", 1.0, Servers::Single);
+//! let t2 = b.immediate("t2", 1.0, 1);
+//! let t3 = b.exponential("T3", 2.0, Servers::Single);
+//! b.input(p1, t1, 1); b.output(t1, p2, 1);
+//! b.input(p2, t2, 1); b.output(t2, p3, 1);
+//! b.input(p3, t3, 1); b.output(t3, p1, 1);
+//! let net = b.build().unwrap();
+//! let ss = StateSpace::build(&net, &Options::default()).unwrap();
+//! let solver = Solver::new(&net, &ss);
+//! let steady = solver.steady_state(&SolverOptions::default()).unwrap();
+//! assert!(steady.ergodic);
+//! let m = solver.measures(&steady.pi);
+//! assert!((m.mean_tokens[0] - 10.0 / 7.0).abs() < 1e-12);
+//! assert!((m.throughput[1] - 6.0 / 7.0).abs() < 1e-12); // t2, immediate
+//! let busy = Predicate::parse(&net, "P3 > 0").unwrap();
+//! assert!((solver.probability(&steady.pi, &busy) - 3.0 / 7.0).abs() < 1e-12);
+//! let at = solver.transient(&[0.0, 1.0], 1e-12);
+//! assert_eq!(at[0][0], 1.0);
+//! ```
+
+use crate::analysis::ctmc::{Ctmc, Limiting, SolveError, SteadyOptions};
+use crate::analysis::state_space::StateSpace;
+use crate::net::Net;
+use crate::net::predicate::Predicate;
+
+/// Options of [`Solver::steady_state`] and [`Solver::transient`].
+pub type SolverOptions = SteadyOptions;
+
+/// The CTMC of a state space, with the net, ready to solve and measure.
+#[derive(Debug)]
+pub struct Solver<'a> {
+    net: &'a Net,
+    space: &'a StateSpace,
+    chain: Ctmc,
+}
+
+/// The measures of one distribution over tangible states. Vectors are indexed by
+/// [`PlaceId::index`](crate::net::PlaceId::index) or
+/// [`TransitionId::index`](crate::net::TransitionId::index).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measures {
+    /// E[tokens] per place.
+    pub mean_tokens: Vec<f64>,
+    /// `token_distribution[p][k]` = P(place p holds k tokens), k up to the largest count seen.
+    pub token_distribution: Vec<Vec<f64>>,
+    /// P(place holds at least one token).
+    pub prob_nonempty: Vec<f64>,
+    /// Firings per unit time of each transition.
+    pub throughput: Vec<f64>,
+    /// Mean time a token spends in each place: E[tokens] / Σ throughput of the place's output
+    /// transitions (`None` when that sum is 0).
+    pub mean_wait: Vec<Option<f64>>,
+}
+
+impl<'a> Solver<'a> {
+    /// The generator: `Q[s][to] += rate·prob` for every move (self-loops dropped).
+    pub fn new(net: &'a Net, space: &'a StateSpace) -> Self {
+        let n = space.tangible_count();
+        let mut triplets = Vec::new();
+        for s in 0..n {
+            for m in space.moves(s) {
+                triplets.push((s as u32, m.to, m.rate * m.prob));
+            }
+        }
+        Solver {
+            net,
+            space,
+            chain: Ctmc::from_triplets(n, triplets),
+        }
+    }
+
+    /// The chain over tangible states.
+    pub fn chain(&self) -> &Ctmc {
+        &self.chain
+    }
+
+    /// The limiting distribution from the initial marking: the steady state when the chain
+    /// is ergodic, else absorption into each bottom component times its steady state.
+    pub fn steady_state(&self, opts: &SolverOptions) -> Result<Limiting, SolveError> {
+        self.chain.limiting(self.space.initial(), opts)
+    }
+
+    /// π(t) at each time, from the initial marking (uniformization, error ≤ `eps` each).
+    pub fn transient(&self, times: &[f64], eps: f64) -> Vec<Vec<f64>> {
+        self.chain.transient(self.space.initial(), times, eps)
+    }
+
+    /// Every measure of distribution `pi` over tangible states.
+    pub fn measures(&self, pi: &[f64]) -> Measures {
+        let net = self.net;
+        let places = net.place_count();
+        let mut mean = vec![0.0; places];
+        let mut dist: Vec<Vec<f64>> = vec![Vec::new(); places];
+        let mut throughput = vec![0.0; net.transition_count()];
+        let mut m = vec![0u32; places];
+        for (s, &p) in pi.iter().enumerate() {
+            self.space.marking_into(s, &mut m);
+            for (i, &k) in m.iter().enumerate() {
+                let d = &mut dist[i];
+                if d.len() <= k as usize {
+                    d.resize(k as usize + 1, 0.0);
+                }
+                d[k as usize] += p;
+                mean[i] += p * k as f64;
+            }
+            if p == 0.0 {
+                continue;
+            }
+            for mv in self.space.moves(s) {
+                throughput[mv.transition.index()] += p * mv.rate * mv.prob;
+            }
+        }
+        if !self.space.immediate_flows().is_empty() {
+            let mut rate_of = rustc_hash::FxHashMap::default();
+            for s in 0..pi.len() {
+                if pi[s] == 0.0 {
+                    continue;
+                }
+                for mv in self.space.moves(s) {
+                    rate_of.insert((s as u32, mv.transition), mv.rate);
+                }
+            }
+            for f in self.space.immediate_flows() {
+                let p = pi[f.state as usize];
+                if p == 0.0 {
+                    continue;
+                }
+                let rate = rate_of
+                    .get(&(f.state, f.transition))
+                    .copied()
+                    .unwrap_or_else(|| {
+                        self.space.marking_into(f.state as usize, &mut m);
+                        net.exp_rate(&m, f.transition)
+                    });
+                throughput[f.immediate.index()] += p * rate * f.expected;
+            }
+        }
+        let prob_nonempty = dist.iter().map(|d| d.iter().skip(1).sum()).collect();
+        let mut out_rate = vec![0.0; places];
+        for t in net.transition_ids() {
+            for &(p, _) in net.inputs(t) {
+                out_rate[p.index()] += throughput[t.index()];
+            }
+        }
+        let mean_wait = mean
+            .iter()
+            .zip(&out_rate)
+            .map(|(&e, &x)| (x > 0.0).then(|| e / x))
+            .collect();
+        Measures {
+            mean_tokens: mean,
+            token_distribution: dist,
+            prob_nonempty,
+            throughput,
+            mean_wait,
+        }
+    }
+
+    /// P(the marking satisfies `predicate`) under distribution `pi`.
+    pub fn probability(&self, pi: &[f64], predicate: &Predicate) -> f64 {
+        let mut m = vec![0u32; self.net.place_count()];
+        let mut total = 0.0;
+        for (s, &p) in pi.iter().enumerate() {
+            if p == 0.0 {
+                continue;
+            }
+            self.space.marking_into(s, &mut m);
+            if predicate.eval(&m) {
+                total += p;
+            }
+        }
+        total
+    }
+}
