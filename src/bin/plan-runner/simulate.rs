@@ -1,14 +1,345 @@
-//! `plan-runner simulate` (being written).
+//! `plan-runner simulate FILE [--seed S] [--until T | --steps N] [--runs R] [--json]`.
+//!
+//! One run prints its trace (time, transition, marking); `--runs R` prints Monte-Carlo
+//! estimates (mean tokens per place, throughput per transition) with 95% confidence
+//! intervals instead.
 
+use std::io::Write;
+use std::path::PathBuf;
 use std::process::ExitCode;
+
+use anyhow::Context;
+use gspn::io::plan::read_plan;
+use gspn::net::Net;
+use gspn::net::predicate::Predicate;
+use gspn::policy::Policy;
+use gspn::sim::{Estimate, Horizon, MonteCarlo, SimError, Simulator};
+use serde_json::{Map, Value, json};
+
+use crate::common::{BadInput, NetArgs, load_net};
 
 /// Arguments of `simulate`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct Args {
-    /// Input file.
-    file: std::path::PathBuf,
+    /// A net (.xml, .pnml, .PNPRO) or a plan (.toml: its policy, seed and stop limits apply).
+    file: PathBuf,
+    /// Seed of the run (Monte-Carlo run i uses stream i of it) [default: the plan's seed, else 0].
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Simulate until this virtual time [default: the plan's time limit, else 1000 with --runs].
+    #[arg(long, value_name = "T", conflicts_with = "steps")]
+    until: Option<f64>,
+    /// Fire this many transitions (per run) [default: the plan's firing limit, else 100 for a trace].
+    #[arg(long, value_name = "N")]
+    steps: Option<u64>,
+    /// Monte-Carlo: this many independent runs, estimates with 95% confidence intervals.
+    #[arg(long, value_name = "R")]
+    runs: Option<u64>,
+    /// Print JSON: `runs, firings, mean_tokens, throughput, ci95` (a single run adds `trace`).
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    net: NetArgs,
+}
+
+/// What the file gave: the net and, for a plan, its policy, seed and limits.
+struct Input {
+    net: Net,
+    policy: Option<Policy>,
+    seed: Option<u64>,
+    time_limit: Option<f64>,
+    max_firings: Option<u64>,
+    stop_when: Option<Predicate>,
+}
+
+fn load(args: &Args) -> anyhow::Result<Input> {
+    let is_plan = args
+        .file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if is_plan {
+        let plan = read_plan(&args.file, &args.net.read_options())?;
+        for w in &plan.warnings {
+            eprintln!("warning: {w}");
+        }
+        Ok(Input {
+            policy: (!plan.policy.is_empty()).then_some(plan.policy),
+            seed: plan.seed,
+            time_limit: plan.stop.time_limit,
+            max_firings: plan.stop.max_firings,
+            stop_when: plan.stop.when,
+            net: plan.net,
+        })
+    } else {
+        let loaded = load_net(&args.file, &args.net)?;
+        for w in &loaded.warnings {
+            eprintln!("warning: {w}");
+        }
+        Ok(Input {
+            net: loaded.net,
+            policy: None,
+            seed: None,
+            time_limit: None,
+            max_firings: None,
+            stop_when: None,
+        })
+    }
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("{}: `simulate` is not implemented yet", args.file.display())
+    if let Some(t) = args.until
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(BadInput(format!("--until {t}: must be a finite number ≥ 0")).into());
+    }
+    if args.runs == Some(0) {
+        return Err(BadInput("--runs 0: at least one run is needed".into()).into());
+    }
+    let input = load(&args)?;
+    let seed = args.seed.or(input.seed).unwrap_or(0);
+    let horizon = match (args.until, args.steps) {
+        (Some(t), _) => Horizon::Until(t),
+        (None, Some(n)) => Horizon::Steps(n),
+        (None, None) => match (input.time_limit, input.max_firings) {
+            (Some(t), _) => Horizon::Until(t),
+            (None, Some(n)) => Horizon::Steps(n),
+            (None, None) if args.runs.is_some() => Horizon::Until(1000.0),
+            (None, None) => Horizon::Steps(100),
+        },
+    };
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    match args.runs {
+        Some(runs) => monte_carlo(&args, &input, runs, horizon, seed, &mut out)?,
+        None => trace(&args, &input, horizon, seed, &mut out)?,
+    }
+    out.flush()?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A timeless trap is a defect of the net: bad input.
+fn sim_error(e: SimError) -> anyhow::Error {
+    BadInput(e.to_string()).into()
+}
+
+fn horizon_text(h: Horizon) -> String {
+    match h {
+        Horizon::Until(t) => format!("until {t}"),
+        Horizon::Steps(n) => format!("{n} steps"),
+    }
+}
+
+fn trace(
+    args: &Args,
+    input: &Input,
+    horizon: Horizon,
+    seed: u64,
+    out: &mut impl Write,
+) -> anyhow::Result<()> {
+    let net = &input.net;
+    let mut sim = Simulator::new(net, seed);
+    if let Some(p) = &input.policy {
+        sim = sim.with_policy(p);
+    }
+    let (until, max_steps) = match horizon {
+        Horizon::Until(t) => (t, u64::MAX),
+        Horizon::Steps(n) => (f64::INFINITY, n),
+    };
+    let mut rows = Vec::new();
+    if !args.json {
+        writeln!(
+            out,
+            "# {}: seed {seed}, {}",
+            net.name(),
+            horizon_text(horizon)
+        )?;
+        writeln!(out, "{:>14}  {:<24}  marking", "time", "transition")?;
+        writeln!(
+            out,
+            "{:>14.6}  {:<24}  {}",
+            0.0,
+            "(initial)",
+            net.format_marking(sim.marking())
+        )?;
+    }
+    let mut end = "limit";
+    while sim.firings() < max_steps {
+        if input
+            .stop_when
+            .as_ref()
+            .is_some_and(|p| p.eval(sim.marking()))
+        {
+            end = "stop_when";
+            break;
+        }
+        match sim.step_until(until).map_err(sim_error)? {
+            Some(step) => {
+                let name = &net.transition(step.transition).name;
+                let marking = net.format_marking(sim.marking());
+                if args.json {
+                    rows.push(json!({"time": step.time, "transition": name, "marking": marking}));
+                } else {
+                    writeln!(out, "{:>14.6}  {:<24}  {}", step.time, name, marking)?;
+                }
+            }
+            None => {
+                if sim.is_dead() {
+                    end = "dead";
+                }
+                break;
+            }
+        }
+    }
+    if sim.is_dead() && until.is_finite() {
+        sim.run_until(until).map_err(sim_error)?;
+    }
+    let stats = sim.statistics();
+    if args.json {
+        let mut v = summary_json(
+            net,
+            1,
+            sim.firings(),
+            &stats.mean_tokens,
+            &stats.throughput,
+            None,
+        );
+        v["trace"] = Value::Array(rows);
+        v["end"] = json!(end);
+        v["time"] = json!(sim.time());
+        serde_json::to_writer_pretty(&mut *out, &v)?;
+        writeln!(out)?;
+    } else {
+        let why = match end {
+            "dead" => "dead marking (nothing can fire again)",
+            "stop_when" => "the plan's stop condition holds",
+            _ => "limit reached",
+        };
+        writeln!(
+            out,
+            "# end at time {:.6} after {} firings: {why}",
+            sim.time(),
+            sim.firings()
+        )?;
+    }
+    Ok(())
+}
+
+fn monte_carlo(
+    args: &Args,
+    input: &Input,
+    runs: u64,
+    horizon: Horizon,
+    seed: u64,
+    out: &mut impl Write,
+) -> anyhow::Result<()> {
+    let net = &input.net;
+    let mut mc = MonteCarlo::new(net, horizon).runs(runs).seed(seed);
+    if let Some(p) = &input.policy {
+        mc = mc.policy(p);
+    }
+    let est = mc
+        .run()
+        .map_err(sim_error)
+        .with_context(|| format!("{}: Monte-Carlo simulation", args.file.display()))?;
+    let mean: Vec<f64> = est.mean_tokens.iter().map(|e| e.mean).collect();
+    let thr: Vec<f64> = est.throughput.iter().map(|e| e.mean).collect();
+    if args.json {
+        let v = summary_json(
+            net,
+            est.runs,
+            est.firings,
+            &mean,
+            &thr,
+            Some((&est.mean_tokens, &est.throughput)),
+        );
+        serde_json::to_writer_pretty(&mut *out, &v)?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "# {}: {} runs, seed {seed}, {}: {} firings, {} runs ended dead, mean time {:.6}",
+        net.name(),
+        est.runs,
+        horizon_text(horizon),
+        est.firings,
+        est.dead_runs,
+        est.mean_time
+    )?;
+    let width = net
+        .places()
+        .iter()
+        .map(|p| p.name.len())
+        .chain(net.transitions().iter().map(|t| t.name.len()))
+        .max()
+        .unwrap_or(0)
+        .max(10);
+    writeln!(
+        out,
+        "{:<width$}  {:>12}  95% interval",
+        "place", "mean tokens"
+    )?;
+    for (p, e) in net.places().iter().zip(&est.mean_tokens) {
+        writeln!(out, "{:<width$}  {:>12.6}  {}", p.name, e.mean, interval(e))?;
+    }
+    writeln!(
+        out,
+        "{:<width$}  {:>12}  95% interval",
+        "transition", "throughput"
+    )?;
+    for (t, e) in net.transitions().iter().zip(&est.throughput) {
+        writeln!(out, "{:<width$}  {:>12.6}  {}", t.name, e.mean, interval(e))?;
+    }
+    Ok(())
+}
+
+fn interval(e: &Estimate) -> String {
+    if e.half_width.is_nan() {
+        "(one run: no interval)".into()
+    } else {
+        format!("[{:.6}, {:.6}]", e.lo(), e.hi())
+    }
+}
+
+/// `runs, firings, mean_tokens {place: x}, throughput {transition: x}, ci95 {mean_tokens
+/// {p: [lo, hi]}, throughput {t: [lo, hi]}}`; intervals are `[null, null]` for one run.
+fn summary_json(
+    net: &Net,
+    runs: u64,
+    firings: u64,
+    mean_tokens: &[f64],
+    throughput: &[f64],
+    ci: Option<(&[Estimate], &[Estimate])>,
+) -> Value {
+    let by_place = |f: &dyn Fn(usize) -> Value| -> Value {
+        Value::Object(
+            net.places()
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (p.name.clone(), f(i)))
+                .collect::<Map<_, _>>(),
+        )
+    };
+    let by_transition = |f: &dyn Fn(usize) -> Value| -> Value {
+        Value::Object(
+            net.transitions()
+                .iter()
+                .enumerate()
+                .map(|(i, t)| (t.name.clone(), f(i)))
+                .collect::<Map<_, _>>(),
+        )
+    };
+    let pair = |e: Option<&Estimate>| match e {
+        Some(e) if !e.half_width.is_nan() => json!([e.lo(), e.hi()]),
+        _ => json!([null, null]),
+    };
+    json!({
+        "runs": runs,
+        "firings": firings,
+        "mean_tokens": by_place(&|i| json!(mean_tokens[i])),
+        "throughput": by_transition(&|i| json!(throughput[i])),
+        "ci95": {
+            "mean_tokens": by_place(&|i| pair(ci.map(|c| &c.0[i]))),
+            "throughput": by_transition(&|i| pair(ci.map(|c| &c.1[i]))),
+        },
+    })
 }
