@@ -1,1 +1,176 @@
-//! The actor runtime: supervisor, agents, places, actions, events, journal (being written).
+//! The actor runtime: a plan executed by agents.
+//!
+//! - [`supervisor`]: one kameo actor per running plan; owns the marking, the policy and the
+//!   agent registry, serialises every firing, never awaits a user action.
+//! - [`agent`]: one agent per token in an action place (stable [`AgentId`]), spawned and
+//!   ended with the tokens; optionally a kameo actor each ([`AgentMode`]).
+//! - [`place`]: one actor per action place, running each agent's [`Action`] concurrently.
+//! - [`action`]: the [`Action`] trait and its [`Outcome`].
+//! - [`event`]: the broadcast bus of [`Event`]s; [`journal`]: the JSON Lines journal.
+//! - [`RuntimeBuilder`] / [`RuntimeHandle`]: embedding in an existing tokio runtime.
+//!
+//! Places without a registered action are *net-timed*: the supervisor samples their
+//! exponential transitions with the net's rates and server semantics, so a plan with no user
+//! code is the GSPN's own token game.
+//!
+//! ```
+//! use gspn::net::{NetBuilder, Servers};
+//! use gspn::runtime::{Runtime, Outcome, action_fn, StopReason};
+//! # #[tokio::main(flavor = "current_thread")]
+//! # async fn main() {
+//! let mut b = NetBuilder::new("ping");
+//! let idle = b.place("idle", 1);
+//! let busy = b.place("busy", 0);
+//! let go = b.exponential("go", 1.0, Servers::Single);
+//! let back = b.exponential("back", 1.0, Servers::Single);
+//! b.input(idle, go, 1);
+//! b.output(go, busy, 1);
+//! b.input(busy, back, 1);
+//! b.output(back, idle, 1);
+//! let net = b.build().unwrap();
+//! let handle = Runtime::builder(net)
+//!     .action("work", action_fn(move |_ctx| async move { Outcome::Fire(back) }))
+//!     .bind("busy", "work")
+//!     .seed(7)
+//!     .max_firings(10)
+//!     .spawn()
+//!     .unwrap();
+//! let summary = handle.wait().await;
+//! assert_eq!(summary.firings, 10);
+//! assert_eq!(summary.stopped, StopReason::MaxFirings);
+//! # }
+//! ```
+
+pub mod action;
+pub mod agent;
+mod builder;
+mod conservation;
+mod engine;
+pub mod event;
+mod handle;
+pub mod journal;
+pub mod place;
+mod race;
+pub mod supervisor;
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+pub use action::{Action, ActionContext, ActionFuture, CancelToken, FnAction, Outcome, action_fn};
+pub use agent::{AgentId, AgentMode, AgentState};
+pub use builder::RuntimeBuilder;
+pub use event::{Event, EventKind, Events, Received};
+pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};
+
+use crate::io::plan::Plan;
+use crate::net::Net;
+
+/// Entry point: `Runtime::builder(net)` or `Runtime::from_plan(plan)`.
+#[derive(Debug)]
+pub struct Runtime;
+
+impl Runtime {
+    /// A run of `net` where every place is net-timed until roles and actions say otherwise.
+    pub fn builder(net: Net) -> RuntimeBuilder {
+        RuntimeBuilder::new(net)
+    }
+
+    /// A run of a plan: its roles, policy, stop conditions, seed and time scale.
+    pub fn from_plan(plan: Plan) -> RuntimeBuilder {
+        RuntimeBuilder::from_plan(plan)
+    }
+}
+
+/// Why a run stopped.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// Nothing can ever fire again.
+    Dead,
+    /// Agents chose transitions that never became enabled (see the errors).
+    Stuck,
+    /// The plan's `stop.when` condition holds.
+    Condition,
+    /// The time limit was reached.
+    TimeLimit,
+    /// The firing limit was reached.
+    MaxFirings,
+    /// An action failed and its place's policy said stop.
+    Failure,
+    /// `handle.stop()`.
+    Requested,
+    /// Ctrl-C.
+    Interrupted,
+}
+
+impl StopReason {
+    /// 0 done, 1 failure, 130 interrupted.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            StopReason::Dead
+            | StopReason::Condition
+            | StopReason::TimeLimit
+            | StopReason::MaxFirings => 0,
+            StopReason::Stuck | StopReason::Failure => 1,
+            StopReason::Requested | StopReason::Interrupted => 130,
+        }
+    }
+
+    /// A sentence for people.
+    pub fn describe(&self) -> &'static str {
+        match self {
+            StopReason::Dead => "nothing can fire any more",
+            StopReason::Stuck => "agents wait for transitions that never became enabled",
+            StopReason::Condition => "the stop condition holds",
+            StopReason::TimeLimit => "time limit reached",
+            StopReason::MaxFirings => "firing limit reached",
+            StopReason::Failure => "an action failed",
+            StopReason::Requested => "stopped by request",
+            StopReason::Interrupted => "interrupted",
+        }
+    }
+}
+
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.describe())
+    }
+}
+
+/// Why a run could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum RuntimeError {
+    /// `spawn` was called outside a tokio runtime.
+    #[error("the runtime must be spawned inside a tokio runtime")]
+    NoTokio,
+    /// A time scale that is negative or not finite.
+    #[error("time scale {0} must be finite and ≥ 0")]
+    BadTimeScale(f64),
+    /// `bind` named a place the net does not have.
+    #[error("no place named `{0}`")]
+    UnknownPlace(String),
+    /// Robots are bound to places but a transition creates or destroys robot tokens.
+    #[error(
+        "transition `{transition}` changes the number of robot tokens by {change} (outside resource places): robots cannot appear or vanish"
+    )]
+    RobotTokens {
+        /// The transition.
+        transition: String,
+        /// Tokens it adds (negative: removes) outside resource places.
+        change: i64,
+    },
+    /// The journal file could not be created.
+    #[error("journal {path}: {reason}")]
+    Journal {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// The net, for callers that built the run from a plan.
+pub fn net_of(handle: &RuntimeHandle) -> &Net {
+    handle.net()
+}

@@ -1,14 +1,161 @@
-//! `plan-runner run` (being written).
+//! `plan-runner run PLAN|NET`: execute a plan (or a bare net, every place net-timed) on agents.
+//!
+//! Places whose action is not registered in this binary run net-timed (the CLI has no user
+//! code); a live one-line progress display on a terminal; a summary at the end (`--json`:
+//! `stopped, firings, time, agents_spawned, agents_ended, final_marking, mean_tokens,
+//! throughput, errors`). Ctrl-C stops the run cleanly (journal flushed) with exit code 130.
 
+use std::io::IsTerminal;
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::Context as _;
+use gspn::io::plan::{Plan, read_plan};
+use gspn::runtime::{Runtime, Summary};
+
+use crate::common::{BadInput, NetArgs, load_net};
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct Args {
-    /// Input file.
-    file: std::path::PathBuf,
+    /// A plan (`.toml`) or a net file (every place net-timed).
+    file: PathBuf,
+    /// Seed of every random choice (default: the plan's, else from the clock).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// 0 = virtual time, as fast as possible; 1 = real time (default: the plan's, else 0).
+    #[arg(long, value_name = "X")]
+    time_scale: Option<f64>,
+    /// Stop at this model time.
+    #[arg(long, value_name = "T")]
+    until: Option<f64>,
+    /// Stop after this many firings.
+    #[arg(long, value_name = "N")]
+    max_firings: Option<u64>,
+    /// Write every event to this file (JSON Lines).
+    #[arg(long, value_name = "FILE")]
+    journal: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    net: NetArgs,
+}
+
+fn load(args: &Args) -> anyhow::Result<Plan> {
+    let is_plan = args
+        .file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if is_plan {
+        Ok(read_plan(&args.file, &args.net.read_options())?)
+    } else {
+        let loaded = load_net(&args.file, &args.net)?;
+        Ok(Plan::for_net(&args.file, loaded))
+    }
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("{}: `run` is not implemented yet", args.file.display())
+    let mut plan = load(&args)?;
+    if let Some(x) = args.time_scale {
+        if !(x.is_finite() && x >= 0.0) {
+            return Err(BadInput(format!("--time-scale {x}: must be ≥ 0")).into());
+        }
+        plan.time_scale = Some(x);
+    }
+    if let Some(s) = args.seed {
+        plan.seed = Some(s);
+    }
+    if let Some(t) = args.until {
+        plan.stop.time_limit = Some(t);
+    }
+    if let Some(n) = args.max_firings {
+        plan.stop.max_firings = Some(n);
+    }
+    for w in &plan.warnings {
+        eprintln!("warning: {w}");
+    }
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting tokio")?;
+    let summary = rt.block_on(execute(plan, &args))?;
+    print_summary(&summary, args.json)?;
+    Ok(ExitCode::from(summary.exit_code()))
+}
+
+async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
+    let mut b = Runtime::from_plan(plan).subscribe_at_start(false);
+    if let Some(j) = &args.journal {
+        b = b.journal(j);
+    }
+    let handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    for w in handle.warnings() {
+        eprintln!("warning: {w}");
+    }
+    let live = !args.json && std::io::stderr().is_terminal();
+    let progress = handle.progress();
+    let bar = live.then(|| {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.enable_steady_tick(Duration::from_millis(100));
+        bar
+    });
+    let wait = handle.wait();
+    tokio::pin!(wait);
+    let mut ticker = tokio::time::interval(Duration::from_millis(200));
+    let mut interrupted = false;
+    let summary = loop {
+        tokio::select! {
+            s = &mut wait => break s,
+            r = tokio::signal::ctrl_c(), if !interrupted => {
+                if r.is_ok() {
+                    interrupted = true;
+                    handle.interrupt();
+                }
+            }
+            _ = ticker.tick() => {
+                if let Some(bar) = &bar {
+                    bar.set_message(format!(
+                        "firings {}  time {:.3}",
+                        progress.firings(),
+                        progress.time()
+                    ));
+                }
+            }
+        }
+    };
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    eprintln!("seed {}", handle.seed());
+    Ok(summary)
+}
+
+fn print_summary(s: &Summary, json: bool) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(s)?);
+        return Ok(());
+    }
+    println!(
+        "stopped: {} after {} firings at time {:.4}",
+        s.stopped, s.firings, s.time
+    );
+    println!(
+        "agents: {} spawned, {} ended",
+        s.agents_spawned, s.agents_ended
+    );
+    println!("place                          final    mean tokens");
+    for (p, k) in &s.final_marking {
+        println!("  {p:<28} {k:>6}   {:>12.6}", s.mean_tokens[p]);
+    }
+    println!("transition                     throughput");
+    for (t, x) in &s.throughput {
+        println!("  {t:<28} {x:>12.6}");
+    }
+    for e in &s.errors {
+        println!("error: {e}");
+    }
+    Ok(())
 }

@@ -1,0 +1,191 @@
+//! The [`Action`] trait: what an agent does while its token sits in an action place.
+//!
+//! An action is async user code. It gets an [`ActionContext`] (the agent, the bound robot,
+//! the place, a marking snapshot, a cancellation signal) and ends with an [`Outcome`]. Actions
+//! are registered by name on the runtime builder, as closures ([`action_fn`]) or as types
+//! implementing [`Action`].
+
+use std::future::Future;
+use std::panic::AssertUnwindSafe;
+use std::pin::Pin;
+use std::sync::Arc;
+use std::task::{Context, Poll};
+
+use serde::Serialize;
+use tokio::sync::watch;
+
+use super::agent::AgentId;
+use crate::net::{Marking, Net, PlaceId, TransitionId};
+
+/// A boxed future returned by [`Action::run`].
+pub type ActionFuture = Pin<Box<dyn Future<Output = Outcome> + Send + 'static>>;
+
+/// How an action ended.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", content = "detail", rename_all = "snake_case")]
+pub enum Outcome {
+    /// This event happened: fire this transition (an output of the place) when it is enabled.
+    Fire(TransitionId),
+    /// Let the net decide: the policy or the weights among the immediate transitions, else
+    /// the race of the place's exponential outputs at the net's rates.
+    Decide,
+    /// The action failed; the place's failure policy decides what happens next.
+    Failed(String),
+    /// The action saw the run being stopped and gave up.
+    Cancelled,
+}
+
+/// Async user code run for each agent that enters an action place.
+///
+/// ```
+/// use gspn::runtime::{Action, ActionContext, ActionFuture, Outcome};
+/// struct AlwaysDecide;
+/// impl Action for AlwaysDecide {
+///     fn run(&self, _ctx: ActionContext) -> ActionFuture {
+///         Box::pin(async { Outcome::Decide })
+///     }
+/// }
+/// ```
+pub trait Action: Send + Sync + 'static {
+    /// Runs the action for one agent. Called once per entry into the place (again on retry).
+    fn run(&self, ctx: ActionContext) -> ActionFuture;
+}
+
+/// An [`Action`] made from a closure returning a future; see [`action_fn`].
+pub struct FnAction<F>(F);
+
+impl<F> std::fmt::Debug for FnAction<F> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("FnAction")
+    }
+}
+
+/// Wraps `f(ctx) -> impl Future<Output = Outcome>` as an [`Action`].
+///
+/// ```
+/// use gspn::runtime::{action_fn, Outcome};
+/// let noop = action_fn(|_ctx| async { Outcome::Decide });
+/// # let _ = noop;
+/// ```
+pub fn action_fn<F, Fut>(f: F) -> FnAction<F>
+where
+    F: Fn(ActionContext) -> Fut + Send + Sync + 'static,
+    Fut: Future<Output = Outcome> + Send + 'static,
+{
+    FnAction(f)
+}
+
+impl<F, Fut> Action for FnAction<F>
+where
+    F: Fn(ActionContext) -> Fut + Send + Sync + 'static,
+    Fut: Future<Output = Outcome> + Send + 'static,
+{
+    fn run(&self, ctx: ActionContext) -> ActionFuture {
+        Box::pin((self.0)(ctx))
+    }
+}
+
+/// What an action knows when it starts.
+#[derive(Clone, Debug)]
+pub struct ActionContext {
+    /// The agent running the action.
+    pub agent: AgentId,
+    /// The robot the place's agents are bound to, when there is one.
+    pub robot: Option<Arc<str>>,
+    /// The action place.
+    pub place: PlaceId,
+    /// The marking when the action started.
+    pub marking: Arc<Marking>,
+    /// How many times the action ran before for this entry (0 the first time; retries count up).
+    pub attempt: u32,
+    /// Fires when the run is being stopped; the action should clean up and return
+    /// [`Outcome::Cancelled`].
+    pub cancel: CancelToken,
+    /// The net, to turn names into ids.
+    pub net: Arc<Net>,
+}
+
+impl ActionContext {
+    /// The id of the transition named `name`, when the net has one.
+    pub fn transition(&self, name: &str) -> Option<TransitionId> {
+        self.net.transition_by_name(name)
+    }
+
+    /// The name of the action place.
+    pub fn place_name(&self) -> &str {
+        &self.net.place(self.place).name
+    }
+
+    /// The transitions that consume from this place (the ones [`Outcome::Fire`] may name).
+    pub fn outputs(&self) -> Vec<TransitionId> {
+        self.net
+            .transition_ids()
+            .filter(|&t| self.net.inputs(t).iter().any(|&(p, _)| p == self.place))
+            .collect()
+    }
+
+    /// `Fire(name)`, or `Failed` when the net has no such transition.
+    pub fn fire(&self, name: &str) -> Outcome {
+        match self.transition(name) {
+            Some(t) => Outcome::Fire(t),
+            None => Outcome::Failed(format!("no transition named `{name}`")),
+        }
+    }
+}
+
+/// A cancellation signal shared by every action of a run.
+#[derive(Clone, Debug)]
+pub struct CancelToken(watch::Receiver<bool>);
+
+/// The sending side of a [`CancelToken`].
+#[derive(Debug)]
+pub(crate) struct CancelSource(watch::Sender<bool>);
+
+impl CancelSource {
+    pub(crate) fn new() -> (CancelSource, CancelToken) {
+        let (tx, rx) = watch::channel(false);
+        (CancelSource(tx), CancelToken(rx))
+    }
+
+    pub(crate) fn cancel(&self) {
+        let _ = self.0.send(true);
+    }
+}
+
+impl CancelToken {
+    /// True once the run is being stopped.
+    pub fn is_cancelled(&self) -> bool {
+        *self.0.borrow()
+    }
+
+    /// Completes when the run is being stopped.
+    pub async fn cancelled(&self) {
+        let mut rx = self.0.clone();
+        // An error means the sender is gone: the run is over, which is a cancellation too.
+        let _ = rx.wait_for(|&c| c).await;
+    }
+}
+
+/// Polls a future, turning a panic into `Err(message)` so one agent's panic never takes the
+/// plan down.
+pub(crate) struct CatchUnwind<F>(pub(crate) F);
+
+impl<F: Future + Unpin> Future for CatchUnwind<F> {
+    type Output = Result<F::Output, String>;
+
+    fn poll(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Self::Output> {
+        let inner = &mut self.0;
+        match std::panic::catch_unwind(AssertUnwindSafe(|| Pin::new(inner).poll(cx))) {
+            Ok(Poll::Ready(v)) => Poll::Ready(Ok(v)),
+            Ok(Poll::Pending) => Poll::Pending,
+            Err(payload) => {
+                let msg = payload
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "panic".to_string());
+                Poll::Ready(Err(msg))
+            }
+        }
+    }
+}

@@ -1,0 +1,88 @@
+//! Agents: one per token in an action place, with a stable id and a state.
+//!
+//! The supervisor keeps every agent's record (its place, state, outcome); with
+//! [`AgentMode::Actor`] each agent is also a kameo actor that owns its state and lives exactly
+//! as long as its token. [`AgentMode::Light`] keeps only the record — the actions still run
+//! concurrently, one tokio task each, hosted by the place (see `docs/benchmarks.md` for what
+//! each mode costs).
+
+use kameo::Actor;
+use kameo::message::{Context, Message};
+use serde::{Deserialize, Serialize};
+
+use crate::net::PlaceId;
+
+/// A stable agent id: assigned once, kept while the agent moves through the net.
+#[repr(transparent)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct AgentId(pub u64);
+
+/// An agent's state, as the thesis named them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AgentState {
+    /// In a place, no action running yet.
+    Free,
+    /// Its action is running.
+    Occupied,
+    /// Its action ended with `Fire` or `Decide`; the transition may fire now.
+    Done,
+    /// Its action ended, but the transition it is ready for is not enabled yet.
+    Waiting,
+    /// In a place with no output transition: nothing will happen to it.
+    Inactive,
+    /// Consumed by a join: the agent ended.
+    Void,
+}
+
+/// How agents are represented.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AgentMode {
+    /// A record in the supervisor; actions are tasks hosted by the place actors.
+    #[default]
+    Light,
+    /// A record plus a kameo actor per agent, spawned and killed with its token.
+    Actor,
+}
+
+/// The actor of one agent ([`AgentMode::Actor`]): it owns the agent's current place and
+/// state, which the supervisor tells it about.
+#[derive(Actor, Debug)]
+pub struct Agent {
+    /// The agent's id.
+    pub id: AgentId,
+    /// The place it is in.
+    pub place: PlaceId,
+    /// Its state.
+    pub state: AgentState,
+}
+
+/// The agent moved or changed state.
+#[derive(Clone, Copy, Debug)]
+pub struct Update {
+    /// Its place now.
+    pub place: PlaceId,
+    /// Its state now.
+    pub state: AgentState,
+}
+
+impl Message<Update> for Agent {
+    type Reply = ();
+
+    async fn handle(&mut self, u: Update, _: &mut Context<Self, Self::Reply>) {
+        self.place = u.place;
+        self.state = u.state;
+    }
+}
+
+/// Ask an agent actor for its place and state.
+#[derive(Clone, Copy, Debug)]
+pub struct Query;
+
+impl Message<Query> for Agent {
+    type Reply = (PlaceId, AgentState);
+
+    async fn handle(&mut self, _: Query, _: &mut Context<Self, Self::Reply>) -> Self::Reply {
+        (self.place, self.state)
+    }
+}

@@ -1,0 +1,277 @@
+//! [`RuntimeBuilder`]: a net (or a plan), its actions and options → a running plan.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use tokio::sync::{broadcast, watch};
+
+use super::action::Action;
+use super::agent::AgentMode;
+use super::engine::Engine;
+use super::event::Events;
+use super::handle::{Progress, RuntimeHandle};
+use super::journal::Journal;
+use super::supervisor::{PlaceSetup, Supervisor, SupervisorArgs};
+use super::{RuntimeError, conservation};
+use crate::io::plan::{FailurePolicy, Plan, Role, StopConditions};
+use crate::net::predicate::Predicate;
+use crate::net::{Net, PlaceId};
+use crate::policy::Policy;
+
+/// Configures a run; [`RuntimeBuilder::spawn`] starts it inside the current tokio runtime.
+pub struct RuntimeBuilder {
+    net: Arc<Net>,
+    roles: Vec<Option<Role>>,
+    binds: Vec<(String, String)>,
+    policy: Policy,
+    actions: HashMap<String, Arc<dyn Action>>,
+    seed: Option<u64>,
+    time_scale: f64,
+    stop: StopConditions,
+    journal: Option<PathBuf>,
+    agent_mode: AgentMode,
+    event_capacity: usize,
+    grace: Duration,
+    subscribe: bool,
+}
+
+impl std::fmt::Debug for RuntimeBuilder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RuntimeBuilder")
+            .field("net", &self.net.name())
+            .field("actions", &self.actions.keys().collect::<Vec<_>>())
+            .field("seed", &self.seed)
+            .field("time_scale", &self.time_scale)
+            .finish()
+    }
+}
+
+impl RuntimeBuilder {
+    pub(crate) fn new(net: Net) -> Self {
+        let n = net.place_count();
+        RuntimeBuilder {
+            net: Arc::new(net),
+            roles: vec![None; n],
+            binds: Vec::new(),
+            policy: Policy::empty(),
+            actions: HashMap::new(),
+            seed: None,
+            time_scale: 0.0,
+            stop: StopConditions::default(),
+            journal: None,
+            agent_mode: AgentMode::default(),
+            event_capacity: 1 << 14,
+            grace: Duration::from_secs(5),
+            subscribe: true,
+        }
+    }
+
+    pub(crate) fn from_plan(plan: Plan) -> Self {
+        let mut b = RuntimeBuilder::new(plan.net);
+        b.roles = plan.roles;
+        b.policy = plan.policy;
+        b.stop = plan.stop;
+        b.seed = plan.seed;
+        b.time_scale = plan.time_scale.unwrap_or(0.0);
+        b
+    }
+
+    /// The policy over immediate transitions (checked against the net by [`Policy::new`]).
+    pub fn policy(mut self, policy: Policy) -> Self {
+        self.policy = policy;
+        self
+    }
+
+    /// Registers an action under a name; places whose role names it run it.
+    pub fn action(mut self, name: impl Into<String>, action: impl Action) -> Self {
+        self.actions.insert(name.into(), Arc::new(action));
+        self
+    }
+
+    /// Makes `place` an action place running the action registered as `action` (no
+    /// timeout, failure stops the run). Unknown place names fail at [`RuntimeBuilder::spawn`].
+    pub fn bind(mut self, place: impl Into<String>, action: impl Into<String>) -> Self {
+        self.binds.push((place.into(), action.into()));
+        self
+    }
+
+    /// Sets the role of a place (what a plan file's `[places."…"]` says).
+    pub fn role(mut self, place: PlaceId, role: Role) -> Self {
+        if let Some(r) = self.roles.get_mut(place.index()) {
+            *r = Some(role);
+        }
+        self
+    }
+
+    /// The seed of every random choice (default: from the clock; the handle tells which).
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = Some(seed);
+        self
+    }
+
+    /// 0 = virtual time, as fast as possible (the default); 1 = real time; 0.5 = twice as fast.
+    pub fn time_scale(mut self, scale: f64) -> Self {
+        self.time_scale = scale;
+        self
+    }
+
+    /// Stops at this model time.
+    pub fn until(mut self, t: f64) -> Self {
+        self.stop.time_limit = Some(t);
+        self
+    }
+
+    /// Stops after this many firings.
+    pub fn max_firings(mut self, n: u64) -> Self {
+        self.stop.max_firings = Some(n);
+        self
+    }
+
+    /// Stops as soon as the marking satisfies `p`.
+    pub fn stop_when(mut self, p: Predicate) -> Self {
+        self.stop.when = Some(p);
+        self
+    }
+
+    /// Writes every event to this file as JSON Lines.
+    pub fn journal(mut self, path: impl Into<PathBuf>) -> Self {
+        self.journal = Some(path.into());
+        self
+    }
+
+    /// Light agents (records) or one kameo actor per agent.
+    pub fn agent_mode(mut self, mode: AgentMode) -> Self {
+        self.agent_mode = mode;
+        self
+    }
+
+    /// How many events the bus keeps for slow subscribers (default 16384).
+    pub fn event_capacity(mut self, n: usize) -> Self {
+        self.event_capacity = n.max(1);
+        self
+    }
+
+    /// How long a stop waits for cancelled actions (tokio time; default 5 s).
+    pub fn grace(mut self, d: Duration) -> Self {
+        self.grace = d;
+        self
+    }
+
+    /// Whether the handle holds a subscription from the start (default true). Without one,
+    /// and without a journal, the supervisor builds no events until someone subscribes.
+    pub fn subscribe_at_start(mut self, yes: bool) -> Self {
+        self.subscribe = yes;
+        self
+    }
+
+    /// Checks the configuration and starts the run in the current tokio runtime.
+    pub fn spawn(mut self) -> Result<RuntimeHandle, RuntimeError> {
+        if tokio::runtime::Handle::try_current().is_err() {
+            return Err(RuntimeError::NoTokio);
+        }
+        if !(self.time_scale.is_finite() && self.time_scale >= 0.0) {
+            return Err(RuntimeError::BadTimeScale(self.time_scale));
+        }
+        let net = Arc::clone(&self.net);
+        for (place, action) in std::mem::take(&mut self.binds) {
+            let p = net
+                .place_by_name(&place)
+                .ok_or_else(|| RuntimeError::UnknownPlace(place.clone()))?;
+            self.roles[p.index()] = Some(Role::Action {
+                name: action,
+                timeout: None,
+                on_failure: FailurePolicy::Stop,
+                robot: None,
+            });
+        }
+        if self
+            .roles
+            .iter()
+            .any(|r| matches!(r, Some(Role::Action { robot: Some(_), .. })))
+        {
+            conservation::check_robot_tokens(&net, &self.roles)?;
+        }
+        let mut warnings = Vec::new();
+        let mut setups = Vec::new();
+        for p in net.place_ids() {
+            if let Some(Role::Action {
+                name,
+                timeout,
+                on_failure,
+                robot,
+            }) = &self.roles[p.index()]
+            {
+                match self.actions.get(name) {
+                    Some(a) => setups.push(PlaceSetup {
+                        place: p,
+                        action: Arc::clone(a),
+                        timeout: *timeout,
+                        on_failure: *on_failure,
+                        robot: robot.as_deref().map(Arc::from),
+                    }),
+                    None => warnings.push(format!(
+                        "place `{}`: action `{name}` is not registered; the place is net-timed",
+                        net.place(p).name
+                    )),
+                }
+            }
+        }
+        let seed = self.seed.unwrap_or_else(|| {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos() as u64)
+        });
+        let journal = match &self.journal {
+            Some(path) => Some(Journal::create(path, &net, seed, self.time_scale).map_err(
+                |e| RuntimeError::Journal {
+                    path: path.clone(),
+                    reason: e.to_string(),
+                },
+            )?),
+            None => None,
+        };
+        let places: Vec<PlaceId> = setups.iter().map(|s| s.place).collect();
+        let eng = Engine::new(
+            Arc::clone(&net),
+            &places,
+            self.policy,
+            ChaCha8Rng::seed_from_u64(seed),
+        );
+        let (bus, rx) = broadcast::channel(self.event_capacity);
+        let first = if self.subscribe {
+            Some(Events(rx))
+        } else {
+            drop(rx);
+            None
+        };
+        let weak = bus.downgrade();
+        let (done_tx, done_rx) = watch::channel(None);
+        let progress = Arc::new(Progress::default());
+        let sup = Supervisor::start(SupervisorArgs {
+            eng,
+            setups,
+            time_scale: self.time_scale,
+            stop: self.stop,
+            bus,
+            journal,
+            done: done_tx,
+            progress: Arc::clone(&progress),
+            grace: self.grace,
+            agent_mode: self.agent_mode,
+        });
+        Ok(RuntimeHandle {
+            sup,
+            done: done_rx,
+            first,
+            bus: weak,
+            progress,
+            net,
+            warnings,
+            seed,
+        })
+    }
+}

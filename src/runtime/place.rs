@@ -1,0 +1,74 @@
+//! Place actors: one per action place, hosting its [`Action`] and running each agent's
+//! action concurrently (one tokio task per agent), under the place's timeout.
+//!
+//! The place never waits for an action: it spawns the task and returns to its mailbox. The
+//! task reports the outcome to the supervisor; a panic or a timeout becomes
+//! [`Outcome::Failed`] for that agent only.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use kameo::Actor;
+use kameo::actor::ActorRef;
+use kameo::message::{Context, Message};
+
+use super::action::{Action, ActionContext, CatchUnwind, Outcome};
+use super::supervisor::{ActionDone, Supervisor};
+
+/// The actor of one action place.
+#[derive(Actor)]
+pub(crate) struct Place {
+    pub(crate) action: Arc<dyn Action>,
+    /// Per-run timeout, already scaled to tokio time.
+    pub(crate) timeout: Option<Duration>,
+    pub(crate) supervisor: ActorRef<Supervisor>,
+}
+
+impl std::fmt::Debug for Place {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Place")
+            .field("timeout", &self.timeout)
+            .finish()
+    }
+}
+
+/// Start the action for one agent.
+#[derive(Debug)]
+pub(crate) struct Start {
+    pub(crate) ctx: ActionContext,
+    /// The supervisor's tag for this start (stale reports are ignored).
+    pub(crate) ticket: u64,
+}
+
+impl Message<Start> for Place {
+    type Reply = ();
+
+    async fn handle(&mut self, msg: Start, _: &mut Context<Self, Self::Reply>) {
+        let agent = msg.ctx.agent;
+        let action = &self.action;
+        let ctx = msg.ctx;
+        // A panic before the future exists is the agent's failure too, not the place's.
+        let fut = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| action.run(ctx)))
+            .unwrap_or_else(|_| Box::pin(async { Outcome::Failed("panicked".into()) }));
+        let timeout = self.timeout;
+        let sup = self.supervisor.clone();
+        tokio::spawn(async move {
+            let caught = CatchUnwind(fut);
+            let outcome = match timeout {
+                Some(d) => match tokio::time::timeout(d, caught).await {
+                    Ok(r) => r,
+                    Err(_) => Ok(Outcome::Failed(format!("timed out after {d:?}"))),
+                },
+                None => caught.await,
+            };
+            let outcome = outcome.unwrap_or_else(|p| Outcome::Failed(format!("panicked: {p}")));
+            let _ = sup
+                .tell(ActionDone {
+                    agent,
+                    ticket: msg.ticket,
+                    outcome,
+                })
+                .try_send();
+        });
+    }
+}

@@ -1,0 +1,756 @@
+//! The supervisor: one actor per running plan. It owns the marking, the policy and the agent
+//! registry (through the [`Engine`]), serialises every firing, and never awaits a user action:
+//! actions run in tasks hosted by the place actors and report back with [`ActionDone`].
+//!
+//! Time: model time is `offset + tokio elapsed / scale`. With `time_scale = 0` (virtual
+//! time) and no action running, the supervisor plays the net-timed race directly, in batches,
+//! jumping the model clock — as fast as possible and exactly reproducible from the seed; while
+//! actions run it waits on tokio timers (paused clock in tests) like in scaled real time.
+
+use std::sync::Arc;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use kameo::actor::{Actor, ActorRef, Spawn, WeakActorRef};
+use kameo::error::Infallible;
+use kameo::mailbox;
+use kameo::message::{Context, Message};
+use rustc_hash::FxHashMap;
+use tokio::sync::{broadcast, watch};
+use tokio::task::JoinHandle;
+use tokio::time::Instant;
+
+use super::StopReason;
+use super::action::{ActionContext, CancelSource, CancelToken, Outcome};
+use super::agent::{Agent, AgentId, AgentMode, AgentState, Update};
+use super::engine::{Engine, Firing, Ready};
+use super::event::{Event, EventKind};
+use super::handle::{AgentInfo, Progress, Summary};
+use super::journal::Journal;
+use super::place::{Place, Start};
+use crate::io::plan::{FailurePolicy, StopConditions};
+use crate::net::{Marking, PlaceId, TransitionId};
+
+/// Firings played per message in the virtual-time fast path (then the mailbox gets a turn).
+const BATCH: usize = 4096;
+
+/// Per action place, what the supervisor needs besides the engine's queues.
+pub(crate) struct PlaceSetup {
+    pub(crate) place: PlaceId,
+    pub(crate) action: Arc<dyn super::Action>,
+    pub(crate) timeout: Option<f64>,
+    pub(crate) on_failure: FailurePolicy,
+    pub(crate) robot: Option<Arc<str>>,
+}
+
+/// The supervisor actor.
+pub struct Supervisor {
+    eng: Engine,
+    buf: Firing,
+    setups: Vec<PlaceSetup>,
+    places: Vec<ActorRef<Place>>,
+    scale: f64,
+    virtual_time: bool,
+    clock_start: Instant,
+    offset: f64,
+    now: f64,
+    stop: StopConditions,
+    stopping: Option<StopReason>,
+    finished: bool,
+    timer: Option<(JoinHandle<()>, u64)>,
+    generation: u64,
+    continue_pending: bool,
+    bus: broadcast::Sender<Event>,
+    seq: u64,
+    journal: Option<Journal>,
+    errors: Vec<String>,
+    done: watch::Sender<Option<Arc<Summary>>>,
+    progress: Arc<Progress>,
+    cancel: CancelSource,
+    cancel_token: CancelToken,
+    grace: Duration,
+    me: Option<ActorRef<Supervisor>>,
+    agent_mode: AgentMode,
+    agent_actors: FxHashMap<AgentId, ActorRef<Agent>>,
+    snapshot: Option<(u64, Arc<Marking>)>,
+}
+
+impl std::fmt::Debug for Supervisor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Supervisor")
+            .field("net", &self.eng.net.name())
+            .field("firings", &self.eng.firings)
+            .field("now", &self.now)
+            .finish()
+    }
+}
+
+/// Everything the builder hands the supervisor.
+pub(crate) struct SupervisorArgs {
+    pub(crate) eng: Engine,
+    pub(crate) setups: Vec<PlaceSetup>,
+    pub(crate) time_scale: f64,
+    pub(crate) stop: StopConditions,
+    pub(crate) bus: broadcast::Sender<Event>,
+    pub(crate) journal: Option<Journal>,
+    pub(crate) done: watch::Sender<Option<Arc<Summary>>>,
+    pub(crate) progress: Arc<Progress>,
+    pub(crate) grace: Duration,
+    pub(crate) agent_mode: AgentMode,
+}
+
+impl Supervisor {
+    /// Spawns the supervisor (unbounded mailbox: actions never block reporting).
+    pub(crate) fn start(args: SupervisorArgs) -> ActorRef<Supervisor> {
+        let (cancel, cancel_token) = CancelSource::new();
+        let virtual_time = args.time_scale <= 0.0;
+        let sup = Supervisor {
+            eng: args.eng,
+            buf: Firing::default(),
+            setups: args.setups,
+            places: Vec::new(),
+            scale: if virtual_time { 1.0 } else { args.time_scale },
+            virtual_time,
+            clock_start: Instant::now(),
+            offset: 0.0,
+            now: 0.0,
+            stop: args.stop,
+            stopping: None,
+            finished: false,
+            timer: None,
+            generation: 0,
+            continue_pending: false,
+            bus: args.bus,
+            seq: 0,
+            journal: args.journal,
+            errors: Vec::new(),
+            done: args.done,
+            progress: args.progress,
+            cancel,
+            cancel_token,
+            grace: args.grace,
+            me: None,
+            agent_mode: args.agent_mode,
+            agent_actors: FxHashMap::default(),
+            snapshot: None,
+        };
+        Supervisor::spawn_with_mailbox(sup, mailbox::unbounded())
+    }
+
+    fn me(&self) -> &ActorRef<Supervisor> {
+        self.me.as_ref().expect("set in on_start")
+    }
+
+    fn clock(&self) -> f64 {
+        self.offset + self.clock_start.elapsed().as_secs_f64() / self.scale
+    }
+
+    fn advance_clock(&mut self) {
+        let c = self.clock();
+        if c > self.now {
+            self.now = c;
+        }
+    }
+
+    fn jump_to(&mut self, t: f64) {
+        self.now = t;
+        self.offset = t - self.clock_start.elapsed().as_secs_f64() / self.scale;
+    }
+
+    fn observed(&self) -> bool {
+        self.journal.is_some() || self.bus.receiver_count() > 0
+    }
+
+    fn emit(&mut self, kind: EventKind) {
+        let e = Event {
+            seq: self.seq,
+            time: self.now,
+            kind,
+        };
+        self.seq += 1;
+        if let Some(j) = &mut self.journal {
+            j.write(&e);
+        }
+        let _ = self.bus.send(e);
+    }
+
+    fn snapshot(&mut self) -> Arc<Marking> {
+        match &self.snapshot {
+            Some((f, m)) if *f == self.eng.firings => Arc::clone(m),
+            _ => {
+                let m = Arc::new(self.eng.m.clone());
+                self.snapshot = Some((self.eng.firings, Arc::clone(&m)));
+                m
+            }
+        }
+    }
+
+    fn ap(&self, p: PlaceId) -> usize {
+        self.eng.action_of[p.index()].expect("an action place") as usize
+    }
+
+    fn set_state(&mut self, id: AgentId, state: AgentState) {
+        let place = match self.eng.agents.get_mut(&id) {
+            Some(rec) => {
+                rec.state = state;
+                rec.place
+            }
+            None => return,
+        };
+        if let Some(a) = self.agent_actors.get(&id) {
+            let _ = a.tell(Update { place, state }).try_send();
+        }
+    }
+
+    fn spawn_agent_actor(&mut self, id: AgentId, place: PlaceId) {
+        if self.agent_mode == AgentMode::Actor {
+            let a = Agent::spawn_with_mailbox(
+                Agent {
+                    id,
+                    place,
+                    state: AgentState::Free,
+                },
+                mailbox::unbounded(),
+            );
+            self.agent_actors.insert(id, a);
+        }
+    }
+
+    /// Starts (or restarts) the action of an agent in its place; Inactive when the place has
+    /// no output transition.
+    fn start_action(&mut self, id: AgentId, attempt: u32) {
+        let Some(place) = self.eng.agents.get(&id).map(|r| r.place) else {
+            return;
+        };
+        if !self.eng.has_outputs(place) {
+            self.set_state(id, AgentState::Inactive);
+            return;
+        }
+        let a = self.ap(place);
+        let ticket = self.eng.start(id, attempt);
+        let ctx = ActionContext {
+            agent: id,
+            robot: self.setups[a].robot.clone(),
+            place,
+            marking: self.snapshot(),
+            attempt,
+            cancel: self.cancel_token.clone(),
+            net: Arc::clone(&self.eng.net),
+        };
+        let _ = self.places[a].tell(Start { ctx, ticket }).try_send();
+        self.set_state(id, AgentState::Occupied);
+        if self.observed() {
+            self.emit(EventKind::ActionStarted {
+                agent: id,
+                place,
+                attempt,
+            });
+        }
+    }
+
+    fn fire_one(&mut self, t: TransitionId) {
+        let mut buf = std::mem::take(&mut self.buf);
+        self.eng.fire(t, self.now, &mut buf);
+        self.progress
+            .firings
+            .store(self.eng.firings, Ordering::Relaxed);
+        self.progress
+            .time
+            .store(self.now.to_bits(), Ordering::Relaxed);
+        let observed = self.observed();
+        if observed {
+            self.emit(EventKind::Fired {
+                transition: t,
+                consumed: buf.consumed.clone(),
+                produced: buf.produced.clone(),
+                marking: self.eng.m.clone(),
+            });
+        }
+        for &id in &buf.spawned {
+            let place = self.eng.agents[&id].place;
+            self.spawn_agent_actor(id, place);
+            if observed {
+                self.emit(EventKind::AgentSpawned { agent: id, place });
+            }
+        }
+        for &id in &buf.ended {
+            if let Some(a) = self.agent_actors.remove(&id) {
+                a.kill();
+            }
+            if observed {
+                self.emit(EventKind::AgentEnded { agent: id });
+            }
+        }
+        for &id in &buf.produced {
+            self.start_action(id, 0);
+        }
+        self.buf = buf;
+        if let Some(max) = self.stop.max_firings
+            && self.eng.firings >= max
+        {
+            self.begin_stop(StopReason::MaxFirings);
+        } else if let Some(p) = &self.stop.when
+            && p.eval(&self.eng.m)
+        {
+            self.begin_stop(StopReason::Condition);
+        }
+    }
+
+    /// Fires everything that is ready now (immediate transitions, reported events).
+    fn settle(&mut self) {
+        while self.stopping.is_none() {
+            match self.eng.next_ready() {
+                Some(t) => self.fire_one(t),
+                None => break,
+            }
+        }
+    }
+
+    fn kick(&mut self) {
+        if !self.continue_pending {
+            self.continue_pending = true;
+            let _ = self.me().tell(Continue).try_send();
+        }
+    }
+
+    fn cancel_timer(&mut self) {
+        if let Some((h, _)) = self.timer.take() {
+            h.abort();
+        }
+    }
+
+    /// After every change: nothing more can happen (stop), the fast path (virtual time, no
+    /// action running), or a timer for the next net-timed firing or the time limit.
+    fn schedule(&mut self) {
+        if self.stopping.is_some() {
+            return;
+        }
+        if self.virtual_time && self.eng.running == 0 {
+            self.cancel_timer();
+            self.kick();
+            return;
+        }
+        let total = self.eng.race.total();
+        if total <= 0.0 && self.eng.running == 0 {
+            self.dead();
+            return;
+        }
+        if let Some((_, version)) = &self.timer
+            && *version == self.eng.race_version
+        {
+            return; // the race did not change: the pending sample stays valid (memoryless)
+        }
+        self.cancel_timer();
+        self.generation += 1;
+        let (mut at, mut limit) = (f64::INFINITY, false);
+        if let Some((dt, _)) = self.eng.sample_race() {
+            at = self.now + dt;
+        }
+        if let Some(u) = self.stop.time_limit
+            && u < at
+        {
+            (at, limit) = (u, true);
+        }
+        if at.is_finite() {
+            let wait = ((at - self.clock()) * self.scale).max(0.0);
+            let me = self.me().clone();
+            let generation = self.generation;
+            let h = tokio::spawn(async move {
+                tokio::time::sleep(Duration::from_secs_f64(wait)).await;
+                let _ = me
+                    .tell(Timer {
+                        generation,
+                        at,
+                        limit,
+                    })
+                    .try_send();
+            });
+            self.timer = Some((h, self.eng.race_version));
+        }
+    }
+
+    fn dead(&mut self) {
+        let stuck = self.eng.stuck();
+        if stuck.is_empty() {
+            self.begin_stop(StopReason::Dead);
+            return;
+        }
+        let names: Vec<String> = stuck
+            .iter()
+            .map(|&t| self.eng.net.transition(t).name.clone())
+            .collect();
+        for n in &names {
+            let msg = format!("transition `{n}` was chosen by an action but never became enabled");
+            self.errors.push(msg.clone());
+            self.emit(EventKind::Error { message: msg });
+        }
+        self.begin_stop(StopReason::Stuck);
+    }
+
+    fn fast_path(&mut self) {
+        for _ in 0..BATCH {
+            if self.stopping.is_some() || self.eng.running > 0 {
+                break;
+            }
+            let Some((dt, t)) = self.eng.sample_race() else {
+                self.dead();
+                return;
+            };
+            let at = self.now + dt;
+            if let Some(u) = self.stop.time_limit
+                && at > u
+            {
+                self.jump_to(u);
+                self.begin_stop(StopReason::TimeLimit);
+                return;
+            }
+            self.jump_to(at);
+            self.fire_one(t);
+            self.settle();
+        }
+        self.schedule();
+    }
+
+    fn begin_stop(&mut self, reason: StopReason) {
+        if self.stopping.is_some() {
+            return;
+        }
+        self.stopping = Some(reason);
+        self.cancel_timer();
+        self.cancel.cancel();
+        if self.eng.running == 0 {
+            self.finish();
+        } else {
+            let me = self.me().clone();
+            let grace = self.grace;
+            tokio::spawn(async move {
+                tokio::time::sleep(grace).await;
+                let _ = me.tell(StopDeadline).try_send();
+            });
+        }
+    }
+
+    fn finish(&mut self) {
+        if self.finished {
+            return;
+        }
+        self.finished = true;
+        let reason = self.stopping.clone().unwrap_or(StopReason::Dead);
+        self.emit(EventKind::Stopped {
+            reason: reason.clone(),
+        });
+        if let Some(j) = &mut self.journal
+            && let Some(err) = j.flush()
+        {
+            self.errors.push(format!("journal: {err}"));
+        }
+        let summary = Summary::new(&self.eng, reason, self.now, self.errors.clone());
+        let _ = self.done.send(Some(Arc::new(summary)));
+        for (_, a) in self.agent_actors.drain() {
+            a.kill();
+        }
+        for p in &self.places {
+            p.kill();
+        }
+    }
+
+    fn failure(&mut self, id: AgentId, place: PlaceId, attempt: u32, reason: String) {
+        let a = self.ap(place);
+        match self.setups[a].on_failure {
+            FailurePolicy::Stop => self.begin_stop(StopReason::Failure),
+            FailurePolicy::Retry(n) if attempt < n => self.start_action(id, attempt + 1),
+            FailurePolicy::Retry(n) => {
+                let msg = format!(
+                    "agent {} in `{}`: gave up after {n} retries",
+                    id.0,
+                    self.eng.net.place(place).name
+                );
+                self.errors.push(msg.clone());
+                self.emit(EventKind::Error { message: msg });
+                self.begin_stop(StopReason::Failure);
+            }
+            FailurePolicy::Fire(t) => self.eng.ready(id, Ready::Fire(t)),
+        }
+        let _ = reason;
+    }
+}
+
+impl Actor for Supervisor {
+    type Args = Supervisor;
+    type Error = Infallible;
+
+    async fn on_start(mut sup: Supervisor, me: ActorRef<Self>) -> Result<Self, Self::Error> {
+        sup.me = Some(me.clone());
+        sup.clock_start = Instant::now();
+        for s in &sup.setups {
+            let timeout = s.timeout.map(|t| Duration::from_secs_f64(t * sup.scale));
+            let place = Place::spawn_with_mailbox(
+                Place {
+                    action: Arc::clone(&s.action),
+                    timeout,
+                    supervisor: me.clone(),
+                },
+                mailbox::unbounded(),
+            );
+            sup.places.push(place);
+        }
+        let mut initial = Vec::new();
+        for s in 0..sup.setups.len() {
+            let p = sup.setups[s].place;
+            for _ in 0..sup.eng.m[p] {
+                let id = sup.eng.new_agent(p);
+                initial.push((id, p));
+            }
+        }
+        let observed = sup.observed();
+        for &(id, p) in &initial {
+            sup.spawn_agent_actor(id, p);
+            if observed {
+                sup.emit(EventKind::AgentSpawned {
+                    agent: id,
+                    place: p,
+                });
+            }
+        }
+        for &(id, _) in &initial {
+            sup.start_action(id, 0);
+        }
+        sup.progress.started.store(true, Ordering::Release);
+        sup.settle();
+        sup.schedule();
+        if sup.finished {
+            sup.kick();
+        }
+        Ok(sup)
+    }
+
+    async fn on_stop(
+        &mut self,
+        _: WeakActorRef<Self>,
+        _: kameo::error::ActorStopReason,
+    ) -> Result<(), Self::Error> {
+        if !self.finished {
+            self.stopping.get_or_insert(StopReason::Requested);
+            self.finish();
+        }
+        self.cancel_timer();
+        Ok(())
+    }
+}
+
+/// An action ended (sent by the place's task).
+#[derive(Debug)]
+pub(crate) struct ActionDone {
+    pub(crate) agent: AgentId,
+    pub(crate) ticket: u64,
+    pub(crate) outcome: Outcome,
+}
+
+/// The next net-timed firing (or the time limit) is due.
+#[derive(Debug)]
+struct Timer {
+    generation: u64,
+    at: f64,
+    limit: bool,
+}
+
+/// Play the next batch of the virtual-time fast path.
+#[derive(Debug)]
+struct Continue;
+
+/// Stop the run.
+#[derive(Debug)]
+pub(crate) struct StopRequest(pub(crate) StopReason);
+
+/// The grace period for cancelled actions is over.
+#[derive(Debug)]
+struct StopDeadline;
+
+/// Ask for the current marking.
+#[derive(Debug)]
+pub(crate) struct GetMarking;
+
+/// Ask for every live agent.
+#[derive(Debug)]
+pub(crate) struct GetAgents;
+
+macro_rules! finish_turn {
+    ($self:ident, $ctx:ident) => {
+        if $self.finished {
+            $ctx.stop();
+        }
+    };
+}
+
+impl Message<ActionDone> for Supervisor {
+    type Reply = ();
+
+    async fn handle(&mut self, msg: ActionDone, ctx: &mut Context<Self, ()>) {
+        let Some(rec) = self.eng.agents.get(&msg.agent) else {
+            return;
+        };
+        if rec.ticket != msg.ticket || rec.state != AgentState::Occupied {
+            return;
+        }
+        let (place, attempt) = (rec.place, rec.attempt);
+        self.eng.running -= 1;
+        self.advance_clock();
+        self.set_state(msg.agent, AgentState::Done);
+        if self.observed() {
+            self.emit(EventKind::ActionEnded {
+                agent: msg.agent,
+                place,
+                outcome: msg.outcome.clone(),
+            });
+        }
+        if self.stopping.is_some() {
+            if self.eng.running == 0 {
+                self.finish();
+            }
+            return finish_turn!(self, ctx);
+        }
+        if let Some(u) = self.stop.time_limit
+            && self.now >= u
+        {
+            self.jump_to(u);
+            self.begin_stop(StopReason::TimeLimit);
+            return finish_turn!(self, ctx);
+        }
+        let pname = self.eng.net.place(place).name.clone();
+        match msg.outcome {
+            Outcome::Fire(t) => {
+                let a = self.ap(place);
+                if self.eng.aps[a].consumers.contains(&t) {
+                    self.eng.ready(msg.agent, Ready::Fire(t));
+                } else {
+                    let tname = self
+                        .eng
+                        .net
+                        .transitions()
+                        .get(t.index())
+                        .map_or_else(|| format!("#{}", t.0), |x| x.name.clone());
+                    let m = format!(
+                        "agent {} in `{pname}` returned transition `{tname}`, which is not an output of `{pname}`",
+                        msg.agent.0
+                    );
+                    self.errors.push(m.clone());
+                    self.emit(EventKind::Error { message: m.clone() });
+                    self.failure(msg.agent, place, attempt, m);
+                }
+            }
+            Outcome::Decide => self.eng.ready(msg.agent, Ready::Decide),
+            Outcome::Failed(r) => {
+                let m = format!("agent {} in `{pname}` failed: {r}", msg.agent.0);
+                self.errors.push(m.clone());
+                self.emit(EventKind::Error { message: m.clone() });
+                self.failure(msg.agent, place, attempt, m);
+            }
+            Outcome::Cancelled => {
+                let m = format!("agent {} in `{pname}` cancelled its action", msg.agent.0);
+                self.errors.push(m.clone());
+                self.failure(msg.agent, place, attempt, m);
+            }
+        }
+        self.settle();
+        self.schedule();
+        finish_turn!(self, ctx)
+    }
+}
+
+impl Message<Timer> for Supervisor {
+    type Reply = ();
+
+    async fn handle(&mut self, msg: Timer, ctx: &mut Context<Self, ()>) {
+        if msg.generation != self.generation || self.stopping.is_some() {
+            return;
+        }
+        self.timer = None;
+        self.jump_to(msg.at.max(self.now));
+        if msg.limit {
+            self.begin_stop(StopReason::TimeLimit);
+        } else if self.eng.race.total() > 0.0 {
+            let t = self.eng.pick_race();
+            self.fire_one(t);
+            self.settle();
+            self.schedule();
+        } else {
+            self.schedule();
+        }
+        finish_turn!(self, ctx)
+    }
+}
+
+impl Message<Continue> for Supervisor {
+    type Reply = ();
+
+    async fn handle(&mut self, _: Continue, ctx: &mut Context<Self, ()>) {
+        self.continue_pending = false;
+        if self.stopping.is_none() {
+            if self.virtual_time && self.eng.running == 0 {
+                self.fast_path();
+            } else {
+                self.schedule();
+            }
+        }
+        finish_turn!(self, ctx)
+    }
+}
+
+impl Message<StopRequest> for Supervisor {
+    type Reply = ();
+
+    async fn handle(&mut self, msg: StopRequest, ctx: &mut Context<Self, ()>) {
+        self.advance_clock();
+        self.begin_stop(msg.0);
+        finish_turn!(self, ctx)
+    }
+}
+
+impl Message<StopDeadline> for Supervisor {
+    type Reply = ();
+
+    async fn handle(&mut self, _: StopDeadline, ctx: &mut Context<Self, ()>) {
+        if !self.finished {
+            let m = format!(
+                "{} action(s) did not end within {:?} of the stop",
+                self.eng.running, self.grace
+            );
+            self.errors.push(m.clone());
+            self.emit(EventKind::Error { message: m });
+            self.finish();
+        }
+        finish_turn!(self, ctx)
+    }
+}
+
+impl Message<GetMarking> for Supervisor {
+    type Reply = Vec<u32>;
+
+    async fn handle(&mut self, _: GetMarking, _: &mut Context<Self, Vec<u32>>) -> Vec<u32> {
+        self.eng.m.to_vec()
+    }
+}
+
+impl Message<GetAgents> for Supervisor {
+    type Reply = Vec<AgentInfo>;
+
+    async fn handle(
+        &mut self,
+        _: GetAgents,
+        _: &mut Context<Self, Vec<AgentInfo>>,
+    ) -> Vec<AgentInfo> {
+        self.eng.mark_waiting();
+        let mut v: Vec<AgentInfo> = self
+            .eng
+            .agents
+            .iter()
+            .map(|(&id, r)| AgentInfo {
+                id,
+                place: r.place,
+                state: r.state,
+            })
+            .collect();
+        v.sort_by_key(|a| a.id);
+        v
+    }
+}

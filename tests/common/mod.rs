@@ -1,0 +1,80 @@
+//! Shared helpers for behaviour tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// A fixture file: `$CARGO_MANIFEST_DIR/../shared/fixtures/<rel>`, else `/work/shared/...`.
+pub fn fixture(rel: &str) -> PathBuf {
+    let local = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/fixtures")
+        .join(rel);
+    if local.exists() {
+        return local;
+    }
+    PathBuf::from("/work/shared/fixtures").join(rel)
+}
+
+/// Batch means over a single run: the time axis cut into `n` batches of length `len`; each
+/// statistic is either a time integral (`advance`) or a count (`count`), divided by `len`.
+pub struct BatchMeans {
+    len: f64,
+    sums: Vec<Vec<f64>>,
+    last: f64,
+}
+
+impl BatchMeans {
+    pub fn new(n: usize, len: f64, stats: usize) -> Self {
+        BatchMeans {
+            len,
+            sums: vec![vec![0.0; n]; stats],
+            last: 0.0,
+        }
+    }
+
+    /// Adds `values[k]` (held constant since the last call) integrated up to time `t`.
+    pub fn advance(&mut self, t: f64, values: &[f64]) {
+        let n = self.sums[0].len();
+        let mut from = self.last;
+        while from < t {
+            let b = ((from / self.len) as usize).min(n - 1);
+            let end = t.min((b + 1) as f64 * self.len);
+            let end = if b == n - 1 { t } else { end };
+            for (k, v) in values.iter().enumerate() {
+                self.sums[k][b] += v * (end - from);
+            }
+            from = end;
+        }
+        self.last = t;
+    }
+
+    /// Counts one event of statistic `k` at time `t`.
+    pub fn count(&mut self, t: f64, k: usize) {
+        let n = self.sums[k].len();
+        let b = ((t / self.len) as usize).min(n - 1);
+        self.sums[k][b] += 1.0;
+    }
+
+    /// Mean and half-width of the 95% interval (Student t) of statistic `k` per unit time.
+    pub fn interval(&self, k: usize) -> (f64, f64) {
+        let xs: Vec<f64> = self.sums[k].iter().map(|s| s / self.len).collect();
+        let n = xs.len() as f64;
+        let mean = xs.iter().sum::<f64>() / n;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        (mean, t975(xs.len() - 1) * (var / n).sqrt())
+    }
+}
+
+/// The 97.5% quantile of Student's t with `df` degrees of freedom (table, df ≥ 9).
+fn t975(df: usize) -> f64 {
+    match df {
+        0..=9 => 2.262,
+        10..=14 => 2.228,
+        15..=19 => 2.131,
+        20..=24 => 2.086,
+        25..=29 => 2.060,
+        30..=39 => 2.042,
+        40..=59 => 2.021,
+        60..=119 => 2.000,
+        _ => 1.980,
+    }
+}
