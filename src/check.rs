@@ -122,8 +122,15 @@ fn is_isolated(net: &Net, p: PlaceId) -> bool {
 /// Warnings about the net alone: dead transitions and isolated places.
 pub fn net_warnings(net: &Net, s: &Structure) -> Vec<String> {
     let mut out = Vec::new();
+    let dead = s.may_fire.iter().filter(|&&f| !f).count();
+    if dead > 1 && dead == net.transition_count() {
+        out.push(format!(
+            "none of the {dead} transitions can ever fire from the initial marking ({} token(s))",
+            net.initial_tokens()
+        ));
+    }
     for t in net.transition_ids() {
-        if s.may_fire[t.index()] {
+        if s.may_fire[t.index()] || (dead > 1 && dead == net.transition_count()) {
             continue;
         }
         let name = &net.transition(t).name;
@@ -199,14 +206,10 @@ pub fn rule_never_applies(net: &Net, s: &Structure, rule: &Rule) -> Option<Strin
         let support: Vec<usize> = (0..y.len()).filter(|&i| y[i] > 0).collect();
         let values: Option<u64> = support.iter().try_fold(0u64, |acc, &i| {
             let k = rule.pattern.required(PlaceId(i as u32))?;
-            Some(acc + y[i] * k as u64)
+            Some(acc.saturating_add(y[i].saturating_mul(k as u64)))
         });
-        let total: u64 = net
-            .places()
-            .iter()
-            .zip(y)
-            .map(|(p, &w)| p.initial as u64 * w)
-            .sum();
+        let m0: Vec<u64> = net.places().iter().map(|p| p.initial as u64).collect();
+        let total = structure::weighted(y, &m0);
         if let Some(v) = values
             && v != total
         {
