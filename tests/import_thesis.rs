@@ -352,3 +352,22 @@ fn the_cli_writes_plan_and_net_and_exits_2_on_bad_input() {
         "{stderr}"
     );
 }
+
+#[test]
+fn the_generated_ring_input_imports_with_an_explicit_net() {
+    let path = fixtures().join("generated/ring_input_example.json");
+    let (_dir, r) = import_to(&path, None);
+    let e = r.unwrap_err();
+    assert_eq!(e.span.map(|s| (s.line, s.column)), Some((2, 10)));
+    assert!(e.to_string().contains("`ring.xml` not found"), "{e}");
+    let (_dir, r) = import_to(&path, Some(fixtures().join("generated/ring_K4_N10.xml")));
+    let plan = r.unwrap();
+    assert!(plan.policy.is_empty());
+    let p3 = plan.net.place_by_name("p3").unwrap();
+    assert!(matches!(
+        plan.role(p3),
+        Some(Role::Action { name, .. }) if name == "ring_functions.work_p3"
+    ));
+    assert_eq!(plan.roles.iter().flatten().count(), 4);
+    assert_eq!(plan.net.initial_tokens(), 10);
+}
