@@ -115,15 +115,25 @@ impl Report {
     }
 }
 
-fn is_isolated(net: &Net, p: PlaceId) -> bool {
-    !net.arcs().iter().any(|a| a.place == p)
-}
-
 /// Warnings about the net alone: dead transitions and isolated places.
 pub fn net_warnings(net: &Net, s: &Structure) -> Vec<String> {
     let mut out = Vec::new();
+    // Places some transition that may fire adds tokens to.
+    let mut fed = vec![false; net.place_count()];
+    for t in net.transition_ids().filter(|t| s.may_fire[t.index()]) {
+        for &(p, d) in net.delta(t) {
+            fed[p.index()] |= d > 0;
+        }
+    }
+    let dead = s.may_fire.iter().filter(|&&f| !f).count();
+    if dead > 1 && dead == net.transition_count() {
+        out.push(format!(
+            "none of the {dead} transitions can ever fire from the initial marking ({} token(s))",
+            net.initial_tokens()
+        ));
+    }
     for t in net.transition_ids() {
-        if s.may_fire[t.index()] {
+        if s.may_fire[t.index()] || (dead > 1 && dead == net.transition_count()) {
             continue;
         }
         let name = &net.transition(t).name;
@@ -134,10 +144,7 @@ pub fn net_warnings(net: &Net, s: &Structure) -> Vec<String> {
         let why = if let Some(&(p, w)) = starved {
             let place = net.place(p);
             let u = s.upper[p.index()].unwrap_or_default();
-            let producers = net.transition_ids().any(|u| {
-                s.may_fire[u.index()] && net.delta(u).iter().any(|&(q, d)| q == p && d > 0)
-            });
-            if producers {
+            if fed[p.index()] {
                 format!(
                     "input place `{}` holds at most {u} token(s), the arc needs {w}",
                     place.name
@@ -163,13 +170,15 @@ pub fn net_warnings(net: &Net, s: &Structure) -> Vec<String> {
         };
         out.push(format!("transition `{name}` can never fire: {why}"));
     }
-    for p in net.place_ids() {
-        if is_isolated(net, p) {
-            out.push(format!(
-                "place `{}` is isolated: no arc touches it",
-                net.place(p).name
-            ));
-        }
+    let mut touched = vec![false; net.place_count()];
+    for a in net.arcs() {
+        touched[a.place.index()] = true;
+    }
+    for p in net.place_ids().filter(|p| !touched[p.index()]) {
+        out.push(format!(
+            "place `{}` is isolated: no arc touches it",
+            net.place(p).name
+        ));
     }
     out
 }
@@ -195,18 +204,14 @@ pub fn rule_never_applies(net: &Net, s: &Structure, rule: &Rule) -> Option<Strin
         }
     }
     // A P-invariant whose places the pattern all fixes must keep its value.
+    let m0: Vec<u64> = net.places().iter().map(|p| p.initial as u64).collect();
     for y in &s.invariants {
         let support: Vec<usize> = (0..y.len()).filter(|&i| y[i] > 0).collect();
         let values: Option<u64> = support.iter().try_fold(0u64, |acc, &i| {
             let k = rule.pattern.required(PlaceId(i as u32))?;
-            Some(acc + y[i] * k as u64)
+            Some(acc.saturating_add(y[i].saturating_mul(k as u64)))
         });
-        let total: u64 = net
-            .places()
-            .iter()
-            .zip(y)
-            .map(|(p, &w)| p.initial as u64 * w)
-            .sum();
+        let total = structure::weighted(y, &m0);
         if let Some(v) = values
             && v != total
         {

@@ -538,3 +538,32 @@ fn structural_errors_are_refused_with_their_position() {
     assert!(matches!(e.kind, LoadErrorKind::Xml(_)), "{e}");
     assert_eq!(at(&e).0, 8);
 }
+
+#[test]
+fn files_that_are_not_projects_are_refused() {
+    let e = load_err(&data("not_a_project.PNPRO"), None, &[]);
+    let LoadErrorKind::Invalid(msg) = &e.kind else {
+        panic!("{e}");
+    };
+    assert!(msg.contains("root element is `<pnml>`"), "{msg}");
+    assert_eq!(at(&e), (2, 1));
+
+    // An INPUT arc must go from a place to a transition.
+    let e = load_err(&data("wrong_direction.PNPRO"), None, &[]);
+    let LoadErrorKind::Invalid(msg) = &e.kind else {
+        panic!("{e}");
+    };
+    assert_eq!(msg, "INPUT arc t1 → P1: `t1` is not a place");
+    assert_eq!(at(&e), (9, 41));
+
+    let empty = pnpro::read(Path::new("e.PNPRO"), b"  \n", &ReadOptions::default());
+    assert_eq!(empty.unwrap_err().kind, LoadErrorKind::Empty);
+    let e = pnpro::read(
+        Path::new("b.PNPRO"),
+        b"<project>\xff</project>",
+        &ReadOptions::default(),
+    )
+    .unwrap_err();
+    assert!(matches!(e.kind, LoadErrorKind::Xml(_)), "{e}");
+    assert_eq!(at(&e), (1, 10));
+}

@@ -156,3 +156,36 @@ fn the_exact_index_scales_to_many_rules() {
     assert!(p.policy.rule_for(&[1, 2000, 1], &[A, B, C]).is_none());
     assert_eq!(p.rule_spans[1].line, 5);
 }
+
+proptest::proptest! {
+    /// Whatever the rule's probabilities and whichever transitions can fire, the policy's
+    /// distribution is over firable transitions only, positive, and sums to 1.
+    #[test]
+    fn distributions_sum_to_one_over_firable_transitions(
+        raw in proptest::collection::vec(0u32..5, 3),
+        firable_mask in 1u8..8,
+    ) {
+        let total: u32 = raw.iter().sum();
+        proptest::prop_assume!(total > 0);
+        let probs: Vec<f64> = raw.iter().map(|&r| r as f64 / total as f64).collect();
+        let p = plan(&format!(
+            "[[policy]]\nmarking = {{}}\npartial = true\nchoose = {{ a = {:?}, b = {:?}, c = {:?} }}\n",
+            probs[0], probs[1], probs[2]
+        ));
+        let firable: Vec<TransitionId> = [A, B, C]
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| firable_mask & (1 << i) != 0)
+            .map(|(_, t)| t)
+            .collect();
+        let d = p.policy.distribution_or_weights(&p.net, &[1, 0, 1], &firable);
+        let sum: f64 = d.iter().map(|x| x.1).sum();
+        proptest::prop_assert!((sum - 1.0).abs() < 1e-9, "{d:?}");
+        for (t, q) in &d {
+            proptest::prop_assert!(firable.contains(t) && *q > 0.0, "{d:?}");
+        }
+        // The rule applies exactly when it gives a firable transition positive mass.
+        let applies = firable.iter().any(|t| probs[t.index()] > 0.0);
+        proptest::prop_assert_eq!(p.policy.distribution(&p.net, &[1, 0, 1], &firable).is_some(), applies);
+    }
+}

@@ -106,7 +106,7 @@ fn code_built_net_round_trips_with_every_feature() {
     let work = b.exponential("work", 1.0 / 3.0, Servers::Single);
     let spin = b.exponential("spin", 1e-9, Servers::Infinite);
     let pick = b.immediate("pick", 0.0, 3);
-    let drop = b.immediate("drop", 2.5, 1);
+    let drop = b.immediate("drop\tit\nnow", 2.5, 1);
     b.input(idle, start, 2);
     b.output(start, busy, 2);
     b.input(busy, work, 1);

@@ -32,10 +32,9 @@ impl Structure {
         let m0: Vec<u64> = net.places().iter().map(|p| p.initial as u64).collect();
         let mut inv_bound: Vec<Option<u64>> = vec![None; net.place_count()];
         for y in &invariants {
-            let total: u64 = y.iter().zip(&m0).map(|(a, b)| a * b).sum();
+            let total = weighted(y, &m0);
             for (p, &w) in y.iter().enumerate() {
-                if w > 0 {
-                    let b = total / w;
+                if let Some(b) = total.checked_div(w) {
                     inv_bound[p] = Some(inv_bound[p].map_or(b, |c: u64| c.min(b)));
                 }
             }
@@ -85,7 +84,7 @@ impl Structure {
                 // upper bounds gives y_p·m(p) ≥ y·m0 − Σ_{q≠p} y_q·ub(q).
                 let mut lower = lower;
                 for y in &invariants {
-                    let total: u64 = y.iter().zip(&m0).map(|(a, b)| a * b).sum();
+                    let total = weighted(y, &m0);
                     for p in 0..n {
                         if y[p] == 0 {
                             continue;
@@ -94,7 +93,7 @@ impl Structure {
                         let mut bounded = true;
                         for q in (0..n).filter(|&q| q != p && y[q] > 0) {
                             match upper[q] {
-                                Some(u) => others = others.saturating_add(y[q] * u),
+                                Some(u) => others = others.saturating_add(y[q].saturating_mul(u)),
                                 None => bounded = false,
                             }
                         }
@@ -214,6 +213,13 @@ fn minimal_supports(rows: Vec<(Vec<i64>, Vec<i64>)>) -> Vec<(Vec<i64>, Vec<i64>)
         .zip(keep)
         .filter_map(|(r, k)| k.then_some(r))
         .collect()
+}
+
+/// `y·m`, saturating (a bound that saturates is still a bound).
+pub(crate) fn weighted(y: &[u64], m: &[u64]) -> u64 {
+    y.iter()
+        .zip(m)
+        .fold(0u64, |acc, (a, b)| acc.saturating_add(a.saturating_mul(*b)))
 }
 
 fn gcd(a: i64, b: i64) -> i64 {

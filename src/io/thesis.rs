@@ -27,14 +27,13 @@
 //! `t4`) is a [`LoadError`] at its position in the JSON file. A policy entry for an
 //! exponential transition — which the thesis code never consulted — is dropped with a warning.
 
+mod input;
 mod json;
 mod pylit;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use self::json::{Field, JsonStr, JsonValue};
-use self::pylit::{Py, PyKind};
 use super::plan::{Plan, read_plan};
 use super::{LoadError, LoadErrorKind, ReadOptions, Span, read_net};
 use crate::net::{Net, Timing};
@@ -138,7 +137,7 @@ pub fn read_input(path: &Path) -> Result<ThesisInput, LoadError> {
             LoadErrorKind::Invalid("the file is not UTF-8".into()),
         )
     })?;
-    Reader { path, text: &text }.input()
+    input::Reader { path, text: &text }.input()
 }
 
 /// Reads the input at `path`, checks it against its net, and writes `plan.toml` and a copy of
@@ -356,7 +355,11 @@ pub fn plan_text(
                 KeyItem::Free => None,
             })
             .collect();
-        let _ = writeln!(out, "marking = {{ {} }}", cells.join(", "));
+        if cells.is_empty() {
+            let _ = writeln!(out, "marking = {{}}");
+        } else {
+            let _ = writeln!(out, "marking = {{ {} }}", cells.join(", "));
+        }
         if !exact {
             let _ = writeln!(out, "partial = true");
         }
@@ -448,294 +451,4 @@ fn toml_key(s: &str) -> String {
 /// A TOML basic string (JSON's escapes are valid TOML escapes).
 fn toml_str(s: &str) -> String {
     serde_json::to_string(s).unwrap_or_else(|_| format!("\"{s}\""))
-}
-
-/// Reads one input file; positions are computed against `text`.
-struct Reader<'a> {
-    path: &'a Path,
-    text: &'a str,
-}
-
-impl Reader<'_> {
-    fn span(&self, offset: usize) -> Span {
-        Span::locate(self.text.as_bytes(), offset)
-    }
-
-    fn err(&self, offset: usize, kind: LoadErrorKind) -> LoadError {
-        LoadError::at(self.path, self.span(offset), kind)
-    }
-
-    fn invalid(&self, offset: usize, msg: String) -> LoadError {
-        self.err(offset, LoadErrorKind::Invalid(msg))
-    }
-
-    fn input(&self) -> Result<ThesisInput, LoadError> {
-        let fields = json::parse_object(self.text)
-            .map_err(|e| self.invalid(e.offset, format!("JSON: {}", e.message)))?;
-        let mut warnings = Vec::new();
-        let mut input = ThesisInput {
-            path: self.path.to_path_buf(),
-            net: Named {
-                name: String::new(),
-                span: Span { line: 1, column: 1 },
-            },
-            places: Vec::new(),
-            policy: Vec::new(),
-            actions: Vec::new(),
-            resources: Vec::new(),
-            full_synchronization: None,
-            warnings: Vec::new(),
-        };
-        let (mut has_net, mut has_places, mut has_policy) = (false, false, false);
-        for Field { key, value } in &fields {
-            let s = match value {
-                JsonValue::Str(s) => s,
-                JsonValue::Other(at) => {
-                    return Err(self.invalid(
-                        *at,
-                        format!(
-                            "`{}` must be a string (a Python literal in quotes)",
-                            key.text
-                        ),
-                    ));
-                }
-            };
-            match key.text.as_str() {
-                "gspn" => {
-                    input.net = Named {
-                        name: s.text.clone(),
-                        span: self.span(s.start),
-                    };
-                    has_net = true;
-                }
-                "places_tuple" => {
-                    input.places = self.names(s, &self.literal(s)?, "places_tuple")?;
-                    has_places = true;
-                }
-                "policy_dictionary" => {
-                    input.policy = self.policy(s, &mut warnings)?;
-                    has_policy = true;
-                }
-                "place_to_function_mapping" => self.functions(s, &mut input.actions)?,
-                "place_to_client_mapping" => self.clients(s, &mut input.actions)?,
-                "resources_list" => {
-                    input.resources = self.names(s, &self.literal(s)?, "resources_list")?;
-                }
-                "full_synchronization" => match s.text.trim() {
-                    "True" | "true" => input.full_synchronization = Some(true),
-                    "False" | "false" => input.full_synchronization = Some(false),
-                    other => {
-                        return Err(self.invalid(
-                            s.start,
-                            format!("full_synchronization is `{other}`: expected True or False"),
-                        ));
-                    }
-                },
-                "project_path" => warnings.push(format!(
-                    "project_path `{}` ignored: actions are registered by name",
-                    s.text
-                )),
-                other => warnings.push(format!("key `{other}` ignored")),
-            }
-        }
-        for (has, what) in [
-            (has_net, "`gspn`"),
-            (has_places, "`places_tuple`"),
-            (has_policy, "`policy_dictionary`"),
-        ] {
-            if !has {
-                return Err(LoadError::file(
-                    self.path,
-                    LoadErrorKind::Missing {
-                        what: what.into(),
-                        name: None,
-                    },
-                ));
-            }
-        }
-        input.warnings = warnings;
-        Ok(input)
-    }
-
-    /// Parses the Python literal inside JSON string `s`.
-    fn literal(&self, s: &JsonStr) -> Result<Py, LoadError> {
-        pylit::parse(&s.text).map_err(|e| {
-            self.invalid(
-                s.file_offset(e.offset),
-                format!("Python literal: {}", e.message),
-            )
-        })
-    }
-
-    fn named(&self, s: &JsonStr, v: &Py, what: &str) -> Result<Named, LoadError> {
-        match &v.kind {
-            PyKind::Str(name) => Ok(Named {
-                name: name.clone(),
-                span: self.span(s.file_offset(v.at)),
-            }),
-            other => Err(self.invalid(
-                s.file_offset(v.at),
-                format!(
-                    "{what}: expected a name in quotes, found {}",
-                    other.describe()
-                ),
-            )),
-        }
-    }
-
-    fn names(&self, s: &JsonStr, v: &Py, what: &str) -> Result<Vec<Named>, LoadError> {
-        match &v.kind {
-            PyKind::Tuple(items) | PyKind::List(items) => {
-                items.iter().map(|i| self.named(s, i, what)).collect()
-            }
-            other => Err(self.invalid(
-                s.file_offset(v.at),
-                format!(
-                    "{what}: expected a tuple or list of names, found {}",
-                    other.describe()
-                ),
-            )),
-        }
-    }
-
-    fn dict<'p>(&self, s: &JsonStr, v: &'p Py, what: &str) -> Result<&'p [(Py, Py)], LoadError> {
-        match &v.kind {
-            PyKind::Dict(items) => Ok(items),
-            other => Err(self.invalid(
-                s.file_offset(v.at),
-                format!("{what}: expected a dict, found {}", other.describe()),
-            )),
-        }
-    }
-
-    fn functions(&self, s: &JsonStr, out: &mut Vec<ActionEntry>) -> Result<(), LoadError> {
-        let v = self.literal(s)?;
-        for (k, f) in self.dict(s, &v, "place_to_function_mapping")? {
-            let place = self.named(s, k, "place_to_function_mapping")?;
-            let action = self.named(s, f, "place_to_function_mapping")?.name;
-            out.push(ActionEntry {
-                place,
-                action,
-                action_type: None,
-            });
-        }
-        Ok(())
-    }
-
-    fn clients(&self, s: &JsonStr, out: &mut Vec<ActionEntry>) -> Result<(), LoadError> {
-        let v = self.literal(s)?;
-        for (k, c) in self.dict(s, &v, "place_to_client_mapping")? {
-            let place = self.named(s, k, "place_to_client_mapping")?;
-            let parts = self.names(s, c, "place_to_client_mapping")?;
-            let [action_type, server] = parts.as_slice() else {
-                return Err(self.invalid(
-                    s.file_offset(c.at),
-                    format!(
-                        "place_to_client_mapping of `{}`: expected ['ActionType', 'server_name'], found {} items",
-                        place.name,
-                        parts.len()
-                    ),
-                ));
-            };
-            out.push(ActionEntry {
-                place,
-                action: server.name.clone(),
-                action_type: Some(action_type.name.clone()),
-            });
-        }
-        Ok(())
-    }
-
-    fn policy(
-        &self,
-        s: &JsonStr,
-        warnings: &mut Vec<String>,
-    ) -> Result<Vec<PolicyEntry>, LoadError> {
-        let v = self.literal(s)?;
-        let mut entries = Vec::new();
-        for (k, choice) in self.dict(s, &v, "policy_dictionary")? {
-            let items = match &k.kind {
-                PyKind::Tuple(items) | PyKind::List(items) => items.as_slice(),
-                // `('-')` is '-' in Python: a one-place key.
-                _ => std::slice::from_ref(k),
-            };
-            let mut key = Vec::with_capacity(items.len());
-            for item in items {
-                key.push(self.key_item(s, item, warnings)?);
-            }
-            let mut choose = Vec::new();
-            for (t, p) in self.dict(s, choice, "policy_dictionary value")? {
-                let t = self.named(s, t, "policy_dictionary transition")?;
-                let prob = match p.kind {
-                    PyKind::Int(i) => i as f64,
-                    PyKind::Float(f) => f,
-                    ref other => {
-                        return Err(self.err(
-                            s.file_offset(p.at),
-                            LoadErrorKind::NotANumber {
-                                what: "probability",
-                                name: t.name.clone(),
-                                value: other.describe().to_string(),
-                            },
-                        ));
-                    }
-                };
-                choose.push((t, prob));
-            }
-            entries.push(PolicyEntry {
-                span: self.span(s.file_offset(k.at)),
-                key,
-                choose,
-            });
-        }
-        Ok(entries)
-    }
-
-    fn key_item(
-        &self,
-        s: &JsonStr,
-        v: &Py,
-        warnings: &mut Vec<String>,
-    ) -> Result<KeyItem, LoadError> {
-        let at = s.file_offset(v.at);
-        match &v.kind {
-            PyKind::Int(i) => u32::try_from(*i).map(KeyItem::Count).map_err(|_| {
-                self.err(
-                    at,
-                    LoadErrorKind::OutOfRange {
-                        what: "token count",
-                        name: "policy key".into(),
-                        value: i.to_string(),
-                        expected: "must be an integer ≥ 0",
-                    },
-                )
-            }),
-            PyKind::Str(t) if t == "-" => Ok(KeyItem::Free),
-            PyKind::Str(t) => match t.trim().parse::<u32>() {
-                Ok(c) => {
-                    warnings.push(format!(
-                        "policy key at {}: '{t}' is a string; read as the count {c} (the thesis \
-                         code compared it with the integer and never matched)",
-                        self.span(at)
-                    ));
-                    Ok(KeyItem::Count(c))
-                }
-                Err(_) => Err(self.err(
-                    at,
-                    LoadErrorKind::NotANumber {
-                        what: "token count",
-                        name: "policy key".into(),
-                        value: t.clone(),
-                    },
-                )),
-            },
-            other => Err(self.invalid(
-                at,
-                format!(
-                    "policy key: expected a token count or '-', found {}",
-                    other.describe()
-                ),
-            )),
-        }
-    }
 }

@@ -2,9 +2,26 @@
 
 use std::fmt::Write;
 
-use quick_xml::escape::escape;
+use std::borrow::Cow;
+
+use quick_xml::escape;
 
 use crate::net::{ArcKind, Net, Position, Servers, Timing};
+
+/// An attribute value: XML-escaped, and with tabs and line breaks as character references,
+/// which attribute-value normalisation would otherwise turn into spaces.
+fn attr(s: &str) -> Cow<'_, str> {
+    let e = escape::escape(s);
+    if e.contains(['\n', '\r', '\t']) {
+        Cow::Owned(
+            e.replace('\n', "&#10;")
+                .replace('\r', "&#13;")
+                .replace('\t', "&#9;"),
+        )
+    } else {
+        e
+    }
+}
 
 /// Where nodes without a position go: places on one row, transitions on the next.
 fn default_position(row: f64, i: usize) -> Position {
@@ -26,7 +43,7 @@ fn coords(out: &mut String, p: Position) {
 
 pub(super) fn write(net: &Net) -> String {
     let mut out = String::with_capacity(256 + 160 * (net.place_count() + net.arcs().len()));
-    let name = escape(net.name());
+    let name = attr(net.name());
     out.push_str("<?xml version=\"1.0\" encoding=\"UTF-8\" standalone=\"no\"?>\n");
     out.push_str("<!-- Written by gspn (plan-runner) -->\n");
     let _ = writeln!(out, "<project name=\"{name}\" version=\"121\">");
@@ -39,7 +56,7 @@ pub(super) fn write(net: &Net) -> String {
         let _ = writeln!(
             out,
             "    <!-- place {} had capacity {}: PNPRO has no capacities, it was left out -->",
-            escape(p.name.replace("--", "- -")),
+            p.name.replace("--", "- -").replace(['\n', '\r'], " "),
             p.capacity.unwrap_or_default()
         );
     }
@@ -49,7 +66,7 @@ pub(super) fn write(net: &Net) -> String {
         if p.initial > 0 {
             let _ = write!(out, " marking=\"{}\"", p.initial);
         }
-        let _ = write!(out, " name=\"{}\"", escape(p.name.as_str()));
+        let _ = write!(out, " name=\"{}\"", attr(p.name.as_str()));
         coords(
             &mut out,
             p.position.unwrap_or_else(|| default_position(2.0, i)),
@@ -57,11 +74,7 @@ pub(super) fn write(net: &Net) -> String {
         out.push_str("/>\n");
     }
     for (i, t) in net.transitions().iter().enumerate() {
-        let _ = write!(
-            out,
-            "      <transition name=\"{}\"",
-            escape(t.name.as_str())
-        );
+        let _ = write!(out, "      <transition name=\"{}\"", attr(t.name.as_str()));
         match t.timing {
             Timing::Exponential { rate, servers } => {
                 let servers = match servers {
@@ -91,8 +104,8 @@ pub(super) fn write(net: &Net) -> String {
     }
     out.push_str("    </nodes>\n    <edges>\n");
     for a in net.arcs() {
-        let place = escape(net.place(a.place).name.as_str());
-        let trans = escape(net.transition(a.transition).name.as_str());
+        let place = attr(net.place(a.place).name.as_str());
+        let trans = attr(net.transition(a.transition).name.as_str());
         let (head, tail, kind) = match a.kind {
             ArcKind::Input => (trans, place, "INPUT"),
             ArcKind::Output => (place, trans, "OUTPUT"),
