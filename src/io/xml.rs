@@ -103,8 +103,8 @@ pub(crate) struct XmlStream<'a> {
     reader: Reader<&'a [u8]>,
     text: &'a [u8],
     path: &'a Path,
-    /// Open elements: their name and offset, for "never closed" errors.
-    open: Vec<(String, usize)>,
+    /// Offsets of the open elements' `<`, for "never closed" errors.
+    open: Vec<usize>,
     /// An empty element's pending `End`.
     pending_end: bool,
     seen_root: bool,
@@ -179,13 +179,13 @@ impl<'a> XmlStream<'a> {
                 Event::Start(start) => {
                     self.seen_root = true;
                     let tag = Tag { start, at: before };
-                    self.open.push((tag.name().to_string(), before));
+                    self.open.push(before);
                     return Ok(Some(XmlEvent::Start(tag)));
                 }
                 Event::Empty(start) => {
                     self.seen_root = true;
                     let tag = Tag { start, at: before };
-                    self.open.push((tag.name().to_string(), before));
+                    self.open.push(before);
                     self.pending_end = true;
                     return Ok(Some(XmlEvent::Start(tag)));
                 }
@@ -230,10 +230,15 @@ impl<'a> XmlStream<'a> {
                     return Ok(Some(XmlEvent::Text(Cow::Owned(s), before)));
                 }
                 Event::Eof => {
-                    if let Some((name, at)) = self.open.last() {
+                    if let Some(&at) = self.open.last() {
+                        let name: String = self.text[at + 1..]
+                            .iter()
+                            .take_while(|b| !b.is_ascii_whitespace() && !matches!(b, b'>' | b'/'))
+                            .map(|&b| b as char)
+                            .collect();
                         let msg = format!(
                             "the file ends inside `<{name}>` (opened at {}): truncated?",
-                            self.span(*at)
+                            self.span(at)
                         );
                         return Err(self.error_at(self.text.len(), msg));
                     }
@@ -334,4 +339,88 @@ pub(crate) fn node_ids(net: &Net, sanitize: bool) -> (Vec<String>, Vec<String>) 
         .map(|t| make(&t.name, "t"))
         .collect();
     (p, t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn events(text: &str) -> Result<Vec<String>, LoadError> {
+        let path = Path::new("t.xml");
+        let mut x = XmlStream::new(path, text.as_bytes());
+        let mut out = Vec::new();
+        while let Some(ev) = x.next()? {
+            out.push(match ev {
+                XmlEvent::Start(t) => format!("<{}@{}", t.name(), x.span(t.at)),
+                XmlEvent::End => "/".into(),
+                XmlEvent::Text(s, at) if !s.trim().is_empty() => {
+                    format!("{}@{}", s.trim(), x.span(at))
+                }
+                XmlEvent::Text(..) => continue,
+            });
+        }
+        Ok(out)
+    }
+
+    #[test]
+    fn events_carry_positions_and_resolve_entities() {
+        let got = events("<pnml:a x='1'>\n  <b/> t&amp;u </pnml:a>").unwrap();
+        assert_eq!(
+            got,
+            ["<a@1:1", "<b@2:3", "/", "t@2:8", "&@2:9", "u@2:14", "/"]
+        );
+    }
+
+    #[test]
+    fn attribute_values_are_located() {
+        let text = "<r>\n  <arc id=\"a\"  target = \"q\"/></r>";
+        let path = Path::new("t.xml");
+        let mut x = XmlStream::new(path, text.as_bytes());
+        x.next().unwrap();
+        let t = loop {
+            if let Some(XmlEvent::Start(t)) = x.next().unwrap() {
+                break t;
+            }
+        };
+        let v = t.attr(&x, "target").unwrap().unwrap();
+        assert_eq!(v.text, "q");
+        assert_eq!(
+            x.span(v.at),
+            Span {
+                line: 2,
+                column: 26
+            }
+        );
+        assert!(t.attr(&x, "source").unwrap().is_none());
+    }
+
+    #[test]
+    fn a_file_ending_inside_an_element_names_it() {
+        let e = events("<pnml>\n<net id=\"n\">\n").unwrap_err();
+        assert_eq!(e.span, Some(Span { line: 3, column: 1 }));
+        let LoadErrorKind::Xml(msg) = e.kind else {
+            panic!("{e}")
+        };
+        assert!(msg.contains("`<net>` (opened at 2:1)"), "{msg}");
+    }
+
+    #[test]
+    fn no_root_and_stray_text_are_errors() {
+        assert!(events("<?xml version=\"1.0\"?>\n").is_err());
+        assert!(events("hello").is_err());
+        assert!(events("<a/><b/>").is_err());
+    }
+
+    #[test]
+    fn latin1_files_are_transcoded() {
+        let bytes = b"<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?><a>caf\xE9</a>";
+        let text = to_utf8(Path::new("t.xml"), bytes).unwrap();
+        assert_eq!(
+            std::str::from_utf8(&text).unwrap().chars().last(),
+            Some('>')
+        );
+        assert!(std::str::from_utf8(&text).unwrap().contains("café"));
+        let err = to_utf8(Path::new("t.xml"), b"<a>caf\xE9</a>").unwrap_err();
+        assert_eq!(err.span, Some(Span { line: 1, column: 7 }));
+    }
 }

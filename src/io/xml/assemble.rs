@@ -9,7 +9,9 @@ use std::path::Path;
 use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions};
-use crate::net::{ArcKind, NetBuilder, Place, PlaceId, Position, Servers, Timing, Transition};
+use crate::net::{
+    ArcKind, NetBuilder, Place, PlaceId, Position, Servers, Timing, Transition, TransitionId,
+};
 
 use super::nodes::{ArcRecord, NodeRecord, Record, RecordKind, Value, collect};
 use super::{Dialect, XmlStream, to_utf8};
@@ -39,7 +41,10 @@ pub(crate) fn read(
     let mut ids: FxHashMap<String, NodeRef> = FxHashMap::default();
     let mut places: Vec<(PendingNode, Place)> = Vec::new();
     let mut transitions: Vec<(PendingNode, Transition)> = Vec::new();
-    let mut arcs: Vec<ArcRecord> = Vec::new();
+    // Arcs whose ends are known when they close are resolved at once (a few bytes each);
+    // the others wait for the end of the file.
+    let mut arcs: Vec<Resolved> = Vec::new();
+    let mut deferred: Vec<ArcRecord> = Vec::new();
     let mut arc_ids: FxHashSet<String> = FxHashSet::default();
     let mut dup_arc_ids = 0usize;
     let mut vip = false;
@@ -113,7 +118,10 @@ pub(crate) fn read(
                     {
                         dup_arc_ids += 1;
                     }
-                    arcs.push(a);
+                    match resolve_arc(x, &ids, &a, false)? {
+                        Some(r) => arcs.push(r),
+                        None => deferred.push(a),
+                    }
                 }
             }
             Ok(())
@@ -148,8 +156,11 @@ pub(crate) fn read(
         t.name = name;
         b.add_transition(t);
     }
-    for a in arcs {
-        add_arc(&x, &mut b, &ids, a)?;
+    for a in deferred {
+        arcs.push(resolve_arc(&x, &ids, &a, true)?.expect("final resolution errs or resolves"));
+    }
+    for (kind, p, t, w, points) in arcs {
+        b.arc(kind, PlaceId(p), TransitionId(t), w, points);
     }
     let net = b
         .build()
@@ -337,12 +348,23 @@ fn transition(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Transitio
     })
 }
 
-fn add_arc(
+/// An arc ready for the builder: kind, place, transition, weight, bend points.
+type Resolved = (ArcKind, u32, u32, u32, Vec<Position>);
+
+/// Resolves an arc's ends and checks its weight and type. `Ok(None)` when an end is not
+/// known yet and `last` is false; when `last`, an unknown end is an error.
+fn resolve_arc(
     x: &XmlStream<'_>,
-    b: &mut NetBuilder,
     ids: &FxHashMap<String, NodeRef>,
-    a: ArcRecord,
-) -> Result<(), LoadError> {
+    a: &ArcRecord,
+    last: bool,
+) -> Result<Option<Resolved>, LoadError> {
+    if !last {
+        let known = |v: &Option<Value>| v.as_ref().is_some_and(|v| ids.contains_key(&v.text));
+        if !known(&a.source) || !known(&a.target) {
+            return Ok(None);
+        }
+    }
     let end = |v: &Option<Value>, attr: &str| -> Result<(NodeRef, Value), LoadError> {
         let v = v.as_ref().ok_or_else(|| {
             x.error(
@@ -430,14 +452,7 @@ fn add_arc(
             ));
         }
     };
-    b.arc(
-        kind,
-        PlaceId(p),
-        crate::net::TransitionId(t),
-        weight,
-        points,
-    );
-    Ok(())
+    Ok(Some((kind, p, t, weight, points)))
 }
 
 /// A non-negative integer at least `min`; `Default,k` is read as `k`.
