@@ -46,7 +46,7 @@ fn bench(c: &mut Criterion) {
     let path = fixture("greatspn/gspnr_toolbox/video_GSPNR.PNPRO");
     let bytes = std::fs::read(&path).expect("fixture");
     g.throughput(Throughput::Bytes(bytes.len() as u64));
-    g.bench_function("video_GSPNR (38 KB, 14 pages)", |b| {
+    g.bench_function("video_GSPNR (38 KB, 12 pages)", |b| {
         b.iter(|| pnpro::read(&path, black_box(&bytes), &opts).expect("reads"))
     });
     for n in [10_000, 100_000] {

@@ -87,3 +87,37 @@ fn convert_refuses_coloured_nets_and_unknown_pages_with_exit_2() {
     assert!(stderr.contains("`Model`, `Model2`"), "{stderr}");
     assert!(!out.exists());
 }
+
+#[test]
+fn convert_pnpro_to_pnml_keeps_the_net() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = greatspn("cyc3/cyc3.PNPRO");
+    let out = dir.path().join("cyc3.pnml");
+    plan_runner()
+        .arg("convert")
+        .arg(&input)
+        .arg(&out)
+        .assert()
+        .success();
+    let back = read_net(&out, &ReadOptions::default()).unwrap().net;
+    let original = read_net(&input, &ReadOptions::default()).unwrap().net;
+    assert_eq!(original.diff(&back), Vec::<String>::new());
+    assert_eq!(
+        back.transition(back.transition_by_name("T1").unwrap())
+            .timing,
+        gspn::net::Timing::Exponential {
+            rate: 1.0,
+            servers: gspn::net::Servers::Infinite
+        }
+    );
+    // And back to PNPRO, through the command again.
+    let again = dir.path().join("again.PNPRO");
+    plan_runner()
+        .arg("convert")
+        .arg(&out)
+        .arg(&again)
+        .assert()
+        .success();
+    let again = read_net(&again, &ReadOptions::default()).unwrap().net;
+    assert_eq!(original.diff(&again), Vec::<String>::new());
+}

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use gspn::io::{LoadErrorKind, ReadOptions, pnpro, read_net};
+use gspn::io::{Format, LoadErrorKind, ReadOptions, pnpro, read_net, write_net};
 use gspn::net::{Net, NetBuilder, Position, Servers};
 
 fn shared() -> PathBuf {
@@ -130,4 +130,84 @@ fn code_built_net_round_trips_with_every_feature() {
     // Nodes without a position get one, so the editor can draw them.
     assert!(back.places().iter().all(|p| p.position.is_some()));
     assert!(back.transitions().iter().all(|t| t.position.is_some()));
+}
+
+/// The PIPE and PNML fixtures (as tests/roundtrip_xml.rs lists them), minus the bad one.
+fn xml_fixtures() -> Vec<PathBuf> {
+    let root = shared().join("fixtures");
+    let mut files = Vec::new();
+    for (dir, exts) in [
+        ("thesis", &[".xml", ".pnml"][..]),
+        ("generated", &[".xml"][..]),
+        ("mcc", &["model.pnml"][..]),
+        ("kanban", &[".pnml"][..]),
+    ] {
+        let mut stack = vec![root.join(dir)];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap() {
+                let p = e.unwrap().path();
+                let name = p.file_name().unwrap().to_string_lossy().into_owned();
+                if p.is_dir() {
+                    stack.push(p);
+                } else if exts.iter().any(|x| name.ends_with(x))
+                    && name != "gspn_thesis_test_case.xml"
+                {
+                    files.push(p);
+                }
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+#[test]
+fn every_pipe_and_pnml_fixture_survives_pnpro() {
+    let files = xml_fixtures();
+    assert_eq!(
+        files.len(),
+        52,
+        "28 thesis, 4 generated, 17 MCC, 4 Kanban, minus the bad one"
+    );
+    for f in &files {
+        let net = read_net(f, &ReadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+            .net;
+        round_trip(&net, &f.display().to_string());
+    }
+}
+
+#[test]
+fn every_pnpro_fixture_page_survives_pnml_and_pipe() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    all_pnpro(&shared().join("fixtures/greatspn"), &mut files);
+    let mut done = 0;
+    for f in &files {
+        for page in pnpro::pages(f, &std::fs::read(f).unwrap()).unwrap() {
+            let opts = ReadOptions {
+                page: Some(page.clone()),
+                params: Vec::new(),
+            };
+            let Ok(loaded) = read_net(f, &opts) else {
+                continue; // coloured
+            };
+            let net = loaded.net;
+            for (format, ext) in [(Format::Pnml, "pnml"), (Format::Pipe, "xml")] {
+                let out = dir.path().join(format!("n{done}.{ext}"));
+                write_net(&net, &out, format).unwrap();
+                let back = read_net(&out, &ReadOptions::default())
+                    .unwrap_or_else(|e| panic!("{}#{page} as {ext}: {e}", f.display()))
+                    .net;
+                assert_eq!(
+                    net.diff(&back),
+                    Vec::<String>::new(),
+                    "{}#{page} via {ext}",
+                    f.display()
+                );
+            }
+            done += 1;
+        }
+    }
+    assert_eq!(done, 52);
 }

@@ -16,9 +16,9 @@ struct Env<'a> {
     path: &'a Path,
     text: &'a str,
     page: &'a str,
-    constants: FxHashMap<&'a str, &'a Record>,
+    constants: FxHashMap<&'a str, &'a Record<'a>>,
     /// Template parameters with the value from `--param`, if one was given.
-    templates: FxHashMap<&'a str, (&'a Record, Option<f64>)>,
+    templates: FxHashMap<&'a str, (&'a Record<'a>, Option<f64>)>,
     places: FxHashMap<&'a str, ()>,
     memo: RefCell<FxHashMap<String, f64>>,
     visiting: RefCell<Vec<String>>,
@@ -37,7 +37,7 @@ impl Env<'_> {
         self.error(
             attr.at + e.at.min(attr.value.len()),
             LoadErrorKind::Expression {
-                expr: attr.value.clone(),
+                expr: attr.value.to_string(),
                 name: owner.to_string(),
                 reason: e.reason,
             },
@@ -109,7 +109,7 @@ impl Env<'_> {
                         self.error(
                             b.at,
                             LoadErrorKind::Expression {
-                                expr: b.value.clone(),
+                                expr: b.value.to_string(),
                                 name: name.to_string(),
                                 reason,
                             },
@@ -197,7 +197,7 @@ impl Env<'_> {
                 LoadErrorKind::NotANumber {
                     what,
                     name: owner.to_string(),
-                    value: attr.value.clone(),
+                    value: attr.value.to_string(),
                 },
             )),
         }
@@ -232,7 +232,7 @@ fn check_template_type(t: &Record, v: f64) -> Result<(), String> {
 }
 
 fn name_of<'r>(env: &Env<'_>, r: &'r Record, what: &str) -> Result<&'r str, LoadError> {
-    r.get("name").map(|a| a.value.as_str()).ok_or_else(|| {
+    r.get("name").map(|a| a.value.as_ref()).ok_or_else(|| {
         env.error(
             r.at,
             LoadErrorKind::Missing {
@@ -246,7 +246,7 @@ fn name_of<'r>(env: &Env<'_>, r: &'r Record, what: &str) -> Result<&'r str, Load
 pub(super) fn build(
     path: &Path,
     text: &str,
-    scanned: &Scanned,
+    scanned: &Scanned<'_>,
     opts: &ReadOptions,
 ) -> Result<Loaded, LoadError> {
     let records = &scanned.records;
@@ -262,7 +262,7 @@ pub(super) fn build(
         visiting: RefCell::default(),
     };
     for r in records {
-        let Some(name) = r.get("name").map(|a| a.value.as_str()) else {
+        let Some(name) = r.get("name").map(|a| a.value.as_ref()) else {
             continue;
         };
         match r.kind {
@@ -400,7 +400,7 @@ pub(super) fn build(
             })
         };
         let (head, tail, kind_attr) = (get("head")?, get("tail")?, get("kind")?);
-        let kind = match kind_attr.value.as_str() {
+        let kind = match kind_attr.value.as_ref() {
             "INPUT" => ArcKind::Input,
             "OUTPUT" => ArcKind::Output,
             "INHIBITOR" => ArcKind::Inhibitor,
@@ -427,23 +427,23 @@ pub(super) fn build(
             } else {
                 LoadErrorKind::UnknownNode {
                     what,
-                    name: attr.value.clone(),
+                    name: attr.value.to_string(),
                 }
             };
             env.error(attr.at, kind)
         };
-        let p = *place_ids.get(p_attr.value.as_str()).ok_or_else(|| {
+        let p = *place_ids.get(p_attr.value.as_ref()).ok_or_else(|| {
             missing(
                 p_attr,
                 "place",
-                trans_ids.contains_key(p_attr.value.as_str()),
+                trans_ids.contains_key(p_attr.value.as_ref()),
             )
         })?;
-        let t = *trans_ids.get(t_attr.value.as_str()).ok_or_else(|| {
+        let t = *trans_ids.get(t_attr.value.as_ref()).ok_or_else(|| {
             missing(
                 t_attr,
                 "transition",
-                place_ids.contains_key(t_attr.value.as_str()),
+                place_ids.contains_key(t_attr.value.as_ref()),
             )
         })?;
         let weight = match r.get("mult") {
@@ -482,7 +482,7 @@ pub(super) fn build(
 }
 
 fn timing(env: &Env<'_>, r: &Record, name: &str) -> Result<Timing, LoadError> {
-    let ty = r.get("type").map_or("EXP", |a| a.value.as_str());
+    let ty = r.get("type").map_or("EXP", |a| a.value.as_ref());
     let unsupported = |what: &str| {
         env.error(
             r.get("type").map_or(r.at, |a| a.at),

@@ -1,6 +1,7 @@
 //! Streams a `.PNPRO` file through quick-xml and keeps, for the selected `<gspn>` page only,
 //! the few attributes the net needs (with their byte offsets, for error positions).
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use quick_xml::Reader;
@@ -20,35 +21,36 @@ pub(super) enum Kind {
 
 /// One attribute value and the byte offset where it starts in the file.
 #[derive(Clone, Debug)]
-pub(super) struct Attr {
+pub(super) struct Attr<'a> {
     pub(super) key: &'static str,
-    pub(super) value: String,
+    /// Unescaped; borrowed from the file unless it held an entity.
+    pub(super) value: Cow<'a, str>,
     pub(super) at: usize,
 }
 
 /// An element of the selected page: its kind, where it starts, the attributes we read, and
 /// (arcs only) its bend points.
 #[derive(Clone, Debug)]
-pub(super) struct Record {
+pub(super) struct Record<'a> {
     pub(super) kind: Kind,
     pub(super) at: usize,
-    pub(super) attrs: Vec<Attr>,
-    pub(super) points: Vec<(Attr, Attr)>,
+    pub(super) attrs: Vec<Attr<'a>>,
+    pub(super) points: Vec<(Attr<'a>, Attr<'a>)>,
 }
 
-impl Record {
-    pub(super) fn get(&self, key: &str) -> Option<&Attr> {
+impl<'a> Record<'a> {
+    pub(super) fn get(&self, key: &str) -> Option<&Attr<'a>> {
         self.attrs.iter().find(|a| a.key == key)
     }
 }
 
 /// The selected page, and the names of every page (for messages).
 #[derive(Debug)]
-pub(super) struct Scanned {
+pub(super) struct Scanned<'a> {
     pub(super) page: String,
     pub(super) page_at: usize,
     pub(super) pages: Vec<String>,
-    pub(super) records: Vec<Record>,
+    pub(super) records: Vec<Record<'a>>,
 }
 
 /// Attributes worth keeping; the editor's label offsets, magnets, rotations... are dropped.
@@ -88,13 +90,19 @@ enum Ctx {
     Other,
 }
 
-pub(super) fn scan(path: &Path, text: &str, opts: &ReadOptions) -> Result<Scanned, LoadError> {
+pub(super) fn scan<'a>(
+    path: &Path,
+    text: &'a str,
+    opts: &ReadOptions,
+) -> Result<Scanned<'a>, LoadError> {
     let base = text.as_ptr() as usize;
     let err = |at: usize, kind: LoadErrorKind| {
         LoadError::at(path, Span::locate(text.as_bytes(), at), kind)
     };
     let mut reader = Reader::from_str(text);
-    let mut stack: Vec<(Ctx, String)> = Vec::new();
+    // Open elements: what each is, and where it starts (its name is read back from there
+    // only for the truncated-file message).
+    let mut stack: Vec<(Ctx, usize)> = Vec::new();
     let mut pages = Vec::new();
     let mut chosen: Option<(String, usize)> = None;
     let mut records = Vec::new();
@@ -117,9 +125,10 @@ pub(super) fn scan(path: &Path, text: &str, opts: &ReadOptions) -> Result<Scanne
             Event::Eof => break,
             _ => continue,
         };
-        let name = e.local_name().as_ref().to_string();
+        let local = e.local_name();
+        let name: &str = local.as_ref();
         let parent = stack.last().map(|s| s.0);
-        let ctx = match (parent, name.as_str()) {
+        let ctx = match (parent, name) {
             (None, "project") => {
                 project_at = Some(at);
                 Ctx::Project
@@ -137,7 +146,7 @@ pub(super) fn scan(path: &Path, text: &str, opts: &ReadOptions) -> Result<Scanne
                 let page = attrs
                     .iter()
                     .find(|a| a.key == "name")
-                    .map(|a| a.value.clone())
+                    .map(|a| a.value.to_string())
                     .unwrap_or_default();
                 pages.push(page.clone());
                 let this =
@@ -198,10 +207,15 @@ pub(super) fn scan(path: &Path, text: &str, opts: &ReadOptions) -> Result<Scanne
             _ => Ctx::Other,
         };
         if !empty {
-            stack.push((ctx, name));
+            stack.push((ctx, at));
         }
     }
-    if let Some((_, open)) = stack.last() {
+    if let Some(&(_, open_at)) = stack.last() {
+        let open: String = text[open_at..]
+            .trim_start_matches('<')
+            .chars()
+            .take_while(|c| !c.is_whitespace() && !matches!(c, '>' | '/'))
+            .collect();
         return Err(err(
             text.len(),
             LoadErrorKind::Xml(format!(
@@ -251,12 +265,12 @@ pub(super) fn scan(path: &Path, text: &str, opts: &ReadOptions) -> Result<Scanne
 }
 
 /// The attributes of `e` that [`KEYS`] lists, unescaped, with their offsets in `text`.
-fn keep(
+fn keep<'a>(
     e: &BytesStart<'_>,
     base: usize,
-    text: &str,
+    text: &'a str,
     err: &dyn Fn(usize, LoadErrorKind) -> LoadError,
-) -> Result<Vec<Attr>, LoadError> {
+) -> Result<Vec<Attr<'a>>, LoadError> {
     let mut out = Vec::new();
     let elem_at = (e.attributes_raw().as_ptr() as usize).saturating_sub(base);
     for a in e.attributes() {
@@ -267,15 +281,16 @@ fn keep(
         };
         // The raw value borrows from the input, so its address gives its offset.
         let raw = a.value.as_ptr() as usize;
-        let at = if raw >= base && raw <= base + text.len() {
-            raw - base
-        } else {
-            elem_at
-        };
-        let value = a
+        let in_text = raw >= base && raw + a.value.len() <= base + text.len();
+        let at = if in_text { raw - base } else { elem_at };
+        let value = match a
             .normalized_value(quick_xml::XmlVersion::Implicit1_0)
             .map_err(|x| err(at, LoadErrorKind::Xml(x.to_string())))?
-            .into_owned();
+        {
+            // Unchanged: borrow it from the file rather than copy it.
+            Cow::Borrowed(_) if in_text => Cow::Borrowed(&text[at..at + a.value.len()]),
+            v => Cow::Owned(v.into_owned()),
+        };
         out.push(Attr { key, value, at });
     }
     Ok(out)
