@@ -147,7 +147,10 @@ impl<'a> Solver<'a> {
                 throughput[f.immediate.index()] += p * rate * f.expected;
             }
         }
-        let prob_nonempty = dist.iter().map(|d| d.iter().skip(1).sum()).collect();
+        let prob_nonempty = dist
+            .iter()
+            .map(|d| d.iter().skip(1).fold(0.0, |a, b| a + b))
+            .collect();
         let mut out_rate = vec![0.0; places];
         for t in net.transition_ids() {
             for &(p, _) in net.inputs(t) {
