@@ -188,3 +188,49 @@ fn every_reference_net_matches_the_independent_solver() {
     assert_eq!(checked, 16);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+fn cyc3(file: &str) -> (gspn::net::Net, StateSpace) {
+    let net = read_net(&fixture(file), &ReadOptions::default())
+        .unwrap()
+        .net;
+    let ss = StateSpace::build(&net, &Options::default()).unwrap();
+    (net, ss)
+}
+
+#[test]
+fn cyc3_single_server_matches_its_closed_form() {
+    let (net, ss) = cyc3("greatspn/cyc3/cyc3_ss.PNPRO");
+    assert_eq!(ss.tangible_count(), 3);
+    let solver = Solver::new(&net, &ss);
+    let steady = solver.steady_state(&SolverOptions::default()).unwrap();
+    assert!(steady.ergodic);
+    // π over (P1,P2,P3) = (2,0,0), (1,0,1), (0,0,2) is (4,2,1)/7.
+    for (s, &p) in steady.pi.iter().enumerate() {
+        let expect = match ss.marking(s).as_slice() {
+            [2, 0, 0] => 4.0 / 7.0,
+            [1, 0, 1] => 2.0 / 7.0,
+            [0, 0, 2] => 1.0 / 7.0,
+            m => panic!("unexpected marking {m:?}"),
+        };
+        assert!((p - expect).abs() < 1e-12);
+    }
+    let m = solver.measures(&steady.pi);
+    let p = |n: &str| net.place_by_name(n).unwrap().index();
+    assert!((m.mean_tokens[p("P1")] - 10.0 / 7.0).abs() < 1e-12);
+    assert_eq!(m.mean_tokens[p("P2")], 0.0);
+    assert!((m.mean_tokens[p("P3")] - 4.0 / 7.0).abs() < 1e-12);
+    for x in &m.throughput {
+        assert!((x - 6.0 / 7.0).abs() < 1e-12, "{:?}", m.throughput);
+    }
+}
+
+#[test]
+fn cyc3_infinite_server_matches_its_closed_form() {
+    let (net, ss) = cyc3("greatspn/cyc3/cyc3.PNPRO");
+    let solver = Solver::new(&net, &ss);
+    let steady = solver.steady_state(&SolverOptions::default()).unwrap();
+    let m = solver.measures(&steady.pi);
+    let p = |n: &str| net.place_by_name(n).unwrap().index();
+    assert!((m.mean_tokens[p("P1")] - 4.0 / 3.0).abs() < 1e-12);
+    assert!((m.mean_tokens[p("P3")] - 2.0 / 3.0).abs() < 1e-12);
+}

@@ -65,19 +65,47 @@ pub struct Measures {
 }
 
 impl<'a> Solver<'a> {
-    /// The generator: `Q[s][to] += rate·prob` for every move (self-loops dropped).
+    /// The generator: `Q[s][to] += rate·prob` for every move (self-loops dropped), built row
+    /// by row straight from the moves (no triplet list: the peak memory stays low).
     pub fn new(net: &'a Net, space: &'a StateSpace) -> Self {
         let n = space.tangible_count();
-        let mut triplets = Vec::new();
+        let mut row_ptr = Vec::with_capacity(n + 1);
+        row_ptr.push(0);
+        let mut cols = Vec::new();
+        let mut rates = Vec::new();
+        let mut row: Vec<(u32, f64)> = Vec::new();
         for s in 0..n {
-            for m in space.moves(s) {
-                triplets.push((s as u32, m.to, m.rate * m.prob));
+            row.clear();
+            row.extend(
+                space
+                    .moves(s)
+                    .iter()
+                    .filter(|m| m.to as usize != s && m.rate * m.prob > 0.0)
+                    .map(|m| (m.to, m.rate * m.prob)),
+            );
+            row.sort_unstable_by_key(|e| e.0);
+            let start = cols.len();
+            for &(to, q) in &row {
+                if cols.len() > start && cols.last() == Some(&to) {
+                    *rates.last_mut().expect("an entry was pushed") += q;
+                } else {
+                    cols.push(to);
+                    rates.push(q);
+                }
             }
+            row_ptr.push(cols.len());
         }
+        cols.shrink_to_fit();
+        rates.shrink_to_fit();
         Solver {
             net,
             space,
-            chain: Ctmc::from_triplets(n, triplets),
+            chain: Ctmc {
+                n,
+                row_ptr,
+                cols,
+                rates,
+            },
         }
     }
 
@@ -147,7 +175,10 @@ impl<'a> Solver<'a> {
                 throughput[f.immediate.index()] += p * rate * f.expected;
             }
         }
-        let prob_nonempty = dist.iter().map(|d| d.iter().skip(1).sum()).collect();
+        let prob_nonempty = dist
+            .iter()
+            .map(|d| d.iter().skip(1).fold(0.0, |a, b| a + b))
+            .collect();
         let mut out_rate = vec![0.0; places];
         for t in net.transition_ids() {
             for &(p, _) in net.inputs(t) {
