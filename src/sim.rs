@@ -412,8 +412,7 @@ impl<'n> Simulator<'n> {
     #[inline]
     fn fire(&mut self, t: TransitionId) {
         let net = self.net;
-        self.tally.firing(net, &self.marking, t, self.time);
-        net.fire(&mut self.marking, t);
+        self.tally.fire(net, &mut self.marking, t, self.time);
         self.firings += 1;
         self.last = Some(t);
         for &u in net.affected_by(t) {
@@ -429,10 +428,11 @@ impl<'n> Simulator<'n> {
         match self.slots[t.index()] {
             Slot::Exp(i) => {
                 let (_, rate, servers) = self.exp_params[i as usize];
-                let r = if net.is_enabled(m, t) {
-                    rate * servers.active(net.enabling_degree(m, t)) as f64
-                } else {
-                    0.0
+                let r = match servers {
+                    // Enabled is all a single server needs to know: one pass over the arcs.
+                    Servers::Single if net.is_enabled(m, t) => rate,
+                    Servers::Single => 0.0,
+                    _ => rate * servers.active(net.enabled_degree(m, t)) as f64,
                 };
                 if r != self.exp.get(i as usize) {
                     self.exp.set(i as usize, r);
