@@ -147,6 +147,8 @@ pub struct Simulator<'n> {
     instant: u64,
     max_immediate: u64,
     dead: bool,
+    /// Some place has a capacity (checked on enabling).
+    has_capacity: bool,
     last: Option<TransitionId>,
     tally: statistics::Tally,
     firable: Vec<TransitionId>,
@@ -211,6 +213,7 @@ impl<'n> Simulator<'n> {
             instant: 0,
             max_immediate: DEFAULT_MAX_IMMEDIATE,
             dead: false,
+            has_capacity: net.places().iter().any(|p| p.capacity.is_some()),
             last: None,
             tally: statistics::Tally::new(net),
             firable: Vec::new(),
@@ -412,8 +415,7 @@ impl<'n> Simulator<'n> {
     #[inline]
     fn fire(&mut self, t: TransitionId) {
         let net = self.net;
-        self.tally.firing(net, &self.marking, t, self.time);
-        net.fire(&mut self.marking, t);
+        self.tally.fire(net, &mut self.marking, t, self.time);
         self.firings += 1;
         self.last = Some(t);
         for &u in net.affected_by(t) {
@@ -424,26 +426,20 @@ impl<'n> Simulator<'n> {
     /// Re-evaluates the enabling of `t` in the current marking.
     #[inline]
     fn refresh(&mut self, t: TransitionId) {
-        let net = self.net;
-        let m: &[u32] = &self.marking;
         match self.slots[t.index()] {
             Slot::Exp(i) => {
                 let (_, rate, servers) = self.exp_params[i as usize];
-                let r = if net.is_enabled(m, t) {
-                    rate * servers.active(net.enabling_degree(m, t)) as f64
-                } else {
-                    0.0
-                };
+                let r = self.rate(t, rate, servers);
                 if r != self.exp.get(i as usize) {
                     self.exp.set(i as usize, r);
                 }
             }
             Slot::Imm { level, index } => {
-                let on = net.is_enabled(m, t);
+                let on = self.enabled(t);
                 if on != self.imm_on[t.index()] {
                     self.imm_on[t.index()] = on;
                     let lv = &mut self.levels[level as usize];
-                    let w = match net.transition(t).timing {
+                    let w = match self.net.transition(t).timing {
                         Timing::Immediate { weight, .. } if on => weight,
                         _ => 0.0,
                     };
@@ -458,5 +454,60 @@ impl<'n> Simulator<'n> {
                 }
             }
         }
+    }
+
+    /// Inhibitors below threshold and no capacity exceeded (the input arcs are checked by
+    /// the callers). The same rules as [`Net::is_enabled`], inlined into the hot loop.
+    #[inline]
+    fn side_conditions(&self, t: TransitionId) -> bool {
+        let m: &[u32] = &self.marking;
+        for &(p, w) in self.net.inhibitors(t) {
+            if m[p.index()] >= w {
+                return false;
+            }
+        }
+        if self.has_capacity {
+            for &(p, d) in self.net.delta(t) {
+                if d > 0 && m[p.index()] as i64 + d > self.net.capacity_of(p) as i64 {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// [`Net::is_enabled`] for the current marking.
+    #[inline]
+    fn enabled(&self, t: TransitionId) -> bool {
+        let m: &[u32] = &self.marking;
+        self.net.inputs(t).iter().all(|&(p, w)| m[p.index()] >= w) && self.side_conditions(t)
+    }
+
+    /// Firing rate of exponential `t` now: `rate × min(servers, degree)`, 0 when disabled.
+    #[inline]
+    fn rate(&self, t: TransitionId, rate: f64, servers: Servers) -> f64 {
+        let m: &[u32] = &self.marking;
+        let inputs = self.net.inputs(t);
+        let active = if servers == Servers::Single {
+            // Enabled is all a single server needs: no divisions.
+            if !inputs.iter().all(|&(p, w)| m[p.index()] >= w) {
+                return 0.0;
+            }
+            1
+        } else {
+            let mut degree = if inputs.is_empty() { 1 } else { u32::MAX };
+            for &(p, w) in inputs {
+                let k = m[p.index()];
+                if k < w {
+                    return 0.0;
+                }
+                degree = degree.min(if w == 1 { k } else { k / w });
+            }
+            servers.active(degree)
+        };
+        if !self.side_conditions(t) {
+            return 0.0;
+        }
+        rate * active as f64
     }
 }

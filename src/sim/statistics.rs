@@ -27,13 +27,17 @@ impl Tally {
         }
     }
 
-    /// Records that `t` fires at `time`, before the marking `m` changes.
+    /// Fires `t` at `time` on `m`, bringing the areas of the places it changes up to date
+    /// first (one pass over `delta(t)` for both).
     #[inline]
-    pub(crate) fn firing(&mut self, net: &Net, m: &[u32], t: TransitionId, time: f64) {
-        for &(p, _) in net.delta(t) {
+    pub(crate) fn fire(&mut self, net: &Net, m: &mut [u32], t: TransitionId, time: f64) {
+        debug_assert!(net.is_enabled(m, t), "fired a disabled transition");
+        for &(p, d) in net.delta(t) {
             let i = p.index();
-            self.area[i] += m[i] as f64 * (time - self.since[i]);
+            let k = m[i];
+            self.area[i] += k as f64 * (time - self.since[i]);
             self.since[i] = time;
+            m[i] = (k as i64 + d) as u32;
         }
         self.fired[t.index()] += 1;
     }

@@ -11,7 +11,9 @@
 pub(crate) struct SumTree {
     /// Number of leaves: a power of two ≥ the number of weights (at least 1).
     size: usize,
-    /// `node[1]` is the root; `node[size + i]` is weight `i`; `node[0]` is unused.
+    /// `node[1]` is the root; `node[size + i]` is weight `i`; `node[0]` is unused, and so
+    /// is `node[2·size..4·size]`: zeros that let [`SumTree::find`] read grandchildren of the
+    /// last inner level without a bounds branch.
     node: Vec<f64>,
 }
 
@@ -21,7 +23,7 @@ impl SumTree {
         let size = len.max(1).next_power_of_two();
         SumTree {
             size,
-            node: vec![0.0; 2 * size],
+            node: vec![0.0; 4 * size],
         }
     }
 
@@ -40,11 +42,16 @@ impl SumTree {
     /// Sets weight `i` to `w` (≥ 0) and recomputes its ancestors.
     #[inline]
     pub(crate) fn set(&mut self, i: usize, w: f64) {
+        // The new sum rides up in a register; the siblings' addresses are known in advance,
+        // so the loads overlap and only the additions are chained. `+` is commutative in
+        // IEEE arithmetic, so `v + sibling` is bit-identical to `left + right`.
         let mut k = self.size + i;
-        self.node[k] = w;
+        let mut v = w;
+        self.node[k] = v;
         while k > 1 {
+            v += self.node[k ^ 1];
             k >>= 1;
-            self.node[k] = self.node[2 * k] + self.node[2 * k + 1];
+            self.node[k] = v;
         }
     }
 
@@ -53,17 +60,19 @@ impl SumTree {
     /// positive, even when rounding pushes `u` past a subtree's sum.
     #[inline]
     pub(crate) fn find(&self, mut u: f64) -> usize {
+        // A random descent is a chain of dependent loads and compares. Branch-free, and with
+        // the four grandchildren loaded before the children are compared, each level waits
+        // for a compare and a select rather than for a load as well.
+        let node = &self.node;
         let mut k = 1;
+        let (mut left, mut right) = (node[2], node[3]);
         while k < self.size {
-            let left = self.node[2 * k];
-            let right = self.node[2 * k + 1];
+            let g: &[f64; 4] = node[4 * k..4 * k + 4].try_into().unwrap_or(&[0.0; 4]);
             // Going right into an empty subtree can only come from rounding: stay left.
-            if u < left || right <= 0.0 {
-                k *= 2;
-            } else {
-                u -= left;
-                k = 2 * k + 1;
-            }
+            let go_right = (u >= left) & (right > 0.0);
+            u -= if go_right { left } else { 0.0 };
+            k = 2 * k + go_right as usize;
+            (left, right) = if go_right { (g[2], g[3]) } else { (g[0], g[1]) };
         }
         k - self.size
     }
