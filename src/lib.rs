@@ -8,6 +8,8 @@
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
 //! - [`io`]: readers and writers — PIPE XML, PNML, GreatSPN PNPRO, DOT, plan files.
 //! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded.
+//! - [`runtime`]: the actor runtime — supervisor, agents, places, actions, events, journal;
+//!   `Runtime::builder(net)…spawn()` embeds a running plan in a tokio service.
 //!
 //! The everyday types are in [`prelude`].
 
@@ -26,5 +28,8 @@ pub mod prelude {
     pub use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, read_net};
     pub use crate::net::{
         ArcKind, Marking, Net, NetBuilder, PlaceId, Servers, Timing, TransitionId,
+    };
+    pub use crate::runtime::{
+        Action, ActionContext, AgentId, Outcome, Runtime, RuntimeHandle, StopReason, action_fn,
     };
 }
