@@ -5,11 +5,13 @@
 //! [`LoadError`] carrying the file, the line and column, and the offending name.
 
 pub mod dot;
+pub mod expr;
 pub mod pipe;
 pub mod plan;
 pub mod pnml;
 pub mod pnpro;
 pub mod thesis;
+mod xml;
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -268,11 +270,12 @@ pub fn read_net(path: &Path, opts: &ReadOptions) -> Result<Loaded, LoadError> {
     }
 }
 
-/// Tells ISO PNML (namespace `pnml.org`) from PIPE's `<pnml>` dialect by the first few KB.
+/// Tells ISO PNML (namespace or net type on `pnml.org`, or VipTool's `VIPschema`) from
+/// PIPE's `<pnml>` dialect by the first few KB.
 fn sniff_xml(bytes: &[u8]) -> Format {
     let head = &bytes[..bytes.len().min(4096)];
     let head = String::from_utf8_lossy(head);
-    if head.contains("pnml.org") {
+    if head.contains("pnml.org") || head.contains("VIPschema") {
         Format::Pnml
     } else {
         Format::Pipe

@@ -1,0 +1,546 @@
+//! Turns the records of one page into a [`Net`]: resolves constants and template
+//! parameters, evaluates every expression, checks every value, and says where a bad one is.
+
+use std::cell::RefCell;
+use std::path::Path;
+
+use rustc_hash::FxHashMap;
+
+use super::scan::{Attr, Kind, Record, Scanned};
+use crate::io::expr::{EvalError, Expr, ExprError};
+use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span};
+use crate::net::{ArcKind, NetBuilder, Place, PlaceId, Position, Servers, Timing, Transition};
+
+/// Constants and template parameters of the page, evaluated on demand.
+struct Env<'a> {
+    path: &'a Path,
+    text: &'a str,
+    page: &'a str,
+    constants: FxHashMap<&'a str, &'a Record>,
+    /// Template parameters with the value from `--param`, if one was given.
+    templates: FxHashMap<&'a str, (&'a Record, Option<f64>)>,
+    places: FxHashMap<&'a str, ()>,
+    memo: RefCell<FxHashMap<String, f64>>,
+    visiting: RefCell<Vec<String>>,
+}
+
+impl Env<'_> {
+    fn span(&self, at: usize) -> Span {
+        Span::locate(self.text.as_bytes(), at)
+    }
+
+    fn error(&self, at: usize, kind: LoadErrorKind) -> LoadError {
+        LoadError::at(self.path, self.span(at), kind)
+    }
+
+    fn expr_error(&self, attr: &Attr, owner: &str, e: ExprError) -> LoadError {
+        self.error(
+            attr.at + e.at.min(attr.value.len()),
+            LoadErrorKind::Expression {
+                expr: attr.value.clone(),
+                name: owner.to_string(),
+                reason: e.reason,
+            },
+        )
+    }
+
+    /// The value of the expression in `attr`, which belongs to node `owner`.
+    fn value(&self, attr: &Attr, owner: &str) -> Result<f64, LoadError> {
+        // Most values are plain numbers: skip the parser (NaN and inf land in range checks).
+        if let Ok(v) = attr.value.trim().parse::<f64>() {
+            return Ok(v);
+        }
+        let expr = Expr::parse(&attr.value).map_err(|e| self.expr_error(attr, owner, e))?;
+        expr.eval(&mut |name: &str, at| self.resolve(name, attr, at, owner))
+            .map_err(|e| match e {
+                EvalError::At(e) => self.expr_error(attr, owner, e),
+                EvalError::Lookup(e) => e,
+            })
+    }
+
+    fn resolve(&self, name: &str, attr: &Attr, at: usize, owner: &str) -> Result<f64, LoadError> {
+        if let Some(&v) = self.memo.borrow().get(name) {
+            return Ok(v);
+        }
+        let fail = |reason: String| self.expr_error(attr, owner, ExprError { at, reason });
+        let v = if let Some(c) = self.constants.get(name) {
+            if let Some(d) = c.get("domain") {
+                return Err(fail(format!(
+                    "`{name}` is a coloured constant (domain `{}`): coloured nets are not supported",
+                    d.value
+                )));
+            }
+            if self.visiting.borrow().iter().any(|n| n == name) {
+                return Err(fail(format!(
+                    "constant `{name}` is defined in terms of itself"
+                )));
+            }
+            let value = c.get("value").ok_or_else(|| {
+                self.error(
+                    c.at,
+                    LoadErrorKind::Missing {
+                        what: "attribute `value`".into(),
+                        name: Some(name.to_string()),
+                    },
+                )
+            })?;
+            self.visiting.borrow_mut().push(name.to_string());
+            let v = self.value(value, name);
+            self.visiting.borrow_mut().pop();
+            let v = v?;
+            if c.get("consttype").is_some_and(|t| t.value == "INTEGER") && v.fract() != 0.0 {
+                return Err(self.error(
+                    value.at,
+                    LoadErrorKind::OutOfRange {
+                        what: "INTEGER constant",
+                        name: name.to_string(),
+                        value: shown(value, v),
+                        expected: "must be a whole number",
+                    },
+                ));
+            }
+            v
+        } else if let Some((t, param)) = self.templates.get(name) {
+            match (param, t.get("last-binding")) {
+                (Some(v), _) => *v,
+                (None, Some(b)) => {
+                    let v = self.value(b, name)?;
+                    check_template_type(t, v).map_err(|reason| {
+                        self.error(
+                            b.at,
+                            LoadErrorKind::Expression {
+                                expr: b.value.clone(),
+                                name: name.to_string(),
+                                reason,
+                            },
+                        )
+                    })?;
+                    v
+                }
+                (None, None) => {
+                    return Err(fail(format!(
+                        "template parameter `{name}` has no value (the file gives no \
+                         last-binding): set it with --param {name}=VALUE"
+                    )));
+                }
+            }
+        } else if self.places.contains_key(name) {
+            return Err(fail(format!(
+                "`{name}` is a place: marking-dependent expressions are not supported"
+            )));
+        } else {
+            return Err(fail(format!(
+                "unknown identifier `{name}`: not a constant or template parameter of page `{}`",
+                self.page
+            )));
+        };
+        self.memo.borrow_mut().insert(name.to_string(), v);
+        Ok(v)
+    }
+
+    /// A whole number ≥ `min` from the expression in `attr`.
+    fn whole(
+        &self,
+        attr: &Attr,
+        owner: &str,
+        what: &'static str,
+        min: u32,
+    ) -> Result<u32, LoadError> {
+        let v = self.value(attr, owner)?;
+        if v.is_finite() && v.fract() == 0.0 && v >= min as f64 && v <= u32::MAX as f64 {
+            return Ok(v as u32);
+        }
+        Err(self.error(
+            attr.at,
+            LoadErrorKind::OutOfRange {
+                what,
+                name: owner.to_string(),
+                value: shown(attr, v),
+                expected: if min == 0 {
+                    "must be a whole number ≥ 0"
+                } else {
+                    "must be a whole number ≥ 1"
+                },
+            },
+        ))
+    }
+
+    /// A real number from the expression in `attr`, checked by `ok`.
+    fn real(
+        &self,
+        attr: &Attr,
+        owner: &str,
+        what: &'static str,
+        ok: fn(f64) -> bool,
+        expected: &'static str,
+    ) -> Result<f64, LoadError> {
+        let v = self.value(attr, owner)?;
+        if ok(v) {
+            return Ok(v);
+        }
+        Err(self.error(
+            attr.at,
+            LoadErrorKind::OutOfRange {
+                what,
+                name: owner.to_string(),
+                value: shown(attr, v),
+                expected,
+            },
+        ))
+    }
+
+    fn coord(&self, attr: &Attr, owner: &str, what: &'static str) -> Result<f64, LoadError> {
+        match attr.value.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(self.error(
+                attr.at,
+                LoadErrorKind::NotANumber {
+                    what,
+                    name: owner.to_string(),
+                    value: attr.value.clone(),
+                },
+            )),
+        }
+    }
+
+    fn position(&self, r: &Record, owner: &str) -> Result<Option<Position>, LoadError> {
+        match (r.get("x"), r.get("y")) {
+            (Some(x), Some(y)) => Ok(Some(Position {
+                x: self.coord(x, owner, "x coordinate")?,
+                y: self.coord(y, owner, "y coordinate")?,
+            })),
+            _ => Ok(None),
+        }
+    }
+}
+
+/// The value as the file wrote it, with what it evaluated to when that differs.
+fn shown(attr: &Attr, v: f64) -> String {
+    match attr.value.trim().parse::<f64>() {
+        Ok(_) => attr.value.trim().to_string(),
+        Err(_) => format!("{} = {v}", attr.value.trim()),
+    }
+}
+
+fn check_template_type(t: &Record, v: f64) -> Result<(), String> {
+    if t.get("type").is_some_and(|ty| ty.value == "INTEGER") && v.fract() != 0.0 {
+        return Err(format!(
+            "{v} is not a whole number, but the parameter is INTEGER"
+        ));
+    }
+    Ok(())
+}
+
+fn name_of<'r>(env: &Env<'_>, r: &'r Record, what: &str) -> Result<&'r str, LoadError> {
+    r.get("name").map(|a| a.value.as_str()).ok_or_else(|| {
+        env.error(
+            r.at,
+            LoadErrorKind::Missing {
+                what: format!("attribute `name` of <{what}>"),
+                name: None,
+            },
+        )
+    })
+}
+
+pub(super) fn build(
+    path: &Path,
+    text: &str,
+    scanned: &Scanned,
+    opts: &ReadOptions,
+) -> Result<Loaded, LoadError> {
+    let records = &scanned.records;
+    let of = |k: Kind| records.iter().filter(move |r| r.kind == k);
+    let mut env = Env {
+        path,
+        text,
+        page: &scanned.page,
+        constants: FxHashMap::default(),
+        templates: FxHashMap::default(),
+        places: FxHashMap::default(),
+        memo: RefCell::default(),
+        visiting: RefCell::default(),
+    };
+    for r in records {
+        let Some(name) = r.get("name").map(|a| a.value.as_str()) else {
+            continue;
+        };
+        match r.kind {
+            Kind::Constant => {
+                env.constants.insert(name, r);
+            }
+            Kind::Template => {
+                env.templates.insert(name, (r, None));
+            }
+            Kind::Place => {
+                env.places.insert(name, ());
+            }
+            _ => {}
+        }
+    }
+    // Coloured nets first: their markings and multiplicities would fail less clearly later.
+    for r in of(Kind::Place) {
+        if let Some(d) = r.get("domain") {
+            let name = name_of(&env, r, "place")?;
+            return Err(env.error(
+                d.at,
+                LoadErrorKind::Unsupported(format!(
+                    "place `{name}` has colour domain `{}`: coloured (SWN) nets are not \
+                     supported; unfold the net first (GreatSPN's unfolding gives a P/T net)",
+                    d.value
+                )),
+            ));
+        }
+    }
+    for (k, v) in &opts.params {
+        let given = format!("--param {k}={v}");
+        let Some((t, slot)) = env.templates.get_mut(k.as_str()) else {
+            return Err(LoadError::file(
+                path,
+                LoadErrorKind::UnknownNode {
+                    what: "template parameter",
+                    name: k.clone(),
+                },
+            ));
+        };
+        let value = Expr::parse(v)
+            .ok()
+            .and_then(|e| e.eval(&mut |_: &str, _| Err(())).ok())
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| {
+                LoadError::file(
+                    path,
+                    LoadErrorKind::NotANumber {
+                        what: "template parameter",
+                        name: k.clone(),
+                        value: v.clone(),
+                    },
+                )
+            })?;
+        check_template_type(t, value).map_err(|reason| {
+            LoadError::file(path, LoadErrorKind::Invalid(format!("{given}: {reason}")))
+        })?;
+        *slot = Some(value);
+    }
+
+    let net_name = if scanned.page.is_empty() {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    } else {
+        scanned.page.clone()
+    };
+    let mut b = NetBuilder::new(net_name);
+    let mut place_ids: FxHashMap<&str, PlaceId> = FxHashMap::default();
+    for r in of(Kind::Place) {
+        let name = name_of(&env, r, "place")?;
+        let initial = match r.get("marking") {
+            Some(m) => env.whole(m, name, "initial marking", 0)?,
+            None => 0,
+        };
+        let position = env.position(r, name)?;
+        if place_ids.contains_key(name) {
+            return Err(env.error(
+                r.at,
+                LoadErrorKind::Duplicate {
+                    what: "place",
+                    name: name.to_string(),
+                },
+            ));
+        }
+        let id = b.add_place(Place {
+            name: name.to_string(),
+            initial,
+            capacity: None,
+            position,
+        });
+        place_ids.insert(name, id);
+    }
+    let mut trans_ids = FxHashMap::default();
+    for r in of(Kind::Transition) {
+        let name = name_of(&env, r, "transition")?;
+        if let Some(g) = r.get("guard").filter(|g| g.value.trim() != "True") {
+            return Err(env.error(
+                g.at,
+                LoadErrorKind::Unsupported(format!(
+                    "transition `{name}` has guard `{}`: guards belong to coloured nets, \
+                     which are not supported",
+                    g.value
+                )),
+            ));
+        }
+        let timing = timing(&env, r, name)?;
+        if trans_ids.contains_key(name) {
+            return Err(env.error(
+                r.at,
+                LoadErrorKind::Duplicate {
+                    what: "transition",
+                    name: name.to_string(),
+                },
+            ));
+        }
+        let position = env.position(r, name)?;
+        let id = b.add_transition(Transition {
+            name: name.to_string(),
+            timing,
+            position,
+        });
+        trans_ids.insert(name, id);
+    }
+    for r in of(Kind::Arc) {
+        let get = |key: &str| {
+            r.get(key).ok_or_else(|| {
+                env.error(
+                    r.at,
+                    LoadErrorKind::Missing {
+                        what: format!("attribute `{key}` of <arc>"),
+                        name: None,
+                    },
+                )
+            })
+        };
+        let (head, tail, kind_attr) = (get("head")?, get("tail")?, get("kind")?);
+        let kind = match kind_attr.value.as_str() {
+            "INPUT" => ArcKind::Input,
+            "OUTPUT" => ArcKind::Output,
+            "INHIBITOR" => ArcKind::Inhibitor,
+            other => {
+                return Err(env.error(
+                    kind_attr.at,
+                    LoadErrorKind::Invalid(format!(
+                        "arc kind `{other}`: expected INPUT, OUTPUT or INHIBITOR"
+                    )),
+                ));
+            }
+        };
+        let (p_attr, t_attr) = match kind {
+            ArcKind::Output => (head, tail),
+            _ => (tail, head),
+        };
+        let owner = format!("{} → {}", tail.value, head.value);
+        let missing = |attr: &Attr, what: &'static str, other_kind: bool| {
+            let kind = if other_kind {
+                LoadErrorKind::Invalid(format!(
+                    "{} arc {owner}: `{}` is not a {what}",
+                    kind_attr.value, attr.value
+                ))
+            } else {
+                LoadErrorKind::UnknownNode {
+                    what,
+                    name: attr.value.clone(),
+                }
+            };
+            env.error(attr.at, kind)
+        };
+        let p = *place_ids.get(p_attr.value.as_str()).ok_or_else(|| {
+            missing(
+                p_attr,
+                "place",
+                trans_ids.contains_key(p_attr.value.as_str()),
+            )
+        })?;
+        let t = *trans_ids.get(t_attr.value.as_str()).ok_or_else(|| {
+            missing(
+                t_attr,
+                "transition",
+                place_ids.contains_key(t_attr.value.as_str()),
+            )
+        })?;
+        let weight = match r.get("mult") {
+            Some(m) => env.whole(m, &owner, "arc multiplicity", 1)?,
+            None => 1,
+        };
+        let points = r
+            .points
+            .iter()
+            .map(|(x, y)| {
+                Ok(Position {
+                    x: env.coord(x, &owner, "x coordinate")?,
+                    y: env.coord(y, &owner, "y coordinate")?,
+                })
+            })
+            .collect::<Result<Vec<_>, LoadError>>()?;
+        b.arc(kind, p, t, weight, points);
+    }
+    let net = b
+        .build()
+        .map_err(|e| LoadError::at(path, env.span(scanned.page_at), LoadErrorKind::Net(e)))?;
+    let mut warnings = Vec::new();
+    if scanned.pages.len() > 1 {
+        warnings.push(format!(
+            "read page `{}` of {} (`{}`); choose another with --page",
+            scanned.page,
+            scanned.pages.len(),
+            scanned.pages.join("`, `")
+        ));
+    }
+    Ok(Loaded {
+        net,
+        format: Format::Pnpro,
+        warnings,
+    })
+}
+
+fn timing(env: &Env<'_>, r: &Record, name: &str) -> Result<Timing, LoadError> {
+    let ty = r.get("type").map_or("EXP", |a| a.value.as_str());
+    let unsupported = |what: &str| {
+        env.error(
+            r.get("type").map_or(r.at, |a| a.at),
+            LoadErrorKind::Unsupported(format!(
+                "transition `{name}` is {what} (type {ty}): only exponential (EXP) and \
+                 immediate (IMM) transitions are supported"
+            )),
+        )
+    };
+    match ty {
+        "EXP" => {
+            let rate = match r.get("delay").or_else(|| r.get("rate")) {
+                Some(d) => env.real(
+                    d,
+                    name,
+                    "rate",
+                    |v| v.is_finite() && v > 0.0,
+                    "must be a finite number > 0",
+                )?,
+                None => 1.0,
+            };
+            let servers = match r.get("nservers") {
+                None => Servers::Infinite,
+                Some(a) => match a.value.trim() {
+                    "Infinite" => Servers::Infinite,
+                    "Single" => Servers::Single,
+                    _ => match env.whole(a, name, "number of servers", 1)? {
+                        1 => Servers::Single,
+                        k => Servers::K(k),
+                    },
+                },
+            };
+            Ok(Timing::Exponential { rate, servers })
+        }
+        "IMM" => {
+            let weight = match r.get("weight") {
+                Some(w) => env.real(
+                    w,
+                    name,
+                    "weight",
+                    |v| v.is_finite() && v >= 0.0,
+                    "must be a finite number ≥ 0",
+                )?,
+                None => 1.0,
+            };
+            let priority = match r.get("priority") {
+                Some(p) => env.whole(p, name, "priority", 1)?,
+                None => 1,
+            };
+            Ok(Timing::Immediate { weight, priority })
+        }
+        "GEN" | "DET" => Err(unsupported("general (non-exponential)")),
+        "CONT" => Err(unsupported("continuous (fluid)")),
+        _ => Err(env.error(
+            r.get("type").map_or(r.at, |a| a.at),
+            LoadErrorKind::Invalid(format!(
+                "transition `{name}`: unknown type `{ty}` (expected EXP or IMM)"
+            )),
+        )),
+    }
+}

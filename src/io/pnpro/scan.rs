@@ -1,0 +1,282 @@
+//! Streams a `.PNPRO` file through quick-xml and keeps, for the selected `<gspn>` page only,
+//! the few attributes the net needs (with their byte offsets, for error positions).
+
+use std::path::Path;
+
+use quick_xml::Reader;
+use quick_xml::events::{BytesStart, Event};
+
+use crate::io::{LoadError, LoadErrorKind, ReadOptions, Span};
+
+/// What a kept element is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Kind {
+    Place,
+    Transition,
+    Constant,
+    Template,
+    Arc,
+}
+
+/// One attribute value and the byte offset where it starts in the file.
+#[derive(Clone, Debug)]
+pub(super) struct Attr {
+    pub(super) key: &'static str,
+    pub(super) value: String,
+    pub(super) at: usize,
+}
+
+/// An element of the selected page: its kind, where it starts, the attributes we read, and
+/// (arcs only) its bend points.
+#[derive(Clone, Debug)]
+pub(super) struct Record {
+    pub(super) kind: Kind,
+    pub(super) at: usize,
+    pub(super) attrs: Vec<Attr>,
+    pub(super) points: Vec<(Attr, Attr)>,
+}
+
+impl Record {
+    pub(super) fn get(&self, key: &str) -> Option<&Attr> {
+        self.attrs.iter().find(|a| a.key == key)
+    }
+}
+
+/// The selected page, and the names of every page (for messages).
+#[derive(Debug)]
+pub(super) struct Scanned {
+    pub(super) page: String,
+    pub(super) page_at: usize,
+    pub(super) pages: Vec<String>,
+    pub(super) records: Vec<Record>,
+}
+
+/// Attributes worth keeping; the editor's label offsets, magnets, rotations... are dropped.
+const KEYS: [&str; 20] = [
+    "name",
+    "marking",
+    "domain",
+    "x",
+    "y",
+    "type",
+    "delay",
+    "rate",
+    "weight",
+    "priority",
+    "nservers",
+    "guard",
+    "consttype",
+    "value",
+    "last-binding",
+    "head",
+    "tail",
+    "kind",
+    "mult",
+    "definition",
+];
+
+/// Where we are in the document.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Ctx {
+    Project,
+    /// A `<gspn>` page; `true` when it is the one being read.
+    Page(bool),
+    Nodes(bool),
+    Edges(bool),
+    /// An `<arc>` of the selected page, collecting its `<point>`s.
+    Arc,
+    Other,
+}
+
+pub(super) fn scan(path: &Path, text: &str, opts: &ReadOptions) -> Result<Scanned, LoadError> {
+    let base = text.as_ptr() as usize;
+    let err = |at: usize, kind: LoadErrorKind| {
+        LoadError::at(path, Span::locate(text.as_bytes(), at), kind)
+    };
+    let mut reader = Reader::from_str(text);
+    let mut stack: Vec<(Ctx, String)> = Vec::new();
+    let mut pages = Vec::new();
+    let mut chosen: Option<(String, usize)> = None;
+    let mut records = Vec::new();
+    let mut project_at = None;
+    loop {
+        let at = reader.buffer_position() as usize;
+        let event = reader.read_event().map_err(|e| {
+            err(
+                reader.error_position() as usize,
+                LoadErrorKind::Xml(e.to_string()),
+            )
+        })?;
+        let (e, empty) = match event {
+            Event::Start(e) => (e, false),
+            Event::Empty(e) => (e, true),
+            Event::End(_) => {
+                stack.pop();
+                continue;
+            }
+            Event::Eof => break,
+            _ => continue,
+        };
+        let name = e.local_name().as_ref().to_string();
+        let parent = stack.last().map(|s| s.0);
+        let ctx = match (parent, name.as_str()) {
+            (None, "project") => {
+                project_at = Some(at);
+                Ctx::Project
+            }
+            (None, other) => {
+                return Err(err(
+                    at,
+                    LoadErrorKind::Invalid(format!(
+                        "not a GreatSPN project: the root element is `<{other}>`, expected `<project>`"
+                    )),
+                ));
+            }
+            (Some(Ctx::Project), "gspn") => {
+                let attrs = keep(&e, base, text, &err)?;
+                let page = attrs
+                    .iter()
+                    .find(|a| a.key == "name")
+                    .map(|a| a.value.clone())
+                    .unwrap_or_default();
+                pages.push(page.clone());
+                let this =
+                    chosen.is_none() && opts.page.as_ref().is_none_or(|wanted| *wanted == page);
+                if this {
+                    chosen = Some((page, at));
+                }
+                Ctx::Page(this)
+            }
+            (Some(Ctx::Page(sel)), "nodes") => Ctx::Nodes(sel),
+            (Some(Ctx::Page(sel)), "edges") => Ctx::Edges(sel),
+            (Some(Ctx::Nodes(true)), n) => {
+                let kind = match n {
+                    "place" => Some(Kind::Place),
+                    "transition" => Some(Kind::Transition),
+                    "constant" => Some(Kind::Constant),
+                    "template" => Some(Kind::Template),
+                    _ => None,
+                };
+                if let Some(kind) = kind {
+                    records.push(Record {
+                        kind,
+                        at,
+                        attrs: keep(&e, base, text, &err)?,
+                        points: Vec::new(),
+                    });
+                }
+                Ctx::Other
+            }
+            (Some(Ctx::Edges(true)), "arc") => {
+                records.push(Record {
+                    kind: Kind::Arc,
+                    at,
+                    attrs: keep(&e, base, text, &err)?,
+                    points: Vec::new(),
+                });
+                Ctx::Arc
+            }
+            (Some(Ctx::Arc), "point") => {
+                let attrs = keep(&e, base, text, &err)?;
+                let coord = |k: &str| {
+                    attrs.iter().find(|a| a.key == k).cloned().ok_or_else(|| {
+                        err(
+                            at,
+                            LoadErrorKind::Missing {
+                                what: format!("attribute `{k}` of <point>"),
+                                name: None,
+                            },
+                        )
+                    })
+                };
+                let p = (coord("x")?, coord("y")?);
+                if let Some(r) = records.last_mut() {
+                    r.points.push(p);
+                }
+                Ctx::Other
+            }
+            _ => Ctx::Other,
+        };
+        if !empty {
+            stack.push((ctx, name));
+        }
+    }
+    if let Some((_, open)) = stack.last() {
+        return Err(err(
+            text.len(),
+            LoadErrorKind::Xml(format!(
+                "unexpected end of file: `<{open}>` is not closed (truncated file?)"
+            )),
+        ));
+    }
+    let Some(project_at) = project_at else {
+        return Err(LoadError::file(
+            path,
+            LoadErrorKind::Invalid("no `<project>` element: not a GreatSPN project".into()),
+        ));
+    };
+    let Some((page, page_at)) = chosen else {
+        if let Some(wanted) = &opts.page {
+            let list = pages
+                .iter()
+                .map(|p| format!("`{p}`"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            return Err(err(
+                project_at,
+                LoadErrorKind::Invalid(format!(
+                    "page `{wanted}` does not exist; this file has {}: {list}",
+                    if pages.len() == 1 {
+                        "one page"
+                    } else {
+                        "pages"
+                    }
+                )),
+            ));
+        }
+        return Err(err(
+            project_at,
+            LoadErrorKind::Missing {
+                what: "a `<gspn>` page".into(),
+                name: None,
+            },
+        ));
+    };
+    Ok(Scanned {
+        page,
+        page_at,
+        pages,
+        records,
+    })
+}
+
+/// The attributes of `e` that [`KEYS`] lists, unescaped, with their offsets in `text`.
+fn keep(
+    e: &BytesStart<'_>,
+    base: usize,
+    text: &str,
+    err: &dyn Fn(usize, LoadErrorKind) -> LoadError,
+) -> Result<Vec<Attr>, LoadError> {
+    let mut out = Vec::new();
+    let elem_at = (e.attributes_raw().as_ptr() as usize).saturating_sub(base);
+    for a in e.attributes() {
+        let a = a.map_err(|x| err(elem_at, LoadErrorKind::Xml(x.to_string())))?;
+        let key = a.key.as_ref();
+        let Some(key) = KEYS.iter().find(|k| **k == key) else {
+            continue;
+        };
+        // The raw value borrows from the input, so its address gives its offset.
+        let raw = a.value.as_ptr() as usize;
+        let at = if raw >= base && raw <= base + text.len() {
+            raw - base
+        } else {
+            elem_at
+        };
+        let value = a
+            .normalized_value(quick_xml::XmlVersion::Implicit1_0)
+            .map_err(|x| err(at, LoadErrorKind::Xml(x.to_string())))?
+            .into_owned();
+        out.push(Attr { key, value, at });
+    }
+    Ok(out)
+}
