@@ -14,8 +14,9 @@ use std::time::Duration;
 use kameo::actor::{Actor, ActorRef, Spawn, WeakActorRef};
 use kameo::error::Infallible;
 use kameo::mailbox;
+use kameo::mailbox::{MailboxReceiver, Signal};
 use rustc_hash::FxHashMap;
-use tokio::sync::{broadcast, watch};
+use tokio::sync::{broadcast, mpsc, watch};
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
@@ -77,6 +78,8 @@ pub struct Supervisor {
     agent_mode: AgentMode,
     agent_actors: FxHashMap<AgentId, ActorRef<Agent>>,
     snapshot: Option<(u64, Arc<Marking>)>,
+    reports_tx: mpsc::UnboundedSender<ActionDone>,
+    reports_rx: Option<mpsc::UnboundedReceiver<ActionDone>>,
 }
 
 impl std::fmt::Debug for Supervisor {
@@ -107,6 +110,7 @@ impl Supervisor {
     /// Spawns the supervisor (unbounded mailbox: actions never block reporting).
     pub(crate) fn start(args: SupervisorArgs) -> ActorRef<Supervisor> {
         let (cancel, cancel_token) = CancelSource::new();
+        let (reports_tx, reports_rx) = mpsc::unbounded_channel();
         let virtual_time = args.time_scale <= 0.0;
         let sup = Supervisor {
             eng: args.eng,
@@ -137,6 +141,8 @@ impl Supervisor {
             agent_mode: args.agent_mode,
             agent_actors: FxHashMap::default(),
             snapshot: None,
+            reports_tx,
+            reports_rx: Some(reports_rx),
         };
         Supervisor::spawn_with_mailbox(sup, mailbox::unbounded())
     }
@@ -492,7 +498,7 @@ impl Actor for Supervisor {
                 Place {
                     action: Arc::clone(&s.action),
                     timeout,
-                    supervisor: me.clone(),
+                    reports: sup.reports_tx.clone(),
                 },
                 mailbox::unbounded(),
             );
@@ -539,5 +545,46 @@ impl Actor for Supervisor {
         }
         self.cancel_timer();
         Ok(())
+    }
+
+    /// Waits for a message or for action reports. Reports come on their own channel (no
+    /// boxing, no actor message per report) and are drained in a batch: each is recorded in
+    /// arrival order, then what is ready fires once.
+    async fn next(
+        &mut self,
+        _: WeakActorRef<Self>,
+        mailbox_rx: &mut MailboxReceiver<Self>,
+    ) -> Result<Option<Signal<Self>>, Self::Error> {
+        loop {
+            if self.finished {
+                return Ok(None);
+            }
+            let Some(mut rx) = self.reports_rx.take() else {
+                return Ok(mailbox_rx.recv().await);
+            };
+            let got = tokio::select! {
+                biased;
+                sig = mailbox_rx.recv() => {
+                    self.reports_rx = Some(rx);
+                    return Ok(sig);
+                }
+                r = rx.recv() => r,
+            };
+            let mut settle = false;
+            if let Some(first) = got {
+                settle |= self.action_done(first);
+                for _ in 0..BATCH {
+                    match rx.try_recv() {
+                        Ok(d) => settle |= self.action_done(d),
+                        Err(_) => break,
+                    }
+                }
+            }
+            self.reports_rx = Some(rx);
+            if settle {
+                self.settle();
+                self.schedule();
+            }
+        }
     }
 }

@@ -59,11 +59,23 @@ impl Message<ActionDone> for Supervisor {
     type Reply = ();
 
     async fn handle(&mut self, msg: ActionDone, ctx: &mut Context<Self, ()>) {
+        if self.action_done(msg) {
+            self.settle();
+            self.schedule();
+        }
+        finish_turn!(self, ctx)
+    }
+}
+
+impl Supervisor {
+    /// Records one action's end; true when the caller should fire what is ready and
+    /// reschedule (reports arriving together are recorded first, in order, then settled once).
+    pub(super) fn action_done(&mut self, msg: ActionDone) -> bool {
         let Some(rec) = self.eng.agents.get(&msg.agent) else {
-            return;
+            return false;
         };
         if rec.ticket != msg.ticket || rec.state != AgentState::Occupied {
-            return;
+            return false;
         }
         let (place, attempt) = (rec.place, rec.attempt);
         self.eng.running -= 1;
@@ -80,22 +92,23 @@ impl Message<ActionDone> for Supervisor {
             if self.eng.running == 0 {
                 self.finish();
             }
-            return finish_turn!(self, ctx);
+            return false;
         }
         if let Some(u) = self.stop.time_limit
             && self.now >= u
         {
             self.jump_to(u);
             self.begin_stop(StopReason::TimeLimit);
-            return finish_turn!(self, ctx);
+            return false;
         }
-        let pname = self.eng.net.place(place).name.clone();
+        let pname = || self.eng.net.place(place).name.clone();
         match msg.outcome {
             Outcome::Fire(t) => {
                 let a = self.ap(place);
                 if self.eng.aps[a].consumers.contains(&t) {
                     self.eng.ready(msg.agent, Ready::Fire(t));
                 } else {
+                    let pname = pname();
                     let tname = self
                         .eng
                         .net
@@ -113,20 +126,22 @@ impl Message<ActionDone> for Supervisor {
             }
             Outcome::Decide => self.eng.ready(msg.agent, Ready::Decide),
             Outcome::Failed(r) => {
-                let m = format!("agent {} in `{pname}` failed: {r}", msg.agent.0);
+                let m = format!("agent {} in `{}` failed: {r}", msg.agent.0, pname());
                 self.errors.push(m.clone());
                 self.emit(EventKind::Error { message: m.clone() });
                 self.failure(msg.agent, place, attempt, m);
             }
             Outcome::Cancelled => {
-                let m = format!("agent {} in `{pname}` cancelled its action", msg.agent.0);
+                let m = format!(
+                    "agent {} in `{}` cancelled its action",
+                    msg.agent.0,
+                    pname()
+                );
                 self.errors.push(m.clone());
                 self.failure(msg.agent, place, attempt, m);
             }
         }
-        self.settle();
-        self.schedule();
-        finish_turn!(self, ctx)
+        true
     }
 }
 
