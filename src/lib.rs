@@ -11,6 +11,8 @@
 //! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.
 //! - [`check`]: summary and structural warnings (dead transitions, isolated places, policy
 //!   rules that can never apply) for `plan-runner check`.
+//! - [`runtime`]: the actor runtime — supervisor, agents, places, actions, events, journal;
+//!   `Runtime::builder(net)…spawn()` embeds a running plan in a tokio service.
 //!
 //! The everyday types are in [`prelude`].
 
@@ -30,5 +32,8 @@ pub mod prelude {
     pub use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, read_net};
     pub use crate::net::{
         ArcKind, Marking, Net, NetBuilder, PlaceId, Servers, Timing, TransitionId,
+    };
+    pub use crate::runtime::{
+        Action, ActionContext, AgentId, Outcome, Runtime, RuntimeHandle, StopReason, action_fn,
     };
 }

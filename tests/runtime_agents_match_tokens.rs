@@ -8,12 +8,15 @@ use gspn::net::{Net, NetBuilder, PlaceId, Servers};
 use gspn::runtime::{AgentId, EventKind, Outcome, Received, Runtime, action_fn};
 use proptest::prelude::*;
 
+/// Arcs of one transition: (place index, weight).
+type Arcs = Vec<(usize, u32)>;
+
 #[derive(Clone, Debug)]
 struct Spec {
     initial: Vec<u32>,
     action: Vec<bool>,
     /// Per transition: immediate?, inputs (place, weight), outputs (place, weight).
-    transitions: Vec<(bool, Vec<(usize, u32)>, Vec<(usize, u32)>)>,
+    transitions: Vec<(bool, Arcs, Arcs)>,
 }
 
 fn spec() -> impl Strategy<Value = Spec> {

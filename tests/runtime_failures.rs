@@ -70,7 +70,7 @@ async fn a_panicking_action_does_not_take_the_plan_down() {
     let s = h.wait().await;
     assert_eq!(s.stopped, StopReason::MaxFirings);
     assert_eq!(s.firings, 50);
-    assert_eq!(calls.load(Ordering::SeqCst) >= 3, true);
+    assert!(calls.load(Ordering::SeqCst) >= 3);
     assert_eq!(s.errors.len(), 2, "{:?}", s.errors);
     assert!(
         s.errors[0].contains("panicked: sensor exploded"),
@@ -181,5 +181,49 @@ async fn a_transition_that_never_becomes_enabled_is_an_error_not_a_hang() {
     assert_eq!(
         s.errors,
         vec!["transition `X` was chosen by an action but never became enabled".to_string()]
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn an_action_past_its_place_timeout_fails_and_is_retried() {
+    let net = two_loops();
+    let pa = net.place_by_name("a").unwrap();
+    let h = Runtime::builder(net)
+        .action(
+            "slow",
+            action_fn(|_| async {
+                tokio::time::sleep(std::time::Duration::from_secs(10)).await;
+                Outcome::Decide
+            }),
+        )
+        .role(
+            pa,
+            Role::Action {
+                name: "slow".into(),
+                timeout: Some(1.0),
+                on_failure: FailurePolicy::Retry(2),
+                robot: None,
+            },
+        )
+        .time_scale(1.0)
+        .seed(3)
+        .spawn()
+        .unwrap();
+    let s = h.wait().await;
+    assert_eq!(s.stopped, StopReason::Failure);
+    // First run and two retries time out, then the place gives up.
+    assert_eq!(
+        s.errors,
+        vec![
+            "agent 0 in `a` failed: timed out after 1s".to_string(),
+            "agent 0 in `a` failed: timed out after 1s".to_string(),
+            "agent 0 in `a` failed: timed out after 1s".to_string(),
+            "agent 0 in `a`: gave up after 2 retries".to_string(),
+        ]
+    );
+    assert!(
+        (s.time - 3.0).abs() < 0.01,
+        "three timeouts of 1 s, got {}",
+        s.time
     );
 }

@@ -9,11 +9,11 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use kameo::Actor;
-use kameo::actor::ActorRef;
 use kameo::message::{Context, Message};
 
 use super::action::{Action, ActionContext, CatchUnwind, Outcome};
-use super::supervisor::{ActionDone, Supervisor};
+use super::supervisor::ActionDone;
+use tokio::sync::mpsc::UnboundedSender;
 
 /// The actor of one action place.
 #[derive(Actor)]
@@ -21,7 +21,8 @@ pub(crate) struct Place {
     pub(crate) action: Arc<dyn Action>,
     /// Per-run timeout, already scaled to tokio time.
     pub(crate) timeout: Option<Duration>,
-    pub(crate) supervisor: ActorRef<Supervisor>,
+    /// Where the tasks report outcomes (drained by the supervisor in batches).
+    pub(crate) reports: UnboundedSender<ActionDone>,
 }
 
 impl std::fmt::Debug for Place {
@@ -51,7 +52,7 @@ impl Message<Start> for Place {
         let fut = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| action.run(ctx)))
             .unwrap_or_else(|_| Box::pin(async { Outcome::Failed("panicked".into()) }));
         let timeout = self.timeout;
-        let sup = self.supervisor.clone();
+        let sup = self.reports.clone();
         tokio::spawn(async move {
             let caught = CatchUnwind(fut);
             let outcome = match timeout {
@@ -62,13 +63,11 @@ impl Message<Start> for Place {
                 None => caught.await,
             };
             let outcome = outcome.unwrap_or_else(|p| Outcome::Failed(format!("panicked: {p}")));
-            let _ = sup
-                .tell(ActionDone {
-                    agent,
-                    ticket: msg.ticket,
-                    outcome,
-                })
-                .try_send();
+            let _ = sup.send(ActionDone {
+                agent,
+                ticket: msg.ticket,
+                outcome,
+            });
         });
     }
 }

@@ -14,22 +14,27 @@ use std::time::Duration;
 use kameo::actor::{Actor, ActorRef, Spawn, WeakActorRef};
 use kameo::error::Infallible;
 use kameo::mailbox;
-use kameo::message::{Context, Message};
+use kameo::mailbox::{MailboxReceiver, Signal};
 use rustc_hash::FxHashMap;
-use tokio::sync::{broadcast, watch};
+use tokio::sync::{broadcast, mpsc, watch};
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
 use super::StopReason;
-use super::action::{ActionContext, CancelSource, CancelToken, Outcome};
+use super::action::{ActionContext, CancelSource, CancelToken};
 use super::agent::{Agent, AgentId, AgentMode, AgentState, Update};
 use super::engine::{Engine, Firing, Ready};
 use super::event::{Event, EventKind};
-use super::handle::{AgentInfo, Progress, Summary};
+use super::handle::{Progress, Summary};
 use super::journal::Journal;
 use super::place::{Place, Start};
 use crate::io::plan::{FailurePolicy, StopConditions};
 use crate::net::{Marking, PlaceId, TransitionId};
+
+mod messages;
+
+pub(crate) use messages::{ActionDone, GetAgents, GetMarking, StopRequest};
+use messages::{Continue, StopDeadline, Timer};
 
 /// Firings played per message in the virtual-time fast path (then the mailbox gets a turn).
 const BATCH: usize = 4096;
@@ -73,6 +78,8 @@ pub struct Supervisor {
     agent_mode: AgentMode,
     agent_actors: FxHashMap<AgentId, ActorRef<Agent>>,
     snapshot: Option<(u64, Arc<Marking>)>,
+    reports_tx: mpsc::UnboundedSender<ActionDone>,
+    reports_rx: Option<mpsc::UnboundedReceiver<ActionDone>>,
 }
 
 impl std::fmt::Debug for Supervisor {
@@ -103,6 +110,7 @@ impl Supervisor {
     /// Spawns the supervisor (unbounded mailbox: actions never block reporting).
     pub(crate) fn start(args: SupervisorArgs) -> ActorRef<Supervisor> {
         let (cancel, cancel_token) = CancelSource::new();
+        let (reports_tx, reports_rx) = mpsc::unbounded_channel();
         let virtual_time = args.time_scale <= 0.0;
         let sup = Supervisor {
             eng: args.eng,
@@ -133,6 +141,8 @@ impl Supervisor {
             agent_mode: args.agent_mode,
             agent_actors: FxHashMap::default(),
             snapshot: None,
+            reports_tx,
+            reports_rx: Some(reports_rx),
         };
         Supervisor::spawn_with_mailbox(sup, mailbox::unbounded())
     }
@@ -488,7 +498,7 @@ impl Actor for Supervisor {
                 Place {
                     action: Arc::clone(&s.action),
                     timeout,
-                    supervisor: me.clone(),
+                    reports: sup.reports_tx.clone(),
                 },
                 mailbox::unbounded(),
             );
@@ -536,221 +546,45 @@ impl Actor for Supervisor {
         self.cancel_timer();
         Ok(())
     }
-}
 
-/// An action ended (sent by the place's task).
-#[derive(Debug)]
-pub(crate) struct ActionDone {
-    pub(crate) agent: AgentId,
-    pub(crate) ticket: u64,
-    pub(crate) outcome: Outcome,
-}
-
-/// The next net-timed firing (or the time limit) is due.
-#[derive(Debug)]
-struct Timer {
-    generation: u64,
-    at: f64,
-    limit: bool,
-}
-
-/// Play the next batch of the virtual-time fast path.
-#[derive(Debug)]
-struct Continue;
-
-/// Stop the run.
-#[derive(Debug)]
-pub(crate) struct StopRequest(pub(crate) StopReason);
-
-/// The grace period for cancelled actions is over.
-#[derive(Debug)]
-struct StopDeadline;
-
-/// Ask for the current marking.
-#[derive(Debug)]
-pub(crate) struct GetMarking;
-
-/// Ask for every live agent.
-#[derive(Debug)]
-pub(crate) struct GetAgents;
-
-macro_rules! finish_turn {
-    ($self:ident, $ctx:ident) => {
-        if $self.finished {
-            $ctx.stop();
-        }
-    };
-}
-
-impl Message<ActionDone> for Supervisor {
-    type Reply = ();
-
-    async fn handle(&mut self, msg: ActionDone, ctx: &mut Context<Self, ()>) {
-        let Some(rec) = self.eng.agents.get(&msg.agent) else {
-            return;
-        };
-        if rec.ticket != msg.ticket || rec.state != AgentState::Occupied {
-            return;
-        }
-        let (place, attempt) = (rec.place, rec.attempt);
-        self.eng.running -= 1;
-        self.advance_clock();
-        self.set_state(msg.agent, AgentState::Done);
-        if self.observed() {
-            self.emit(EventKind::ActionEnded {
-                agent: msg.agent,
-                place,
-                outcome: msg.outcome.clone(),
-            });
-        }
-        if self.stopping.is_some() {
-            if self.eng.running == 0 {
-                self.finish();
+    /// Waits for a message or for action reports. Reports come on their own channel (no
+    /// boxing, no actor message per report) and are drained in a batch: each is recorded in
+    /// arrival order, then what is ready fires once.
+    async fn next(
+        &mut self,
+        _: WeakActorRef<Self>,
+        mailbox_rx: &mut MailboxReceiver<Self>,
+    ) -> Result<Option<Signal<Self>>, Self::Error> {
+        loop {
+            if self.finished {
+                return Ok(None);
             }
-            return finish_turn!(self, ctx);
-        }
-        if let Some(u) = self.stop.time_limit
-            && self.now >= u
-        {
-            self.jump_to(u);
-            self.begin_stop(StopReason::TimeLimit);
-            return finish_turn!(self, ctx);
-        }
-        let pname = self.eng.net.place(place).name.clone();
-        match msg.outcome {
-            Outcome::Fire(t) => {
-                let a = self.ap(place);
-                if self.eng.aps[a].consumers.contains(&t) {
-                    self.eng.ready(msg.agent, Ready::Fire(t));
-                } else {
-                    let tname = self
-                        .eng
-                        .net
-                        .transitions()
-                        .get(t.index())
-                        .map_or_else(|| format!("#{}", t.0), |x| x.name.clone());
-                    let m = format!(
-                        "agent {} in `{pname}` returned transition `{tname}`, which is not an output of `{pname}`",
-                        msg.agent.0
-                    );
-                    self.errors.push(m.clone());
-                    self.emit(EventKind::Error { message: m.clone() });
-                    self.failure(msg.agent, place, attempt, m);
+            let Some(mut rx) = self.reports_rx.take() else {
+                return Ok(mailbox_rx.recv().await);
+            };
+            let got = tokio::select! {
+                biased;
+                sig = mailbox_rx.recv() => {
+                    self.reports_rx = Some(rx);
+                    return Ok(sig);
+                }
+                r = rx.recv() => r,
+            };
+            let mut settle = false;
+            if let Some(first) = got {
+                settle |= self.action_done(first);
+                for _ in 0..BATCH {
+                    match rx.try_recv() {
+                        Ok(d) => settle |= self.action_done(d),
+                        Err(_) => break,
+                    }
                 }
             }
-            Outcome::Decide => self.eng.ready(msg.agent, Ready::Decide),
-            Outcome::Failed(r) => {
-                let m = format!("agent {} in `{pname}` failed: {r}", msg.agent.0);
-                self.errors.push(m.clone());
-                self.emit(EventKind::Error { message: m.clone() });
-                self.failure(msg.agent, place, attempt, m);
-            }
-            Outcome::Cancelled => {
-                let m = format!("agent {} in `{pname}` cancelled its action", msg.agent.0);
-                self.errors.push(m.clone());
-                self.failure(msg.agent, place, attempt, m);
-            }
-        }
-        self.settle();
-        self.schedule();
-        finish_turn!(self, ctx)
-    }
-}
-
-impl Message<Timer> for Supervisor {
-    type Reply = ();
-
-    async fn handle(&mut self, msg: Timer, ctx: &mut Context<Self, ()>) {
-        if msg.generation != self.generation || self.stopping.is_some() {
-            return;
-        }
-        self.timer = None;
-        self.jump_to(msg.at.max(self.now));
-        if msg.limit {
-            self.begin_stop(StopReason::TimeLimit);
-        } else if self.eng.race.total() > 0.0 {
-            let t = self.eng.pick_race();
-            self.fire_one(t);
-            self.settle();
-            self.schedule();
-        } else {
-            self.schedule();
-        }
-        finish_turn!(self, ctx)
-    }
-}
-
-impl Message<Continue> for Supervisor {
-    type Reply = ();
-
-    async fn handle(&mut self, _: Continue, ctx: &mut Context<Self, ()>) {
-        self.continue_pending = false;
-        if self.stopping.is_none() {
-            if self.virtual_time && self.eng.running == 0 {
-                self.fast_path();
-            } else {
+            self.reports_rx = Some(rx);
+            if settle {
+                self.settle();
                 self.schedule();
             }
         }
-        finish_turn!(self, ctx)
-    }
-}
-
-impl Message<StopRequest> for Supervisor {
-    type Reply = ();
-
-    async fn handle(&mut self, msg: StopRequest, ctx: &mut Context<Self, ()>) {
-        self.advance_clock();
-        self.begin_stop(msg.0);
-        finish_turn!(self, ctx)
-    }
-}
-
-impl Message<StopDeadline> for Supervisor {
-    type Reply = ();
-
-    async fn handle(&mut self, _: StopDeadline, ctx: &mut Context<Self, ()>) {
-        if !self.finished {
-            let m = format!(
-                "{} action(s) did not end within {:?} of the stop",
-                self.eng.running, self.grace
-            );
-            self.errors.push(m.clone());
-            self.emit(EventKind::Error { message: m });
-            self.finish();
-        }
-        finish_turn!(self, ctx)
-    }
-}
-
-impl Message<GetMarking> for Supervisor {
-    type Reply = Vec<u32>;
-
-    async fn handle(&mut self, _: GetMarking, _: &mut Context<Self, Vec<u32>>) -> Vec<u32> {
-        self.eng.m.to_vec()
-    }
-}
-
-impl Message<GetAgents> for Supervisor {
-    type Reply = Vec<AgentInfo>;
-
-    async fn handle(
-        &mut self,
-        _: GetAgents,
-        _: &mut Context<Self, Vec<AgentInfo>>,
-    ) -> Vec<AgentInfo> {
-        self.eng.mark_waiting();
-        let mut v: Vec<AgentInfo> = self
-            .eng
-            .agents
-            .iter()
-            .map(|(&id, r)| AgentInfo {
-                id,
-                place: r.place,
-                state: r.state,
-            })
-            .collect();
-        v.sort_by_key(|a| a.id);
-        v
     }
 }
