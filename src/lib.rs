@@ -8,6 +8,8 @@
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
 //! - [`io`]: readers and writers — PIPE XML, PNML, GreatSPN PNPRO, DOT, plan files.
 //! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded.
+//! - [`analysis`]: the tangible reachability graph, properties (bounds, deadlocks, liveness,
+//!   invariants), the CTMC (steady state, limiting, transient) and measures.
 //! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.
 //! - [`check`]: summary and structural warnings (dead transitions, isolated places, policy
 //!   rules that can never apply) for `plan-runner check`.
