@@ -567,3 +567,30 @@ fn files_that_are_not_projects_are_refused() {
     assert!(matches!(e.kind, LoadErrorKind::Xml(_)), "{e}");
     assert_eq!(at(&e), (1, 10));
 }
+
+#[test]
+fn nan_infinite_and_zero_rates_are_refused() {
+    for (delay, shown) in [("NaN", "NaN"), ("inf", "inf"), ("0", "0"), ("1/0", "")] {
+        let text = format!(
+            "<project name=\"p\">\n<gspn name=\"g\"><nodes>\n\
+             <transition name=\"T\" type=\"EXP\" delay=\"{delay}\"/>\n\
+             </nodes></gspn></project>"
+        );
+        let e = pnpro::read(
+            Path::new("r.PNPRO"),
+            text.as_bytes(),
+            &ReadOptions::default(),
+        )
+        .unwrap_err();
+        assert_eq!(at(&e), (3, 40), "{e}");
+        match &e.kind {
+            LoadErrorKind::OutOfRange { what, value, .. } => {
+                assert_eq!((*what, value.as_str()), ("rate", shown));
+            }
+            LoadErrorKind::Expression { reason, .. } => {
+                assert_eq!((delay, reason.as_str()), ("1/0", "division by zero"));
+            }
+            _ => panic!("{e}"),
+        }
+    }
+}
