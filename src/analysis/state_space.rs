@@ -86,6 +86,12 @@ pub enum AnalysisError {
         /// One marking of the loop, as `p=k,...`.
         marking: String,
     },
+    /// A loop of vanishing markings too large to solve exactly in memory.
+    #[error("a loop of {markings} vanishing markings is too large to solve exactly")]
+    VanishingLoopTooLarge {
+        /// Markings in the loop.
+        markings: usize,
+    },
 }
 
 /// One way out of a tangible state: exponential `transition` fires at `rate`, and the

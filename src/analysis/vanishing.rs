@@ -248,6 +248,10 @@ fn solve_loop(
     }
     let (nd, nf) = (cols_d.len(), cols_f.len());
     let nc = nd + nf;
+    // Dense solve: k² + k·nc numbers. 64 M of them is 512 MB.
+    if k.saturating_mul(k + nc) > 64 << 20 {
+        return Err(AnalysisError::VanishingLoopTooLarge { markings: k });
+    }
     let mut b = vec![0.0f64; k * nc];
     for i in 0..k {
         for &(c, x) in &rhs_d[i] {

@@ -88,21 +88,28 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
         overflow: None,
     };
     let mut m = vec![0u32; net.place_count()];
-    let mut next = vec![0u32; net.place_count()];
     let mut key = vec![0u64; w];
     let mut fire: Vec<(TransitionId, f64)> = Vec::new();
+    let deltas = layout.transition_deltas(net);
     for i in 0..n {
-        layout.unpack(&frontier[i * w..(i + 1) * w], &mut m);
+        let base = &frontier[i * w..(i + 1) * w];
+        layout.unpack(base, &mut m);
         let tangible = firable(net, rules, &m, &mut fire);
         let (items_len, keys_len) = (b.items.len(), b.keys.len());
         for &(t, v) in &fire {
-            next.copy_from_slice(&m);
-            net.fire(&mut next, t);
-            if let Err(p) = layout.pack(&next, &mut key) {
-                b.items.truncate(items_len);
-                b.keys.truncate(keys_len);
-                b.overflow = Some((first + i, p, next[p]));
-                return b;
+            for &(p, d) in net.delta(t) {
+                let after = m[p.index()] as i64 + d;
+                if d > 0 && after as u64 > layout.max_value(p.index()) {
+                    b.items.truncate(items_len);
+                    b.keys.truncate(keys_len);
+                    let value = after.min(u32::MAX as i64) as u32;
+                    b.overflow = Some((first + i, p.index(), value));
+                    return b;
+                }
+            }
+            let d = &deltas[t.index() * w..(t.index() + 1) * w];
+            for ((k, &x), &y) in key.iter_mut().zip(base).zip(d) {
+                *k = x.wrapping_add(y);
             }
             b.items.push((t.0, v, MarkingStore::hash(&key)));
             b.keys.extend_from_slice(&key);
@@ -253,6 +260,12 @@ pub(crate) fn explore(
         };
         match overflow {
             Some((state, p, value)) => {
+                if s.raw.store.layout.max_value(p) >= u32::MAX as u64 {
+                    // More than 2³² tokens: unbounded for every practical purpose.
+                    return Err(AnalysisError::Unbounded {
+                        places: vec![net.place(crate::net::PlaceId(p as u32)).name.clone()],
+                    });
+                }
                 let wider = s.raw.store.layout.widened(p, value);
                 s.raw.store.relayout(wider);
                 cursor = state;

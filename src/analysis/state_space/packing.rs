@@ -9,6 +9,8 @@ use std::hash::Hasher;
 use hashbrown::HashTable;
 use rustc_hash::FxHasher;
 
+use crate::net::Net;
+
 /// Where each place's count lives: word index and bit shift, and its width.
 #[derive(Clone, Debug)]
 pub(crate) struct Layout {
@@ -73,6 +75,32 @@ impl Layout {
         Layout::from_bits(bits)
     }
 
+    /// Largest count place `p` can hold.
+    #[inline]
+    pub(crate) fn max_value(&self, p: usize) -> u64 {
+        let b = self.bits[p];
+        if b >= 32 {
+            u32::MAX as u64
+        } else {
+            (1u64 << b) - 1
+        }
+    }
+
+    /// Per transition, `words` numbers to add (wrapping) to a packed marking to fire it:
+    /// each place's delta shifted into its field. Correct whenever the result fits, since a
+    /// field that stays in range neither borrows from nor carries into its neighbours.
+    pub(crate) fn transition_deltas(&self, net: &Net) -> Vec<u64> {
+        let w = self.words;
+        let mut out = vec![0u64; net.transition_count() * w];
+        for t in net.transition_ids() {
+            for &(p, d) in net.delta(t) {
+                let slot = &mut out[t.index() * w + self.word[p.index()] as usize];
+                *slot = slot.wrapping_add((d as u64).wrapping_shl(self.shift[p.index()] as u32));
+            }
+        }
+        out
+    }
+
     /// Packs `m` into `out`; `Err(place)` when a count does not fit.
     #[inline]
     pub(crate) fn pack(&self, m: &[u32], out: &mut [u64]) -> Result<(), usize> {
@@ -108,12 +136,24 @@ fn hash_words(w: &[u64]) -> u64 {
     h.finish()
 }
 
+/// Word-by-word equality (short slices: cheaper than a `memcmp` call).
+#[inline]
+fn same(a: &[u64], b: &[u64]) -> bool {
+    a.iter().zip(b).all(|(x, y)| x == y)
+}
+
+#[inline]
+fn rehash(words: &[u64], w: usize, id: u32) -> u64 {
+    hash_words(&words[id as usize * w..(id as usize + 1) * w])
+}
+
 /// Packed markings, numbered in insertion order, with a hash index over them.
 #[derive(Debug)]
 pub(crate) struct MarkingStore {
     pub(crate) layout: Layout,
     words: Vec<u64>,
-    index: HashTable<u32>,
+    /// (first word, id) per marking.
+    index: HashTable<(u64, u32)>,
     places: usize,
 }
 
@@ -158,18 +198,18 @@ impl MarkingStore {
     pub(crate) fn insert_hashed(&mut self, key: &[u64], hash: u64) -> (u32, bool) {
         let w = self.layout.words();
         let words = &self.words;
-        let found = self.index.find(hash, |&id| {
-            &words[id as usize * w..(id as usize + 1) * w] == key
+        // The first word sits in the table: one-word markings never touch `words` here.
+        let found = self.index.find(hash, |&(k0, id)| {
+            k0 == key[0] && (w == 1 || same(&words[id as usize * w..(id as usize + 1) * w], key))
         });
-        if let Some(&id) = found {
+        if let Some(&(_, id)) = found {
             return (id, false);
         }
         let id = self.len() as u32;
         self.words.extend_from_slice(key);
         let words = &self.words;
-        self.index.insert_unique(hash, id, |&id| {
-            hash_words(&words[id as usize * w..(id as usize + 1) * w])
-        });
+        self.index
+            .insert_unique(hash, (key[0], id), |&(_, id)| rehash(words, w, id));
         (id, true)
     }
 
@@ -197,8 +237,8 @@ impl MarkingStore {
         for id in 0..self.len() {
             let key = &self.words[id * w..(id + 1) * w];
             let words = &self.words;
-            index.insert_unique(hash_words(key), id as u32, |&id| {
-                hash_words(&words[id as usize * w..(id as usize + 1) * w])
+            index.insert_unique(hash_words(key), (key[0], id as u32), |&(_, id)| {
+                rehash(words, w, id)
             });
         }
         self.index = index;
