@@ -28,6 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let net = read_net(path.as_ref(), &ReadOptions::default())?.net;
     let ss = StateSpace::build(&net, &Options::default())?;
     let built = start.elapsed().as_secs_f64();
+    let rss_built = peak_rss_kb() / 1024;
     let solver = Solver::new(&net, &ss);
     let steady = solver.steady_state(&SolverOptions::default())?;
     let solved = start.elapsed().as_secs_f64();
@@ -47,7 +48,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         solver.chain().residual(&steady.pi)
     );
     println!(
-        "state space {built:.3} s, solve {:.3} s, total {total:.3} s, peak RSS {} MB",
+        "state space {built:.3} s (peak RSS {rss_built} MB, state space {} MB), solve {:.3} s, \
+         total {total:.3} s, peak RSS {} MB",
+        ss.heap_bytes() >> 20,
         solved - built,
         peak_rss_kb() / 1024
     );

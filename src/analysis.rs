@@ -11,6 +11,29 @@
 //!   Gauss–Seidel, limiting distribution of non-ergodic chains, transient by uniformization);
 //!   [`measures`] turns a distribution into mean tokens, throughputs, waiting times and
 //!   predicate probabilities ([`Solver`](measures::Solver)).
+//!
+//! ```
+//! use gspn::analysis::measures::{Solver, SolverOptions};
+//! use gspn::analysis::state_space::{Options, StateSpace};
+//! use gspn::net::{NetBuilder, Servers};
+//! // A machine that breaks (rate 0.1) and is repaired (rate 2).
+//! let mut b = NetBuilder::new("machine");
+//! let (up, down) = (b.place("Up", 1), b.place("Down", 0));
+//! let fail = b.exponential("fail", 0.1, Servers::Single);
+//! let repair = b.exponential("repair", 2.0, Servers::Single);
+//! b.input(up, fail, 1); b.output(fail, down, 1);
+//! b.input(down, repair, 1); b.output(repair, up, 1);
+//! let net = b.build().unwrap();
+//! let space = StateSpace::build(&net, &Options::default()).unwrap();
+//! let solver = Solver::new(&net, &space);
+//! let steady = solver.steady_state(&SolverOptions::default()).unwrap();
+//! let m = solver.measures(&steady.pi);
+//! assert!((m.mean_tokens[up.index()] - 2.0 / 2.1).abs() < 1e-12);
+//! assert!((m.throughput[fail.index()] - 0.2 / 2.1).abs() < 1e-12);
+//! let at_1 = &solver.transient(&[1.0], 1e-12)[0];
+//! assert!((solver.measures(at_1).mean_tokens[up.index()]
+//!     - (2.0 + 0.1 * (-2.1f64).exp()) / 2.1).abs() < 1e-11);
+//! ```
 
 pub mod coverability;
 pub mod ctmc;

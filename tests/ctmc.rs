@@ -149,7 +149,7 @@ fn transient_pure_death_chain_matches_closed_form() {
 fn fox_glynn_weights_match_poisson_probabilities() {
     for qt in [0.3, 4.0, 37.5] {
         let (first, w) = poisson_weights(qt, 1e-14);
-        let mut p = (-qt as f64).exp();
+        let mut p = (-qt).exp();
         for k in 0..first + w.len() {
             if k >= first {
                 assert!(close(w[k - first], p, 1e-13), "qt={qt} k={k}");

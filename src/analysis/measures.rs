@@ -152,8 +152,8 @@ impl<'a> Solver<'a> {
         }
         if !self.space.immediate_flows().is_empty() {
             let mut rate_of = rustc_hash::FxHashMap::default();
-            for s in 0..pi.len() {
-                if pi[s] == 0.0 {
+            for (s, &p) in pi.iter().enumerate() {
+                if p == 0.0 {
                     continue;
                 }
                 for mv in self.space.moves(s) {

@@ -115,8 +115,8 @@ impl Ctmc {
         let sub = self.restrict(states);
         if states.len() <= 20_000 {
             let mut triplets = Vec::with_capacity(sub.nnz() + sub.n);
-            for i in 0..sub.n {
-                triplets.push((i, i, exit[i]));
+            for (i, &q) in exit.iter().enumerate() {
+                triplets.push((i, i, q));
                 for (j, q) in sub.row(i) {
                     triplets.push((j as usize, i, -q));
                 }

@@ -237,11 +237,11 @@ impl Ctmc {
         let mut next = vec![0.0; n];
         let mut residual = f64::INFINITY;
         for it in 1..=max_iterations {
-            for i in 0..n {
-                next[i] = pi[i] * (1.0 - exit[i] / lambda);
+            for ((x, &p), &q) in next.iter_mut().zip(&pi).zip(&exit) {
+                *x = p * (1.0 - q / lambda);
             }
-            for i in 0..n {
-                let p = pi[i] / lambda;
+            for (i, &x) in pi.iter().enumerate() {
+                let p = x / lambda;
                 for (j, q) in self.row(i) {
                     next[j as usize] += p * q;
                 }

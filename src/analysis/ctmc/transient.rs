@@ -92,11 +92,11 @@ impl Ctmc {
             if k == last {
                 break;
             }
-            for i in 0..n {
-                next[i] = cur[i] * (1.0 - exit[i] * inv);
+            for ((x, &c), &q) in next.iter_mut().zip(&cur).zip(exit) {
+                *x = c * (1.0 - q * inv);
             }
-            for i in 0..n {
-                let p = cur[i] * inv;
+            for (i, &c) in cur.iter().enumerate() {
+                let p = c * inv;
                 if p == 0.0 {
                     continue;
                 }
