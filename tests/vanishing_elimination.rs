@@ -2,6 +2,9 @@
 //! state and throughputs (immediate transitions through `immediate_flows`), solved here with
 //! a small dense solver so the check does not depend on the CTMC module.
 
+// Dense matrix code reads best with indices.
+#![allow(clippy::needless_range_loop)]
+
 #[path = "support/shared_fixtures.rs"]
 mod shared_fixtures;
 

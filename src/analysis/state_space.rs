@@ -175,7 +175,7 @@ impl StateSpace {
             n => n,
         };
         let raw = explore::explore(net, layout, opts.max_states, threads, opts.progress)?;
-        Ok(Self::from_raw(net, raw)?)
+        Self::from_raw(net, raw)
     }
 
     fn from_raw(net: &Net, raw: explore::Raw) -> Result<StateSpace, AnalysisError> {
