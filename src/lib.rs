@@ -7,6 +7,8 @@
 //!
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
 //! - [`io`]: readers and writers — PIPE XML, PNML, GreatSPN PNPRO, DOT, plan files.
+//! - [`analysis`]: state space (vanishing markings eliminated, coverability for unbounded
+//!   nets), properties, invariants, and the CTMC built on it.
 //! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded.
 //!
 //! The everyday types are in [`prelude`].
