@@ -7,8 +7,6 @@
 //!
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
 //! - [`io`]: readers and writers — PIPE XML, PNML, GreatSPN PNPRO, DOT, plan files.
-//! - [`analysis`]: state space and properties; the CTMC, its steady state (limiting
-//!   distribution), transient solution and measures (`plan-runner analyze`).
 //! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded.
 //! - [`analysis`]: the tangible reachability graph, properties (bounds, deadlocks, liveness,
 //!   invariants), the CTMC (steady state, limiting, transient) and measures.

@@ -67,6 +67,9 @@ pub fn karp_miller(net: &Net, node_limit: usize) -> Coverability {
     let mut fire_buf = Vec::new();
     let mut omega = vec![false; np];
     let mut max = net.initial_marking().into_vec();
+    // Ancestor comparisons allowed (place counts compared): keeps deep trees from taking
+    // longer than the search the answer is meant to protect.
+    let mut budget: u64 = 20 * node_limit as u64 * np.max(1) as u64;
     while let Some(i) = work.pop() {
         let m = nodes[i as usize].0.clone();
         firable(net, &m, &mut fire_buf);
@@ -78,7 +81,13 @@ pub fn karp_miller(net: &Net, node_limit: usize) -> Coverability {
                     *v = (*v as i64 + d).clamp(0, OMEGA as i64 - 1) as u32;
                 }
             }
-            accelerate(&nodes, i, &mut next, &accelerable);
+            if !accelerate(&nodes, i, &mut next, &accelerable, &mut budget) {
+                return if omega.iter().any(|&o| o) {
+                    unbounded(&omega)
+                } else {
+                    Coverability::Undecided
+                };
+            }
             for (p, &v) in next.iter().enumerate() {
                 if v == OMEGA {
                     omega[p] = true;
@@ -120,11 +129,21 @@ fn unbounded(omega: &[bool]) -> Coverability {
 }
 
 /// Sets ω where `next` strictly covers an ancestor of node `parent` (itself included) and all
-/// growing places may be accelerated.
-fn accelerate(nodes: &[(Vec<u32>, u32)], parent: u32, next: &mut [u32], accelerable: &[bool]) {
+/// growing places may be accelerated. False when the comparison budget ran out.
+fn accelerate(
+    nodes: &[(Vec<u32>, u32)],
+    parent: u32,
+    next: &mut [u32],
+    accelerable: &[bool],
+    budget: &mut u64,
+) -> bool {
     let mut a = parent;
     while a != u32::MAX {
         let (anc, up) = &nodes[a as usize];
+        let Some(left) = budget.checked_sub(anc.len() as u64 + 1) else {
+            return false;
+        };
+        *budget = left;
         let covers = anc.iter().zip(next.iter()).all(|(&x, &y)| y >= x);
         if covers && anc.as_slice() != &*next {
             let safe = anc
@@ -142,6 +161,7 @@ fn accelerate(nodes: &[(Vec<u32>, u32)], parent: u32, next: &mut [u32], accelera
         }
         a = *up;
     }
+    true
 }
 
 /// Transitions that may fire in ω-marking `m` under GSPN rules (ω enables every input arc and

@@ -328,3 +328,46 @@ fn expand_parallel(
         result
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::net::{NetBuilder, Servers};
+
+    /// Two independent two-place cycles with `n` tokens each: (n+1)² markings.
+    fn cycles(n: u32) -> Net {
+        let mut b = NetBuilder::new("cycles");
+        for i in 0..2 {
+            let a = b.place(format!("a{i}"), n);
+            let c = b.place(format!("c{i}"), 0);
+            let t = b.exponential(format!("t{i}"), 1.0, Servers::Single);
+            let u = b.exponential(format!("u{i}"), 1.0, Servers::Single);
+            b.input(a, t, 1);
+            b.output(t, c, 1);
+            b.input(c, u, 1);
+            b.output(u, a, 1);
+        }
+        b.build().unwrap()
+    }
+
+    #[test]
+    fn too_narrow_layout_grows_and_finds_every_marking() {
+        let net = cycles(60);
+        let exact = Layout::new(&[Some(60); 4], &[60, 0, 60, 0]);
+        let narrow = Layout::new(&[Some(60), Some(1), Some(60), Some(1)], &[60, 0, 60, 0]);
+        for threads in [1, 2] {
+            let a = explore(&net, exact.clone(), 1 << 20, threads, false).unwrap();
+            let b = explore(&net, narrow.clone(), 1 << 20, threads, false).unwrap();
+            assert_eq!(a.store.len(), 61 * 61);
+            assert_eq!(b.store.len(), a.store.len());
+            assert_eq!(b.moves.total(), a.moves.total());
+            let (mut x, mut y) = (vec![0; 4], vec![0; 4]);
+            for id in (0..a.store.len()).step_by(37) {
+                a.store.get(id, &mut x);
+                b.store.get(id, &mut y);
+                assert_eq!(x, y);
+                assert_eq!(a.parent[id], b.parent[id]);
+            }
+        }
+    }
+}
