@@ -174,4 +174,34 @@ fn bad_input_exits_with_code_2() {
     let bad = fixture("thesis/azevedo_2020/ros/gspn_thesis_test_case.xml");
     let out = simulate(&[bad.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
+
+    // Two immediate transitions passing a token back and forth: a timeless trap.
+    let dir = tempfile::tempdir().unwrap();
+    let trap = dir.path().join("trap.PNPRO");
+    std::fs::write(
+        &trap,
+        r#"<?xml version="1.0" encoding="UTF-8"?>
+<project name="trap" version="121">
+  <gspn name="trap">
+    <nodes>
+      <place marking="1" name="P" x="1" y="1"/>
+      <place name="Q" x="5" y="1"/>
+      <transition name="there" type="IMM" x="3" y="0"/>
+      <transition name="back" type="IMM" x="3" y="2"/>
+    </nodes>
+    <edges>
+      <arc head="there" kind="INPUT" tail="P"/>
+      <arc head="Q" kind="OUTPUT" tail="there"/>
+      <arc head="back" kind="INPUT" tail="Q"/>
+      <arc head="P" kind="OUTPUT" tail="back"/>
+    </edges>
+  </gspn>
+</project>
+"#,
+    )
+    .unwrap();
+    let out = simulate(&[trap.to_str().unwrap(), "--until", "1"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("timeless trap at time 0"), "{err}");
 }

@@ -32,7 +32,8 @@ pub(crate) struct Args {
     /// Fire this many transitions (per run) [default: the plan's firing limit, else 100 for a trace].
     #[arg(long, value_name = "N")]
     steps: Option<u64>,
-    /// Monte-Carlo: this many independent runs, estimates with 95% confidence intervals.
+    /// Monte-Carlo: this many independent runs, estimates with 95% confidence intervals
+    /// (a plan's `stop.when` ends a trace only; Monte-Carlo runs use the time or step limit).
     #[arg(long, value_name = "R")]
     runs: Option<u64>,
     /// Print JSON: `runs, firings, mean_tokens, throughput, ci95` (a single run adds `trace`).
