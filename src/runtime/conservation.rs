@@ -1,29 +1,27 @@
 //! The robot-token check: after removing resource places, no transition may create or
-//! destroy tokens (the sum of each transition's change over the other places is 0). That is a
-//! structural P-invariant with weight 1 on every non-resource place: one pass over the arcs,
-//! milliseconds even for large nets.
-//!
-//! (A local check; the general invariant code lives in `analysis` once it lands there.)
+//! destroy tokens — a structural P-invariant with weight 1 on every non-resource place,
+//! checked by [`conserves_tokens`] in one pass over the arcs (milliseconds for large nets).
 
 use super::RuntimeError;
+use crate::analysis::invariants::conserves_tokens;
 use crate::io::plan::Role;
-use crate::net::Net;
+use crate::net::{Net, PlaceId};
 
-/// Refuses a net whose transitions change the number of tokens outside resource places.
+/// Refuses a net whose transitions change the number of tokens outside resource places,
+/// naming the first transition that does.
 pub(crate) fn check_robot_tokens(net: &Net, roles: &[Option<Role>]) -> Result<(), RuntimeError> {
-    for t in net.transition_ids() {
-        let sum: i64 = net
-            .delta(t)
-            .iter()
-            .filter(|&&(p, _)| !matches!(roles.get(p.index()), Some(Some(Role::Resource))))
-            .map(|&(_, d)| d)
-            .sum();
-        if sum != 0 {
-            return Err(RuntimeError::RobotTokens {
-                transition: net.transition(t).name.clone(),
-                change: sum,
-            });
+    let resources: Vec<PlaceId> = net
+        .place_ids()
+        .filter(|p| matches!(roles.get(p.index()), Some(Some(Role::Resource))))
+        .collect();
+    match conserves_tokens(net, &resources) {
+        Ok(()) => Ok(()),
+        Err(leaks) => {
+            let leak = &leaks[0];
+            Err(RuntimeError::RobotTokens {
+                transition: net.transition(leak.transition).name.clone(),
+                change: leak.delta,
+            })
         }
     }
-    Ok(())
 }
