@@ -39,6 +39,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    restore_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check(a) => check::main(a),
@@ -54,5 +55,16 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(common::exit_code_for(&e))
         }
+    }
+}
+
+/// Rust ignores SIGPIPE, so printing to a closed pipe (`plan-runner … | head`) would panic;
+/// a Unix tool is expected to end quietly instead.
+fn restore_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in `main`, before any thread is spawned; SIG_DFL is a valid
+    // disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
