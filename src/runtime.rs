@@ -50,7 +50,6 @@ pub mod event;
 mod handle;
 pub mod journal;
 pub mod place;
-mod race;
 pub mod supervisor;
 
 use std::path::PathBuf;

@@ -50,7 +50,7 @@
 mod monte_carlo;
 mod sample;
 mod statistics;
-mod sum_tree;
+pub(crate) mod sum_tree;
 
 pub use monte_carlo::{Estimate, Estimates, Horizon, MonteCarlo, monte_carlo, t_quantile_975};
 pub use statistics::Statistics;

@@ -10,9 +10,9 @@ use rand_chacha::ChaCha8Rng;
 use rustc_hash::FxHashMap;
 
 use super::agent::{AgentId, AgentState};
-use super::race::Race;
 use crate::net::{Marking, Net, PlaceId, Timing, TransitionId};
 use crate::policy::Policy;
+use crate::sim::sum_tree::SumTree;
 
 /// What an agent's finished action made it ready for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -75,7 +75,7 @@ pub(crate) struct Engine {
     /// Exponential transitions some agent returned `Fire` for, in arrival order.
     pending: Vec<TransitionId>,
     in_pending: Vec<bool>,
-    pub(crate) race: Race,
+    pub(crate) race: SumTree,
     /// Bumped whenever a race rate changes (a timer for an unchanged race stays valid).
     pub(crate) race_version: u64,
     /// Immediate transitions, highest priority first.
@@ -134,7 +134,7 @@ impl Engine {
             next_ticket: 0,
             pending: Vec::new(),
             in_pending: vec![false; nt],
-            race: Race::new(nt),
+            race: SumTree::new(nt),
             race_version: 0,
             immediates,
             cands: Vec::new(),
@@ -245,7 +245,8 @@ impl Engine {
 
     fn update_race(&mut self, t: TransitionId) {
         let r = self.race_rate(t);
-        if self.race.set(t.index(), r) {
+        if self.race.get(t.index()) != r {
+            self.race.set(t.index(), r);
             self.race_version += 1;
         }
     }
