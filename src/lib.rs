@@ -11,6 +11,8 @@
 //! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.
 //! - [`check`]: summary and structural warnings (dead transitions, isolated places, policy
 //!   rules that can never apply) for `plan-runner check`.
+//! - `web` (feature `web`): the viewer — an axum server with embedded assets that draws a
+//!   net, plays its token game and shows its analysis (`plan-runner serve`).
 //!
 //! The everyday types are in [`prelude`].
 
@@ -24,6 +26,8 @@ pub mod net;
 pub mod policy;
 pub mod runtime;
 pub mod sim;
+#[cfg(feature = "web")]
+pub mod web;
 
 /// The everyday types, for `use gspn::prelude::*`.
 pub mod prelude {

@@ -8,6 +8,8 @@ mod common;
 mod convert;
 mod import_thesis;
 mod run;
+#[cfg(feature = "web")]
+mod serve;
 mod simulate;
 
 use std::process::ExitCode;
@@ -36,6 +38,9 @@ enum Command {
     Convert(convert::Args),
     /// Turn a thesis framework execution input (JSON) into a plan.toml next to its net.
     ImportThesis(import_thesis::Args),
+    /// Open the viewer for a net or a plan: drawing, token game, analysis (feature `web`).
+    #[cfg(feature = "web")]
+    Serve(serve::Args),
 }
 
 fn main() -> ExitCode {
@@ -47,6 +52,8 @@ fn main() -> ExitCode {
         Command::Run(a) => run::main(a),
         Command::Convert(a) => convert::main(a),
         Command::ImportThesis(a) => import_thesis::main(a),
+        #[cfg(feature = "web")]
+        Command::Serve(a) => serve::main(a),
     };
     match result {
         Ok(code) => code,
