@@ -160,8 +160,14 @@ impl LiveRun {
                 None => true,
             })
             .collect();
+        let firable: Vec<&str> = net
+            .firable(&s.tokens)
+            .into_iter()
+            .map(|t| net.transition(t).name.as_str())
+            .collect();
         json!({
             "type": "state",
+            "firable": firable,
             "tokens": s.tokens,
             "marking": crate::web::api::by_place(net, &s.tokens),
             "text": net.format_marking(&s.tokens),

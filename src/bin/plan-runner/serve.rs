@@ -10,7 +10,10 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use gspn::io::plan::read_plan;
-use gspn::web::{WebState, serve};
+use std::sync::Arc;
+
+use gspn::runtime::{RuntimeHandle, Summary};
+use gspn::web::{LiveRun, WebState, serve};
 
 use crate::common::{NetArgs, load_net};
 
@@ -65,4 +68,42 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         }
         Ok(ExitCode::SUCCESS)
     })
+}
+
+/// A viewer following a run (`plan-runner run --web`).
+pub(crate) struct Viewer {
+    addr: SocketAddr,
+    task: tokio::task::JoinHandle<std::io::Result<()>>,
+}
+
+/// Serves the live view of `handle`'s run at `addr` (nothing when `None`). Call right after
+/// spawning the run (with `subscribe_at_start(true)`), so the viewer sees every event.
+pub(crate) async fn follow(
+    mut handle: RuntimeHandle,
+    addr: Option<SocketAddr>,
+) -> anyhow::Result<(Arc<RuntimeHandle>, Option<Viewer>)> {
+    let Some(addr) = addr else {
+        return Ok((Arc::new(handle), None));
+    };
+    let events = handle.events();
+    let handle = Arc::new(handle);
+    let live = LiveRun::start(handle.clone(), events);
+    let listener = tokio::net::TcpListener::bind(addr)
+        .await
+        .with_context(|| format!("cannot listen on {addr}"))?;
+    let addr = listener.local_addr()?;
+    eprintln!("watch the run at http://{addr}/");
+    let task = tokio::spawn(serve(listener, WebState::for_live(live)));
+    Ok((handle, Some(Viewer { addr, task })))
+}
+
+/// After the run: keeps the viewer up until Ctrl-C, so the final state can be looked at.
+pub(crate) async fn linger(viewer: Option<Viewer>, summary: &Summary) {
+    let Some(v) = viewer else { return };
+    eprintln!(
+        "run over ({}); the viewer stays at http://{}/ until Ctrl-C",
+        summary.stopped, v.addr
+    );
+    let _ = tokio::signal::ctrl_c().await;
+    v.task.abort();
 }

@@ -437,12 +437,89 @@ async function replay(path) {
   }
 }
 
+// ---- live run --------------------------------------------------------------------------
+
+// Follows a running plan: the server sends the net, then snapshots; on a lost connection
+// the page reconnects and the server starts again with the net and the current snapshot.
+function startLive() {
+  for (const id of ['step', 'step-n', 'run', 'reset', 'n', 'seed', 'trace-panel']) {
+    const e = $(id);
+    (e.closest('label') || e).classList.add('hidden');
+  }
+  $('speed').closest('label').classList.add('hidden');
+  $('stop').classList.remove('hidden');
+  $('log-panel').classList.remove('hidden');
+  $('stop').addEventListener('click', () =>
+    api('POST', '/api/live/stop').catch((e) => status(e.message)));
+  connectLive();
+}
+
+function connectLive() {
+  const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  const socket = new WebSocket(scheme + '//' + location.host + '/api/live/ws');
+  socket.onmessage = (ev) => {
+    const msg = JSON.parse(ev.data);
+    if (msg.type === 'net') {
+      const first = net === null;
+      net = msg;
+      scaleCoordinates();
+      drawNet();
+      if (first) fit();
+      $('log').textContent = '';
+    } else if (msg.type === 'state') {
+      applyLive(msg);
+    }
+  };
+  socket.onopen = () => status('');
+  socket.onclose = () => {
+    status('connection lost, reconnecting…');
+    setTimeout(connectLive, 1000);
+  };
+}
+
+function applyLive(s) {
+  s.tokens.forEach((k, i) => setTokens(i, k));
+  const firable = new Set(s.firable);
+  net.transitions.forEach((t, i) =>
+    transEls[i].setAttribute('data-enabled', firable.has(t.name) ? 'true' : 'false'));
+  net.places.forEach((p, i) => {
+    const g = placeEls[i];
+    const agents = s.agents[p.name];
+    let label = g.querySelector('text.agents');
+    if (!agents) {
+      if (label) label.remove();
+      return;
+    }
+    if (!label) label = el('text', { class: 'agents', y: R + 25 }, g);
+    label.textContent = Object.entries(agents).map(([k, n]) => k + ' ' + n).join(', ');
+  });
+  $('clock').textContent = 'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
+    (s.stopped ? ' — stopped: ' + s.stopped : '') +
+    (s.lagged ? ' (' + s.lagged + ' events skipped)' : '');
+  $('marking-text').textContent = s.text;
+  const ol = $('log');
+  for (const e of s.log) {
+    const li = document.createElement('li');
+    li.value = e.seq;
+    li.textContent = fmt(e.time) + '  ' + e.text;
+    ol.appendChild(li);
+  }
+  while (ol.childElementCount > 500) ol.firstElementChild.remove();
+  ol.scrollTop = ol.scrollHeight;
+  if (s.stopped) $('stop').disabled = true;
+}
+
 // ---- start -----------------------------------------------------------------------------
 
 async function main() {
   setupControls();
   setupInteraction();
   try {
+    const mode = await api('GET', '/api/mode');
+    if (mode.live) {
+      startLive();
+      return;
+    }
     net = await api('GET', '/api/net');
     $('title').textContent = net.name + (net.layout === 'layered' ? ' (automatic layout)' : '');
     document.title = net.name + ' — gspn';
