@@ -374,8 +374,9 @@ function setupControls() {
 
 // ---- analysis --------------------------------------------------------------------------
 
-function bars(title, values, cls) {
-  const entries = Object.entries(values);
+// Bars in the net's order (`names`), not the JSON object's.
+function bars(title, values, cls, names) {
+  const entries = names.filter((n) => n in values).map((n) => [n, values[n]]);
   const max = Math.max(1e-300, ...entries.map(([, v]) => v));
   let html = '<h4>' + title + '</h4><table>';
   for (const [name, v] of entries) {
@@ -409,8 +410,9 @@ async function analyse() {
     a.vanishing + ' vanishing); safe: ' + a.safe + '; reversible: ' + a.reversible +
     '; deadlock-free: ' + a.deadlock_free + '</p>';
   if (a.steady) {
-    html += bars('mean tokens' + (a.steady.ergodic ? '' : ' (limiting)'), a.steady.mean_tokens, 'tok');
-    html += bars('throughput', a.steady.throughput, 'thr');
+    html += bars('mean tokens' + (a.steady.ergodic ? '' : ' (limiting)'), a.steady.mean_tokens, 'tok',
+      net.places.map((p) => p.name));
+    html += bars('throughput', a.steady.throughput, 'thr', net.transitions.map((t) => t.name));
   } else if (a.steady_error) {
     html += '<p class="error">' + escapeHtml(a.steady_error) + '</p>';
   }
