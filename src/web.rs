@@ -16,7 +16,8 @@
 //! | `POST /api/sim/step {n}` | fire `n` transitions drawn by the token game: after a reset with seed S, `n` steps are exactly `plan-runner simulate --seed S --steps n` |
 //! | `POST /api/sim/fire {transition}` | fire one firable transition by hand (409 if it may not fire) |
 //! | `GET /api/analysis` | properties, steady-state mean tokens and throughputs, dead markings with a firing sequence to each; `{error, kind}` (422) for an unbounded net |
-//! | `GET /api/mode` | `{"live": bool}`: whether the page follows a running plan ([`LiveRun`]) |
+//! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`replay`]), or the token game |
+//! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal |
 //! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log` |
 //! | `POST /api/live/stop` | asks the live run to stop |
 //! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "state", ...}` snapshots (log entries since the previous one), at most one per [`FRAME`] |
@@ -32,6 +33,7 @@
 mod api;
 pub mod layout;
 mod live;
+pub mod replay;
 mod report;
 mod session;
 
@@ -102,6 +104,7 @@ struct Inner {
     analysis: Arc<OnceCell<Value>>,
     max_states: usize,
     live: OnceLock<LiveRun>,
+    replay: OnceLock<Arc<Vec<replay::Frame>>>,
 }
 
 impl WebState {
@@ -128,6 +131,7 @@ impl WebState {
                 analysis: Arc::new(OnceCell::new()),
                 max_states,
                 live: OnceLock::new(),
+                replay: OnceLock::new(),
             }),
         }
     }
@@ -138,6 +142,14 @@ impl WebState {
         let h = live.handle();
         let state = WebState::new(Net::clone(h.net()), None, h.seed());
         let _ = state.inner.live.set(live);
+        state
+    }
+
+    /// A viewer of a recorded run ([`replay::read_journal`]): the page shows a time slider
+    /// over `frames` instead of playing its own token game.
+    pub fn for_replay(net: Net, frames: Vec<replay::Frame>) -> WebState {
+        let state = WebState::new(net, None, 0);
+        let _ = state.inner.replay.set(Arc::new(frames));
         state
     }
 
@@ -206,6 +218,7 @@ pub fn router(state: WebState) -> Router {
         .route("/api/sim/fire", post(api::sim_fire))
         .route("/api/analysis", get(api::analysis))
         .route("/api/mode", get(mode))
+        .route("/api/replay", get(replay_frames))
         .route("/api/live/state", get(live::state))
         .route("/api/live/stop", post(live::stop))
         .route("/api/live/ws", get(live::ws))
@@ -214,9 +227,21 @@ pub fn router(state: WebState) -> Router {
         .with_state(state)
 }
 
-/// `GET /api/mode`: `{"live": true}` when the page follows a running plan.
+/// `GET /api/mode`: `{"live": bool, "replay": bool}` — a running plan, a recorded one, or
+/// neither (the token game).
 async fn mode(axum::extract::State(state): axum::extract::State<WebState>) -> axum::Json<Value> {
-    axum::Json(json!({ "live": state.live().is_some() }))
+    axum::Json(json!({
+        "live": state.live().is_some(),
+        "replay": state.inner.replay.get().is_some(),
+    }))
+}
+
+/// `GET /api/replay`: `{"frames": [{time, transition, tokens}]}` (404 without a recording).
+async fn replay_frames(axum::extract::State(state): axum::extract::State<WebState>) -> Response {
+    match state.inner.replay.get() {
+        Some(frames) => axum::Json(json!({ "frames": **frames })).into_response(),
+        None => api::error(StatusCode::NOT_FOUND, "no recorded run"),
+    }
 }
 
 async fn add_security_headers(mut res: Response) -> Response {

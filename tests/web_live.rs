@@ -97,3 +97,47 @@ async fn a_late_joiner_gets_the_net_then_the_final_state_of_the_run() {
     assert_eq!(second["stopped"], snap["stopped"]);
     server.abort();
 }
+
+#[tokio::test]
+async fn a_journal_plays_back_as_the_markings_of_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.jsonl");
+    let handle = Runtime::builder(cyc3())
+        .seed(9)
+        .max_firings(12)
+        .journal(&path)
+        .spawn()
+        .unwrap();
+    let summary = handle.wait().await;
+    let text = std::fs::read_to_string(&path).unwrap();
+    let frames = gspn::web::replay::read_journal(&text, &cyc3()).unwrap();
+    assert_eq!(frames.len(), 13);
+    assert_eq!(frames[0].tokens, vec![2, 0, 0]);
+    assert_eq!(frames[12].tokens, summary.marking.as_slice());
+    // Every frame follows from the one before by firing its transition.
+    let net = cyc3();
+    for w in frames.windows(2) {
+        let t = net
+            .transition_by_name(w[1].transition.as_deref().unwrap())
+            .unwrap();
+        let mut m = w[0].tokens.clone();
+        net.fire(&mut m, t);
+        assert_eq!(m, w[1].tokens);
+        assert!(w[1].time >= w[0].time);
+    }
+
+    // Another net's journal is refused, naming both nets.
+    let mut b = NetBuilder::new("other");
+    b.place("x", 1);
+    let err = gspn::web::replay::read_journal(&text, &b.build().unwrap()).unwrap_err();
+    assert!(err.to_string().contains("`cyc3`"), "{err}");
+
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let server = tokio::spawn(serve(listener, WebState::for_replay(cyc3(), frames)));
+    assert_eq!(http_get(addr, "/api/mode").await["replay"], true);
+    let v = http_get(addr, "/api/replay").await;
+    assert_eq!(v["frames"].as_array().unwrap().len(), 13);
+    assert_eq!(v["frames"][0]["transition"], Value::Null);
+    server.abort();
+}

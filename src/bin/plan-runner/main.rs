@@ -7,6 +7,8 @@ mod check;
 mod common;
 mod convert;
 mod import_thesis;
+#[cfg(feature = "web")]
+mod replay;
 mod run;
 #[cfg(feature = "web")]
 mod serve;
@@ -41,6 +43,9 @@ enum Command {
     /// Open the viewer for a net or a plan: drawing, token game, analysis (feature `web`).
     #[cfg(feature = "web")]
     Serve(serve::Args),
+    /// Play a run's journal back: print its firings, or show them with --web (feature `web`).
+    #[cfg(feature = "web")]
+    Replay(replay::Args),
 }
 
 fn main() -> ExitCode {
@@ -54,6 +59,8 @@ fn main() -> ExitCode {
         Command::ImportThesis(a) => import_thesis::main(a),
         #[cfg(feature = "web")]
         Command::Serve(a) => serve::main(a),
+        #[cfg(feature = "web")]
+        Command::Replay(a) => replay::main(a),
     };
     match result {
         Ok(code) => code,

@@ -363,7 +363,11 @@ function setupControls() {
     const seed = Number($('seed').value);
     act('POST', '/api/sim/reset', Number.isSafeInteger(seed) && seed >= 0 ? { seed } : {});
   });
-  $('run').addEventListener('click', () => (runTimer === null ? startRun() : stopRun()));
+  $('run').addEventListener('click', () => {
+    if (!state) return; // replay and live modes drive #run themselves
+    if (runTimer === null) startRun();
+    else stopRun();
+  });
   $('speed').addEventListener('input', () => {
     $('speed-value').textContent = $('speed').value;
     if (runTimer !== null) startRun();
@@ -511,6 +515,60 @@ function applyLive(s) {
   if (s.stopped) $('stop').disabled = true;
 }
 
+// ---- replay ----------------------------------------------------------------------------
+
+// Plays a journal back: the slider picks a frame (the marking after each firing); `run`
+// plays the frames at the chosen speed.
+async function startReplay() {
+  for (const id of ['step', 'step-n', 'reset', 'n', 'seed']) {
+    const e = $(id);
+    (e.closest('label') || e).classList.add('hidden');
+  }
+  const { frames } = await api('GET', '/api/replay');
+  const slider = $('slider');
+  slider.max = String(frames.length - 1);
+  $('slider-label').classList.remove('hidden');
+  const show = (i) => {
+    const f = frames[i];
+    slider.value = String(i);
+    f.tokens.forEach((k, p) => setTokens(p, k));
+    net.transitions.forEach((t, j) => transEls[j].classList.toggle('fired', t.name === f.transition));
+    $('frame').textContent = i + '/' + (frames.length - 1);
+    $('clock').textContent = 'time ' + fmt(f.time) + ', ' + i + ' firings' +
+      (f.transition ? ' — ' + f.transition + ' fired' : '');
+  };
+  slider.addEventListener('input', () => show(Number(slider.value)));
+  const ol = $('trace');
+  ol.textContent = '';
+  frames.slice(1).forEach((f, i) => {
+    const li = document.createElement('li');
+    li.textContent = fmt(f.time) + '  ' + f.transition;
+    li.addEventListener('click', () => show(i + 1));
+    ol.appendChild(li);
+  });
+  let timer = null;
+  $('run').addEventListener('click', () => {
+    if (timer !== null) {
+      clearInterval(timer);
+      timer = null;
+      $('run').textContent = 'run';
+      return;
+    }
+    $('run').textContent = 'pause';
+    timer = setInterval(() => {
+      const i = Number(slider.value) + 1;
+      if (i >= frames.length) {
+        clearInterval(timer);
+        timer = null;
+        $('run').textContent = 'run';
+        return;
+      }
+      show(i);
+    }, 1000 / (Number($('speed').value) || 1));
+  });
+  show(0);
+}
+
 // ---- start -----------------------------------------------------------------------------
 
 async function main() {
@@ -528,6 +586,10 @@ async function main() {
     scaleCoordinates();
     drawNet();
     fit();
+    if (mode.replay) {
+      await startReplay();
+      return;
+    }
     applyState(await api('GET', '/api/sim/state'));
   } catch (e) {
     status(e.message);
