@@ -15,6 +15,8 @@
 //!   rules that can never apply) for `plan-runner check`.
 //! - [`runtime`]: the actor runtime — supervisor, agents, places, actions, events, journal;
 //!   `Runtime::builder(net)…spawn()` embeds a running plan in a tokio service.
+//! - `web` (feature `web`): the viewer — an axum server with embedded assets that draws a
+//!   net, plays its token game and shows its analysis (`plan-runner serve`).
 //!
 //! The everyday types are in [`prelude`].
 
@@ -28,6 +30,8 @@ pub mod net;
 pub mod policy;
 pub mod runtime;
 pub mod sim;
+#[cfg(feature = "web")]
+pub mod web;
 
 /// The everyday types, for `use gspn::prelude::*`.
 pub mod prelude {

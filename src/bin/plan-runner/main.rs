@@ -7,7 +7,11 @@ mod check;
 mod common;
 mod convert;
 mod import_thesis;
+#[cfg(feature = "web")]
+mod replay;
 mod run;
+#[cfg(feature = "web")]
+mod serve;
 mod simulate;
 
 use std::process::ExitCode;
@@ -36,6 +40,12 @@ enum Command {
     Convert(convert::Args),
     /// Turn a thesis framework execution input (JSON) into a plan.toml next to its net.
     ImportThesis(import_thesis::Args),
+    /// Open the viewer for a net or a plan: drawing, token game, analysis (feature `web`).
+    #[cfg(feature = "web")]
+    Serve(serve::Args),
+    /// Play a run's journal back: print its firings, or show them with --web (feature `web`).
+    #[cfg(feature = "web")]
+    Replay(replay::Args),
 }
 
 fn main() -> ExitCode {
@@ -48,6 +58,10 @@ fn main() -> ExitCode {
         Command::Run(a) => run::main(a),
         Command::Convert(a) => convert::main(a),
         Command::ImportThesis(a) => import_thesis::main(a),
+        #[cfg(feature = "web")]
+        Command::Serve(a) => serve::main(a),
+        #[cfg(feature = "web")]
+        Command::Replay(a) => replay::main(a),
     };
     match result {
         Ok(code) => code,

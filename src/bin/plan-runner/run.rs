@@ -39,6 +39,11 @@ pub(crate) struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
+    /// Watch the run in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080]
+    /// (feature `web`); after the run it stays up until Ctrl-C.
+    #[cfg(feature = "web")]
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+    web: Option<std::net::SocketAddr>,
     #[command(flatten)]
     net: NetArgs,
 }
@@ -87,11 +92,17 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
-    let mut b = Runtime::from_plan(plan).subscribe_at_start(false);
+    #[cfg(feature = "web")]
+    let watched = args.web.is_some();
+    #[cfg(not(feature = "web"))]
+    let watched = false;
+    let mut b = Runtime::from_plan(plan).subscribe_at_start(watched);
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
     let handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    #[cfg(feature = "web")]
+    let (handle, viewer) = crate::serve::follow(handle, args.web).await?;
     for w in handle.warnings() {
         eprintln!("warning: {w}");
     }
@@ -130,6 +141,8 @@ async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
         bar.finish_and_clear();
     }
     eprintln!("seed {}", handle.seed());
+    #[cfg(feature = "web")]
+    crate::serve::linger(viewer, &summary).await;
     Ok(summary)
 }
 

@@ -1,0 +1,78 @@
+//! `plan-runner replay JOURNAL --net FILE [--web [ADDR]]`: play a run's journal back.
+//!
+//! The journal names its net by hash; `--net` gives the net (or plan) file it was run from.
+//! Without `--web` the firings are printed (time, transition, marking); with it the viewer
+//! shows the run on the net with a time slider.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use gspn::io::plan::read_plan;
+use gspn::web::replay::read_journal;
+use gspn::web::{WebState, serve};
+
+use crate::common::{BadInput, NetArgs, load_net};
+
+/// Arguments of `replay`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct Args {
+    /// The journal (`plan-runner run --journal FILE`).
+    journal: PathBuf,
+    /// The net or plan file the run was made from.
+    #[arg(long, value_name = "FILE")]
+    net: PathBuf,
+    /// Show it in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080].
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+    web: Option<SocketAddr>,
+    #[command(flatten)]
+    net_args: NetArgs,
+}
+
+pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    let is_plan = args
+        .net
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    let net = if is_plan {
+        read_plan(&args.net, &args.net_args.read_options())?.net
+    } else {
+        load_net(&args.net, &args.net_args)?.net
+    };
+    let text = std::fs::read_to_string(&args.journal)
+        .with_context(|| format!("cannot read {}", args.journal.display()))?;
+    let frames = read_journal(&text, &net)
+        .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
+    let Some(addr) = args.web else {
+        for f in &frames {
+            println!(
+                "{:>14.6}  {:<24}  {}",
+                f.time,
+                f.transition.as_deref().unwrap_or("(initial)"),
+                net.format_marking(&f.tokens)
+            );
+        }
+        return Ok(ExitCode::SUCCESS);
+    };
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()?;
+    rt.block_on(async {
+        let listener = tokio::net::TcpListener::bind(addr)
+            .await
+            .with_context(|| format!("cannot listen on {addr}"))?;
+        println!(
+            "replay of {} ({} firings) at http://{}/",
+            args.journal.display(),
+            frames.len() - 1,
+            listener.local_addr()?
+        );
+        tokio::select! {
+            r = serve(listener, WebState::for_replay(net, frames)) => r.context("viewer server")?,
+            _ = tokio::signal::ctrl_c() => return Ok(ExitCode::from(130)),
+        }
+        Ok(ExitCode::SUCCESS)
+    })
+}

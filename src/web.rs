@@ -1,0 +1,268 @@
+//! The viewer (feature `web`): an axum server that draws a net in the browser, plays its
+//! token game, and shows its analysis.
+//!
+//! Every asset (HTML, JavaScript, CSS — plain, hand-written, no framework) is compiled into
+//! the binary ([`ASSETS`]), and every response forbids the page to load anything from another
+//! origin (`Content-Security-Policy: default-src 'self'`), so the viewer works with the
+//! network off.
+//!
+//! # API
+//!
+//! | route | what |
+//! |---|---|
+//! | `GET /api/net` | places (name, tokens, capacity, x, y), transitions (name, kind, rate or weight and priority, servers, x, y), arcs (kind, place, transition, weight, bend points), `layout`: `file` or `layered` ([`layout`]) |
+//! | `GET /api/sim/state?trace=K` | `seed, time, firings, marking {place: k}, tokens [k], enabled, firable, vanishing, dead, trace` (last K firings) |
+//! | `POST /api/sim/reset {seed}` | back to the initial marking, with that seed |
+//! | `POST /api/sim/step {n}` | fire `n` transitions drawn by the token game: after a reset with seed S, `n` steps are exactly `plan-runner simulate --seed S --steps n` |
+//! | `POST /api/sim/fire {transition}` | fire one firable transition by hand (409 if it may not fire) |
+//! | `GET /api/analysis` | properties, steady-state mean tokens and throughputs, dead markings with a firing sequence to each; `{error, kind}` (422) for an unbounded net |
+//! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`replay`]), or the token game |
+//! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal |
+//! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log` |
+//! | `POST /api/live/stop` | asks the live run to stop |
+//! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "state", ...}` snapshots (log entries since the previous one), at most one per [`FRAME`] |
+//!
+//! ```no_run
+//! # async fn demo(net: gspn::net::Net) -> std::io::Result<()> {
+//! let state = gspn::web::WebState::new(net, None, 42);
+//! let listener = tokio::net::TcpListener::bind("127.0.0.1:8080").await?;
+//! gspn::web::serve(listener, state).await
+//! # }
+//! ```
+
+mod api;
+pub mod layout;
+mod live;
+pub mod replay;
+mod report;
+mod session;
+
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+
+use axum::Router;
+use axum::http::{HeaderValue, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
+use serde_json::{Value, json};
+use tokio::net::TcpListener;
+use tokio::sync::OnceCell;
+
+use crate::net::Net;
+use crate::policy::Policy;
+pub use live::{FRAME, LiveRun};
+use session::Session;
+
+/// Markings the analysis panel explores before it gives up.
+pub const DEFAULT_MAX_STATES: usize = 2_000_000;
+
+/// The policy every response carries: nothing from another origin, ever.
+pub const CONTENT_SECURITY_POLICY: &str = "default-src 'self'; img-src 'self' data:; \
+     connect-src 'self'; style-src 'self'; script-src 'self'; object-src 'none'; \
+     base-uri 'none'; frame-ancestors 'none'";
+
+/// A file the page loads, compiled into the binary.
+#[derive(Clone, Copy, Debug)]
+pub struct Asset {
+    /// The route it is served at.
+    pub path: &'static str,
+    /// Its `Content-Type`.
+    pub mime: &'static str,
+    /// Its text.
+    pub body: &'static str,
+}
+
+/// Every asset of the page.
+pub const ASSETS: &[Asset] = &[
+    Asset {
+        path: "/",
+        mime: "text/html; charset=utf-8",
+        body: include_str!("web/assets/index.html"),
+    },
+    Asset {
+        path: "/app.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/app.js"),
+    },
+    Asset {
+        path: "/style.css",
+        mime: "text/css; charset=utf-8",
+        body: include_str!("web/assets/style.css"),
+    },
+];
+
+/// What the server shares between requests: the net, the token game, the cached analysis.
+#[derive(Clone, Debug)]
+pub struct WebState {
+    inner: Arc<Inner>,
+}
+
+#[derive(Debug)]
+struct Inner {
+    net: Arc<Net>,
+    seed: u64,
+    session: Mutex<Session>,
+    analysis: Arc<OnceCell<Value>>,
+    max_states: usize,
+    live: OnceLock<LiveRun>,
+    replay: OnceLock<Arc<Vec<replay::Frame>>>,
+}
+
+impl WebState {
+    /// Serves `net`; the token game uses `policy` (if any) for immediate choices and starts
+    /// with `seed`.
+    pub fn new(net: Net, policy: Option<Policy>, seed: u64) -> WebState {
+        WebState::with_max_states(net, policy, seed, DEFAULT_MAX_STATES)
+    }
+
+    /// Like [`WebState::new`], exploring at most `max_states` markings for the analysis.
+    pub fn with_max_states(
+        net: Net,
+        policy: Option<Policy>,
+        seed: u64,
+        max_states: usize,
+    ) -> WebState {
+        let net = Arc::new(net);
+        let session = Session::new(net.clone(), policy.map(Arc::new), seed);
+        WebState {
+            inner: Arc::new(Inner {
+                net,
+                seed,
+                session: Mutex::new(session),
+                analysis: Arc::new(OnceCell::new()),
+                max_states,
+                live: OnceLock::new(),
+                replay: OnceLock::new(),
+            }),
+        }
+    }
+
+    /// A viewer of a running plan: the page follows `live` (and can stop it) instead of
+    /// playing its own token game.
+    pub fn for_live(live: LiveRun) -> WebState {
+        let h = live.handle();
+        let state = WebState::new(Net::clone(h.net()), None, h.seed());
+        let _ = state.inner.live.set(live);
+        state
+    }
+
+    /// A viewer of a recorded run ([`replay::read_journal`]): the page shows a time slider
+    /// over `frames` instead of playing its own token game.
+    pub fn for_replay(net: Net, frames: Vec<replay::Frame>) -> WebState {
+        let state = WebState::new(net, None, 0);
+        let _ = state.inner.replay.set(Arc::new(frames));
+        state
+    }
+
+    fn live(&self) -> Option<&LiveRun> {
+        self.inner.live.get()
+    }
+
+    /// The net being served.
+    pub fn net(&self) -> &Net {
+        &self.inner.net
+    }
+
+    fn session(&self) -> MutexGuard<'_, Session> {
+        // A panic while holding the lock cannot leave the session half-updated in a way
+        // that matters more than refusing every later request would.
+        self.inner
+            .session
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// The token game's state as JSON, with the last `trace` firings.
+    fn sim_json(&self, trace: usize) -> Value {
+        let s = self.session();
+        let net = s.net().clone();
+        let m = s.marking();
+        let enabled: Vec<&str> = net
+            .transition_ids()
+            .filter(|&t| net.is_enabled(m, t))
+            .map(|t| net.transition(t).name.as_str())
+            .collect();
+        let firable: Vec<&str> = net
+            .firable(m)
+            .into_iter()
+            .map(|t| net.transition(t).name.as_str())
+            .collect();
+        json!({
+            "seed": s.seed(),
+            "time": s.time(),
+            "firings": s.firings(),
+            "marking": api::by_place(&net, m),
+            "tokens": m,
+            "text": net.format_marking(m),
+            "enabled": enabled,
+            "firable": firable,
+            "vanishing": net.is_vanishing(m),
+            "dead": firable.is_empty(),
+            "trace": s.trace_tail(trace),
+        })
+    }
+}
+
+/// The viewer's routes: the assets and the [JSON API](self#api).
+pub fn router(state: WebState) -> Router {
+    let mut r = Router::new();
+    for asset in ASSETS {
+        r = r.route(
+            asset.path,
+            get(move || async move { asset_response(asset) }),
+        );
+    }
+    r.route("/api/net", get(api::net))
+        .route("/api/sim/state", get(api::sim_state))
+        .route("/api/sim/reset", post(api::sim_reset))
+        .route("/api/sim/step", post(api::sim_step))
+        .route("/api/sim/fire", post(api::sim_fire))
+        .route("/api/analysis", get(api::analysis))
+        .route("/api/mode", get(mode))
+        .route("/api/replay", get(replay_frames))
+        .route("/api/live/state", get(live::state))
+        .route("/api/live/stop", post(live::stop))
+        .route("/api/live/ws", get(live::ws))
+        .fallback(|| async { api::error(StatusCode::NOT_FOUND, "no such route") })
+        .layer(axum::middleware::map_response(add_security_headers))
+        .with_state(state)
+}
+
+/// `GET /api/mode`: `{"live": bool, "replay": bool}` — a running plan, a recorded one, or
+/// neither (the token game).
+async fn mode(axum::extract::State(state): axum::extract::State<WebState>) -> axum::Json<Value> {
+    axum::Json(json!({
+        "live": state.live().is_some(),
+        "replay": state.inner.replay.get().is_some(),
+    }))
+}
+
+/// `GET /api/replay`: `{"frames": [{time, transition, tokens}]}` (404 without a recording).
+async fn replay_frames(axum::extract::State(state): axum::extract::State<WebState>) -> Response {
+    match state.inner.replay.get() {
+        Some(frames) => axum::Json(json!({ "frames": **frames })).into_response(),
+        None => api::error(StatusCode::NOT_FOUND, "no recorded run"),
+    }
+}
+
+async fn add_security_headers(mut res: Response) -> Response {
+    let h = res.headers_mut();
+    h.insert(
+        header::CONTENT_SECURITY_POLICY,
+        HeaderValue::from_static(CONTENT_SECURITY_POLICY),
+    );
+    h.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-cache"));
+    res
+}
+
+fn asset_response(asset: &'static Asset) -> Response {
+    (
+        [(header::CONTENT_TYPE, HeaderValue::from_static(asset.mime))],
+        asset.body,
+    )
+        .into_response()
+}
+
+/// Serves the viewer on `listener` until the task is dropped or the listener fails.
+pub async fn serve(listener: TcpListener, state: WebState) -> std::io::Result<()> {
+    axum::serve(listener, router(state)).await
+}

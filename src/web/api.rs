@@ -1,0 +1,222 @@
+//! The JSON API: the net and its layout, the token game, the analysis.
+
+use axum::Json;
+use axum::extract::{Query, State};
+use axum::http::StatusCode;
+use axum::response::{IntoResponse, Response};
+use serde::Deserialize;
+use serde_json::{Map, Value, json};
+
+use crate::net::{ArcKind, Net, Servers, Timing};
+use crate::web::WebState;
+use crate::web::layout::layout;
+use crate::web::session::SessionError;
+
+/// An error as `{"error": "..."}` with a status.
+pub(crate) fn error(status: StatusCode, message: impl Into<String>) -> Response {
+    (status, Json(json!({ "error": message.into() }))).into_response()
+}
+
+/// `GET /api/net`: places, transitions, arcs and the layout.
+pub(crate) async fn net(State(state): State<WebState>) -> Json<Value> {
+    Json(net_json(&state.inner.net, state.inner.seed))
+}
+
+/// The net as the page draws it.
+pub(crate) fn net_json(net: &Net, seed: u64) -> Value {
+    let l = layout(net);
+    let places: Vec<Value> = net
+        .places()
+        .iter()
+        .zip(&l.places)
+        .enumerate()
+        .map(|(i, (p, pos))| {
+            json!({
+                "id": i, "name": p.name, "tokens": p.initial, "capacity": p.capacity,
+                "x": pos.x, "y": pos.y,
+            })
+        })
+        .collect();
+    let transitions: Vec<Value> = net
+        .transitions()
+        .iter()
+        .zip(&l.transitions)
+        .enumerate()
+        .map(|(i, (t, pos))| {
+            let mut v = json!({ "id": i, "name": t.name, "x": pos.x, "y": pos.y });
+            match t.timing {
+                Timing::Immediate { weight, priority } => {
+                    v["kind"] = json!("immediate");
+                    v["weight"] = json!(weight);
+                    v["priority"] = json!(priority);
+                }
+                Timing::Exponential { rate, servers } => {
+                    v["kind"] = json!("exponential");
+                    v["rate"] = json!(rate);
+                    v["servers"] = match servers {
+                        Servers::Single => json!("single"),
+                        Servers::Infinite => json!("infinite"),
+                        Servers::K(k) => json!(k),
+                    };
+                }
+            }
+            v
+        })
+        .collect();
+    let arcs: Vec<Value> = net
+        .arcs()
+        .iter()
+        .map(|a| {
+            let kind = match a.kind {
+                ArcKind::Input => "input",
+                ArcKind::Output => "output",
+                ArcKind::Inhibitor => "inhibitor",
+            };
+            let points: Vec<Value> = a.points.iter().map(|p| json!([p.x, p.y])).collect();
+            json!({
+                "kind": kind, "place": a.place.index(), "transition": a.transition.index(),
+                "weight": a.weight, "points": points,
+            })
+        })
+        .collect();
+    json!({
+        "name": net.name(),
+        "seed": seed,
+        "layout": l.source,
+        "places": places,
+        "transitions": transitions,
+        "arcs": arcs,
+    })
+}
+
+/// Query of `GET /api/sim/state`.
+#[derive(Debug, Deserialize)]
+pub(crate) struct StateQuery {
+    /// Trace entries to return (the most recent; default 200).
+    trace: Option<usize>,
+}
+
+/// `GET /api/sim/state`.
+pub(crate) async fn sim_state(
+    State(state): State<WebState>,
+    Query(q): Query<StateQuery>,
+) -> Json<Value> {
+    Json(state.sim_json(q.trace.unwrap_or(200)))
+}
+
+/// Body of `POST /api/sim/reset`.
+#[derive(Debug, Default, Deserialize)]
+pub(crate) struct ResetBody {
+    /// New seed; the current one when absent.
+    seed: Option<u64>,
+}
+
+/// `POST /api/sim/reset {seed}`.
+pub(crate) async fn sim_reset(
+    State(state): State<WebState>,
+    body: Option<Json<ResetBody>>,
+) -> Json<Value> {
+    let seed = body.and_then(|Json(b)| b.seed);
+    state.session().reset(seed);
+    Json(state.sim_json(200))
+}
+
+/// Body of `POST /api/sim/step`.
+#[derive(Debug, Default, Deserialize)]
+pub(crate) struct StepBody {
+    /// Firings to do (default 1).
+    n: Option<u64>,
+}
+
+/// Most firings one `step` request may ask for.
+const MAX_STEP: u64 = 1_000_000;
+
+/// `POST /api/sim/step {n}`.
+pub(crate) async fn sim_step(
+    State(state): State<WebState>,
+    body: Option<Json<StepBody>>,
+) -> Response {
+    let n = body.and_then(|Json(b)| b.n).unwrap_or(1);
+    if n > MAX_STEP {
+        return error(
+            StatusCode::BAD_REQUEST,
+            format!("n = {n}: at most {MAX_STEP} steps per request"),
+        );
+    }
+    let result = state.session().step(n);
+    match result {
+        Ok(fired) => {
+            let mut v = state.sim_json(200);
+            v["fired"] = json!(fired);
+            Json(v).into_response()
+        }
+        Err(e) => session_error(e),
+    }
+}
+
+/// Body of `POST /api/sim/fire`.
+#[derive(Debug, Deserialize)]
+pub(crate) struct FireBody {
+    /// Name of the transition to fire.
+    transition: String,
+}
+
+/// `POST /api/sim/fire {transition}`.
+pub(crate) async fn sim_fire(State(state): State<WebState>, Json(b): Json<FireBody>) -> Response {
+    let result = state.session().fire(&b.transition);
+    match result {
+        Ok(()) => Json(state.sim_json(200)).into_response(),
+        Err(e) => session_error(e),
+    }
+}
+
+fn session_error(e: SessionError) -> Response {
+    let status = match e {
+        SessionError::UnknownTransition(_) => StatusCode::NOT_FOUND,
+        SessionError::NotFirable(_) => StatusCode::CONFLICT,
+        SessionError::Sim(_) | SessionError::Net(_) => StatusCode::UNPROCESSABLE_ENTITY,
+    };
+    error(status, e.to_string())
+}
+
+/// `{name: value}` over the places.
+pub(crate) fn by_place<T: serde::Serialize>(net: &Net, values: &[T]) -> Value {
+    Value::Object(
+        net.places()
+            .iter()
+            .zip(values)
+            .map(|(p, v)| (p.name.clone(), json!(v)))
+            .collect::<Map<_, _>>(),
+    )
+}
+
+/// `{name: value}` over the transitions.
+pub(crate) fn by_transition<T: serde::Serialize>(net: &Net, values: &[T]) -> Value {
+    Value::Object(
+        net.transitions()
+            .iter()
+            .zip(values)
+            .map(|(t, v)| (t.name.clone(), json!(v)))
+            .collect::<Map<_, _>>(),
+    )
+}
+
+/// `GET /api/analysis`: computed once (on a blocking thread), then cached.
+pub(crate) async fn analysis(State(state): State<WebState>) -> Response {
+    let cell = state.inner.analysis.clone();
+    let net = state.inner.net.clone();
+    let max_states = state.inner.max_states;
+    let value = cell
+        .get_or_init(|| async move {
+            tokio::task::spawn_blocking(move || crate::web::report::analyse(&net, max_states))
+                .await
+                .unwrap_or_else(|e| json!({ "error": format!("analysis task failed: {e}") }))
+        })
+        .await;
+    let status = if value.get("error").is_some() {
+        StatusCode::UNPROCESSABLE_ENTITY
+    } else {
+        StatusCode::OK
+    };
+    (status, Json(value.clone())).into_response()
+}

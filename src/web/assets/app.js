@@ -1,0 +1,599 @@
+// gspn viewer: draws the net in SVG, plays the token game through the JSON API, shows the
+// analysis. Plain JavaScript, no library, nothing loaded from anywhere but this server.
+//
+// Test hooks (stable): each place's <g> has data-place="NAME" data-tokens="K"; each
+// transition's <g> has data-transition="NAME" data-enabled="true|false" (true = it may fire
+// now under GSPN rules); buttons #step #step-n #run #reset, seed field #seed, trace #trace.
+'use strict';
+
+// An XML namespace name, not an address: nothing is ever fetched from it.
+const SVG_NS = 'http://www.w3.org/2000/svg';
+const R = 18; // place radius
+const TH = 30; // transition height
+
+let net = null;
+let state = null;
+let view = { x: 0, y: 0, k: 1 };
+let runTimer = null;
+let busy = false;
+const placeEls = [];
+const transEls = [];
+const arcEls = [];
+const arcsOfPlace = [];
+const arcsOfTransition = [];
+
+const $ = (id) => document.getElementById(id);
+
+function el(tag, attrs, parent) {
+  const e = document.createElementNS(SVG_NS, tag);
+  for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+  if (parent) parent.appendChild(e);
+  return e;
+}
+
+function status(text) {
+  $('status').textContent = text || '';
+}
+
+async function api(method, path, body) {
+  const opts = { method, headers: {} };
+  if (body !== undefined) {
+    opts.headers['Content-Type'] = 'application/json';
+    opts.body = JSON.stringify(body);
+  }
+  const res = await fetch(path, opts);
+  const data = await res.json();
+  if (!res.ok) throw new Error(data.error || res.statusText);
+  return data;
+}
+
+function fmt(x) {
+  if (typeof x !== 'number') return String(x);
+  if (Number.isInteger(x)) return String(x);
+  return Number(x.toPrecision(4)).toString();
+}
+
+function transitionWidth(t) {
+  return t.kind === 'immediate' ? 6 : 20;
+}
+
+function paramText(t) {
+  if (t.kind === 'immediate') {
+    return 'w=' + fmt(t.weight) + (t.priority !== 1 ? ' π=' + t.priority : '');
+  }
+  const s = t.servers === 'single' ? '' : t.servers === 'infinite' ? ' ∞' : ' ×' + t.servers;
+  return 'λ=' + fmt(t.rate) + s;
+}
+
+// ---- drawing ---------------------------------------------------------------------------
+
+// Files use different units (GreatSPN: about one per grid cell; PIPE: pixels): scale the
+// drawing so that nodes sit at least ~70 px from their nearest neighbour (median).
+function scaleCoordinates() {
+  const nodes = net.places.concat(net.transitions).slice(0, 400);
+  if (nodes.length < 2) return;
+  const nearest = nodes.map((a) => {
+    let best = Infinity;
+    for (const b of nodes) {
+      const d = Math.hypot(a.x - b.x, a.y - b.y);
+      if (b !== a && d > 0 && d < best) best = d;
+    }
+    return best;
+  }).filter(Number.isFinite).sort((x, y) => x - y);
+  if (!nearest.length) return;
+  const s = 70 / nearest[Math.floor(nearest.length / 2)];
+  if (s <= 1) return;
+  for (const n of net.places.concat(net.transitions)) {
+    n.x *= s;
+    n.y *= s;
+  }
+  for (const a of net.arcs) a.points = a.points.map((q) => [q[0] * s, q[1] * s]);
+}
+
+function drawNet() {
+  const arcs = $('arcs');
+  const nodes = $('nodes');
+  arcs.textContent = '';
+  nodes.textContent = '';
+  placeEls.length = transEls.length = arcEls.length = 0;
+  arcsOfPlace.length = arcsOfTransition.length = 0;
+  net.places.forEach((p, i) => {
+    const g = el('g', { class: 'node place', 'data-place': p.name, 'data-tokens': '' }, nodes);
+    g.dataset.index = i;
+    el('circle', { class: 'body', r: R }, g);
+    g.tokens = el('g', {}, g);
+    const label = el('text', { class: 'label', y: R + 13 }, g);
+    label.textContent = p.name;
+    if (p.capacity !== null && p.capacity !== undefined) {
+      const cap = el('text', { class: 'param', y: -R - 5 }, g);
+      cap.textContent = 'cap ' + p.capacity;
+    }
+    const title = el('title', {}, g);
+    title.textContent = p.name;
+    placeEls.push(g);
+    arcsOfPlace.push([]);
+    setTokens(i, p.tokens);
+    move(g, p);
+  });
+  net.transitions.forEach((t, i) => {
+    const g = el('g', {
+      class: 'node transition ' + t.kind,
+      'data-transition': t.name,
+      'data-enabled': 'false',
+    }, nodes);
+    g.dataset.index = i;
+    const w = transitionWidth(t);
+    el('rect', { x: -w / 2, y: -TH / 2, width: w, height: TH }, g);
+    const label = el('text', { class: 'label', y: TH / 2 + 13 }, g);
+    label.textContent = t.name;
+    const param = el('text', { class: 'param', y: -TH / 2 - 5 }, g);
+    param.textContent = paramText(t);
+    const title = el('title', {}, g);
+    title.textContent = t.name + ' (' + t.kind + ', ' + paramText(t) + ')';
+    transEls.push(g);
+    arcsOfTransition.push([]);
+    move(g, t);
+  });
+  net.arcs.forEach((a, i) => {
+    const path = el('path', {
+      class: 'arc ' + a.kind,
+      'marker-end': a.kind === 'inhibitor' ? 'url(#inhibitor)' : 'url(#arrow)',
+    }, arcs);
+    let weight = null;
+    if (a.weight > 1) {
+      weight = el('text', { class: 'arc-weight' }, arcs);
+      weight.textContent = String(a.weight);
+    }
+    arcEls.push({ path, weight });
+    arcsOfPlace[a.place].push(i);
+    arcsOfTransition[a.transition].push(i);
+    drawArc(i);
+  });
+}
+
+function move(g, node) {
+  g.setAttribute('transform', 'translate(' + node.x + ',' + node.y + ')');
+}
+
+// The point where the segment from `c` towards `o` leaves a box of half-size hw × hh.
+function clipBox(c, o, hw, hh) {
+  const dx = o[0] - c[0];
+  const dy = o[1] - c[1];
+  if (dx === 0 && dy === 0) return c;
+  const s = Math.min(dx !== 0 ? hw / Math.abs(dx) : Infinity, dy !== 0 ? hh / Math.abs(dy) : Infinity);
+  return [c[0] + dx * s, c[1] + dy * s];
+}
+
+function clipCircle(c, o, r) {
+  const dx = o[0] - c[0];
+  const dy = o[1] - c[1];
+  const d = Math.hypot(dx, dy) || 1;
+  return [c[0] + (dx / d) * r, c[1] + (dy / d) * r];
+}
+
+function drawArc(i) {
+  const a = net.arcs[i];
+  const p = net.places[a.place];
+  const t = net.transitions[a.transition];
+  const pc = [p.x, p.y];
+  const tc = [t.x, t.y];
+  const fromPlace = a.kind !== 'output';
+  const bends = a.points.map((q) => [q[0], q[1]]);
+  const pts = fromPlace ? [pc, ...bends, tc] : [tc, ...bends, pc];
+  const n = pts.length;
+  const clipT = (c, o) => clipBox(c, o, transitionWidth(t) / 2 + 1, TH / 2 + 1);
+  const clipP = (c, o) => clipCircle(c, o, R + 1);
+  pts[0] = fromPlace ? clipP(pts[0], pts[1]) : clipT(pts[0], pts[1]);
+  pts[n - 1] = fromPlace ? clipT(pts[n - 1], pts[n - 2]) : clipP(pts[n - 1], pts[n - 2]);
+  const { path, weight } = arcEls[i];
+  path.setAttribute('d', 'M' + pts.map((q) => q[0].toFixed(1) + ' ' + q[1].toFixed(1)).join(' L'));
+  if (weight) {
+    const m = Math.floor((n - 1) / 2);
+    weight.setAttribute('x', ((pts[m][0] + pts[m + 1][0]) / 2 + 4).toFixed(1));
+    weight.setAttribute('y', ((pts[m][1] + pts[m + 1][1]) / 2 - 4).toFixed(1));
+  }
+}
+
+// Dots up to 5 tokens, the number beyond; the number is always in a badge too.
+function setTokens(i, k) {
+  const g = placeEls[i];
+  if (g.getAttribute('data-tokens') === String(k)) return;
+  g.setAttribute('data-tokens', String(k));
+  const t = g.tokens;
+  t.textContent = '';
+  const dots = {
+    1: [[0, 0]],
+    2: [[-5, 0], [5, 0]],
+    3: [[-6, 4], [6, 4], [0, -6]],
+    4: [[-5, -5], [5, -5], [-5, 5], [5, 5]],
+    5: [[-6, -6], [6, -6], [0, 0], [-6, 6], [6, 6]],
+  }[k];
+  if (dots) {
+    for (const [x, y] of dots) el('circle', { class: 'dot', cx: x, cy: y, r: 3.5 }, t);
+  } else if (k > 5) {
+    el('text', { class: 'count' }, t).textContent = String(k);
+  }
+  if (k > 0) {
+    el('text', { class: 'badge', x: R * 0.75, y: -R * 0.75 }, t).textContent = String(k);
+  }
+}
+
+function applyState(s) {
+  state = s;
+  s.tokens.forEach((k, i) => setTokens(i, k));
+  const firable = new Set(s.firable);
+  net.transitions.forEach((t, i) => {
+    transEls[i].setAttribute('data-enabled', firable.has(t.name) ? 'true' : 'false');
+    transEls[i].classList.remove('fired');
+  });
+  const last = s.trace.length ? s.trace[s.trace.length - 1] : null;
+  if (last) {
+    const i = net.transitions.findIndex((t) => t.name === last.transition);
+    if (i >= 0) transEls[i].classList.add('fired');
+  }
+  if (document.activeElement !== $('seed')) $('seed').value = s.seed;
+  $('clock').textContent =
+    'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
+    (s.dead ? ' — dead marking' : s.vanishing ? ' — vanishing' : '');
+  $('marking-text').textContent = s.text;
+  const ol = $('trace');
+  ol.textContent = '';
+  for (const e of s.trace) {
+    const li = document.createElement('li');
+    li.value = e.step;
+    li.textContent = fmt(e.time) + '  ' + e.transition + '  → ' + e.marking;
+    if (e.manual) li.className = 'manual';
+    ol.appendChild(li);
+  }
+  ol.scrollTop = ol.scrollHeight;
+  if (s.dead) stopRun();
+}
+
+// ---- pan, zoom, drag -------------------------------------------------------------------
+
+function applyView() {
+  $('viewport').setAttribute('transform', 'translate(' + view.x + ',' + view.y + ') scale(' + view.k + ')');
+}
+
+function fit() {
+  const svg = $('net');
+  const all = net.places.concat(net.transitions);
+  if (!all.length) return;
+  const xs = all.map((n) => n.x);
+  const ys = all.map((n) => n.y);
+  const x0 = Math.min(...xs) - 50;
+  const y0 = Math.min(...ys) - 50;
+  const w = Math.max(...xs) + 50 - x0;
+  const h = Math.max(...ys) + 50 - y0;
+  const k = Math.min(svg.clientWidth / w, svg.clientHeight / h, 2);
+  view = { k, x: -x0 * k + (svg.clientWidth - w * k) / 2, y: -y0 * k + (svg.clientHeight - h * k) / 2 };
+  applyView();
+}
+
+function setupInteraction() {
+  const svg = $('net');
+  let drag = null;
+  svg.addEventListener('wheel', (ev) => {
+    ev.preventDefault();
+    const rect = svg.getBoundingClientRect();
+    const mx = ev.clientX - rect.left;
+    const my = ev.clientY - rect.top;
+    const f = Math.exp(-ev.deltaY * 0.001);
+    view.x = mx - (mx - view.x) * f;
+    view.y = my - (my - view.y) * f;
+    view.k *= f;
+    applyView();
+  }, { passive: false });
+  svg.addEventListener('mousedown', (ev) => {
+    const g = ev.target.closest('.node');
+    drag = { g, sx: ev.clientX, sy: ev.clientY, moved: false };
+    if (!g) svg.classList.add('panning');
+  });
+  window.addEventListener('mousemove', (ev) => {
+    if (!drag) return;
+    const dx = ev.clientX - drag.sx;
+    const dy = ev.clientY - drag.sy;
+    if (Math.abs(dx) + Math.abs(dy) > 2) drag.moved = true;
+    drag.sx = ev.clientX;
+    drag.sy = ev.clientY;
+    if (!drag.g) {
+      view.x += dx;
+      view.y += dy;
+      applyView();
+      return;
+    }
+    const i = Number(drag.g.dataset.index);
+    const isPlace = drag.g.classList.contains('place');
+    const node = isPlace ? net.places[i] : net.transitions[i];
+    node.x += dx / view.k;
+    node.y += dy / view.k;
+    move(drag.g, node);
+    for (const a of (isPlace ? arcsOfPlace : arcsOfTransition)[i]) drawArc(a);
+  });
+  window.addEventListener('mouseup', () => {
+    const d = drag;
+    drag = null;
+    svg.classList.remove('panning');
+    if (d && d.g && !d.moved && d.g.classList.contains('transition') &&
+        d.g.getAttribute('data-enabled') === 'true') {
+      fire(d.g.getAttribute('data-transition'));
+    }
+  });
+}
+
+// ---- token game ------------------------------------------------------------------------
+
+async function act(method, path, body) {
+  if (busy) return;
+  busy = true;
+  try {
+    applyState(await api(method, path, body));
+    status('');
+  } catch (e) {
+    status(e.message);
+    stopRun();
+  } finally {
+    busy = false;
+  }
+}
+
+function fire(name) {
+  return act('POST', '/api/sim/fire', { transition: name });
+}
+
+function stopRun() {
+  if (runTimer !== null) clearInterval(runTimer);
+  runTimer = null;
+  $('run').textContent = 'run';
+}
+
+function startRun() {
+  stopRun();
+  const speed = Number($('speed').value) || 1;
+  runTimer = setInterval(() => act('POST', '/api/sim/step', { n: 1 }), 1000 / speed);
+  $('run').textContent = 'pause';
+}
+
+function setupControls() {
+  $('step').addEventListener('click', () => act('POST', '/api/sim/step', { n: 1 }));
+  $('step-n').addEventListener('click', () =>
+    act('POST', '/api/sim/step', { n: Math.max(1, Number($('n').value) || 1) }));
+  $('reset').addEventListener('click', () => {
+    stopRun();
+    const seed = Number($('seed').value);
+    act('POST', '/api/sim/reset', Number.isSafeInteger(seed) && seed >= 0 ? { seed } : {});
+  });
+  $('run').addEventListener('click', () => {
+    if (!state) return; // replay and live modes drive #run themselves
+    if (runTimer === null) startRun();
+    else stopRun();
+  });
+  $('speed').addEventListener('input', () => {
+    $('speed-value').textContent = $('speed').value;
+    if (runTimer !== null) startRun();
+  });
+  $('fit').addEventListener('click', fit);
+  $('analyze').addEventListener('click', analyse);
+}
+
+// ---- analysis --------------------------------------------------------------------------
+
+// Bars in the net's order (`names`), not the JSON object's.
+function bars(title, values, cls, names) {
+  const entries = names.filter((n) => n in values).map((n) => [n, values[n]]);
+  const max = Math.max(1e-300, ...entries.map(([, v]) => v));
+  let html = '<h4>' + title + '</h4><table>';
+  for (const [name, v] of entries) {
+    html += '<tr><td>' + escapeHtml(name) + '</td><td class="mono">' + fmt(v) +
+      '</td><td class="barcell"><div class="bar ' + cls + '" data-width="' +
+      (100 * v / max).toFixed(1) + '"></div></td></tr>';
+  }
+  return html + '</table>';
+}
+
+function escapeHtml(s) {
+  return String(s).replace(/[&<>"']/g, (c) => '&#' + c.charCodeAt(0) + ';');
+}
+
+async function analyse() {
+  const out = $('analysis');
+  out.textContent = 'analysing…';
+  let a;
+  try {
+    const res = await fetch('/api/analysis');
+    a = await res.json();
+  } catch (e) {
+    out.innerHTML = '<p class="error">' + escapeHtml(e.message) + '</p>';
+    return;
+  }
+  if (a.error) {
+    out.innerHTML = '<p class="error">' + escapeHtml(a.error) + '</p>';
+    return;
+  }
+  let html = '<p>' + a.reachable + ' reachable markings (' + a.tangible + ' tangible, ' +
+    a.vanishing + ' vanishing); safe: ' + a.safe + '; reversible: ' + a.reversible +
+    '; deadlock-free: ' + a.deadlock_free + '</p>';
+  if (a.steady) {
+    html += bars('mean tokens' + (a.steady.ergodic ? '' : ' (limiting)'), a.steady.mean_tokens, 'tok',
+      net.places.map((p) => p.name));
+    html += bars('throughput', a.steady.throughput, 'thr', net.transitions.map((t) => t.name));
+  } else if (a.steady_error) {
+    html += '<p class="error">' + escapeHtml(a.steady_error) + '</p>';
+  }
+  html += '<h4>dead markings (' + a.dead_markings.length + ')</h4><ol>';
+  a.dead_markings.forEach((d, i) => {
+    html += '<li class="dead mono" data-dead="' + i + '" title="click to replay">' +
+      escapeHtml(d.text || '(empty)') + ' ← ' + escapeHtml(d.path.join(' ')) + '</li>';
+  });
+  out.innerHTML = html + '</ol>';
+  // Widths through the CSSOM: the page's policy forbids inline style attributes.
+  for (const b of out.querySelectorAll('.bar')) b.style.width = b.dataset.width + '%';
+  for (const li of out.querySelectorAll('[data-dead]')) {
+    li.addEventListener('click', () => replay(a.dead_markings[Number(li.dataset.dead)].path));
+  }
+}
+
+// Replays a firing sequence from the initial marking, one firing at a time.
+async function replay(path) {
+  stopRun();
+  await act('POST', '/api/sim/reset', {});
+  for (const name of path) {
+    await new Promise((r) => setTimeout(r, 250));
+    await fire(name);
+  }
+}
+
+// ---- live run --------------------------------------------------------------------------
+
+// Follows a running plan: the server sends the net, then snapshots; on a lost connection
+// the page reconnects and the server starts again with the net and the current snapshot.
+function startLive() {
+  for (const id of ['step', 'step-n', 'run', 'reset', 'n', 'seed', 'trace-panel']) {
+    const e = $(id);
+    (e.closest('label') || e).classList.add('hidden');
+  }
+  $('speed').closest('label').classList.add('hidden');
+  $('stop').classList.remove('hidden');
+  $('log-panel').classList.remove('hidden');
+  $('stop').addEventListener('click', () =>
+    api('POST', '/api/live/stop').catch((e) => status(e.message)));
+  connectLive();
+}
+
+function connectLive() {
+  const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  const socket = new WebSocket(scheme + '//' + location.host + '/api/live/ws');
+  socket.onmessage = (ev) => {
+    const msg = JSON.parse(ev.data);
+    if (msg.type === 'net') {
+      const first = net === null;
+      net = msg;
+      scaleCoordinates();
+      drawNet();
+      if (first) fit();
+      $('log').textContent = '';
+    } else if (msg.type === 'state') {
+      applyLive(msg);
+    }
+  };
+  socket.onopen = () => status('');
+  socket.onclose = () => {
+    status('connection lost, reconnecting…');
+    setTimeout(connectLive, 1000);
+  };
+}
+
+function applyLive(s) {
+  s.tokens.forEach((k, i) => setTokens(i, k));
+  const firable = new Set(s.firable);
+  net.transitions.forEach((t, i) =>
+    transEls[i].setAttribute('data-enabled', firable.has(t.name) ? 'true' : 'false'));
+  net.places.forEach((p, i) => {
+    const g = placeEls[i];
+    const agents = s.agents[p.name];
+    let label = g.querySelector('text.agents');
+    if (!agents) {
+      if (label) label.remove();
+      return;
+    }
+    if (!label) label = el('text', { class: 'agents', y: R + 25 }, g);
+    label.textContent = Object.entries(agents).map(([k, n]) => k + ' ' + n).join(', ');
+  });
+  $('clock').textContent = 'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
+    (s.stopped ? ' — stopped: ' + s.stopped : '') +
+    (s.lagged ? ' (' + s.lagged + ' events skipped)' : '');
+  $('marking-text').textContent = s.text;
+  const ol = $('log');
+  for (const e of s.log) {
+    const li = document.createElement('li');
+    li.value = e.seq;
+    li.textContent = fmt(e.time) + '  ' + e.text;
+    ol.appendChild(li);
+  }
+  while (ol.childElementCount > 500) ol.firstElementChild.remove();
+  ol.scrollTop = ol.scrollHeight;
+  if (s.stopped) $('stop').disabled = true;
+}
+
+// ---- replay ----------------------------------------------------------------------------
+
+// Plays a journal back: the slider picks a frame (the marking after each firing); `run`
+// plays the frames at the chosen speed.
+async function startReplay() {
+  for (const id of ['step', 'step-n', 'reset', 'n', 'seed']) {
+    const e = $(id);
+    (e.closest('label') || e).classList.add('hidden');
+  }
+  const { frames } = await api('GET', '/api/replay');
+  const slider = $('slider');
+  slider.max = String(frames.length - 1);
+  $('slider-label').classList.remove('hidden');
+  const show = (i) => {
+    const f = frames[i];
+    slider.value = String(i);
+    f.tokens.forEach((k, p) => setTokens(p, k));
+    net.transitions.forEach((t, j) => transEls[j].classList.toggle('fired', t.name === f.transition));
+    $('frame').textContent = i + '/' + (frames.length - 1);
+    $('clock').textContent = 'time ' + fmt(f.time) + ', ' + i + ' firings' +
+      (f.transition ? ' — ' + f.transition + ' fired' : '');
+  };
+  slider.addEventListener('input', () => show(Number(slider.value)));
+  const ol = $('trace');
+  ol.textContent = '';
+  frames.slice(1).forEach((f, i) => {
+    const li = document.createElement('li');
+    li.textContent = fmt(f.time) + '  ' + f.transition;
+    li.addEventListener('click', () => show(i + 1));
+    ol.appendChild(li);
+  });
+  let timer = null;
+  $('run').addEventListener('click', () => {
+    if (timer !== null) {
+      clearInterval(timer);
+      timer = null;
+      $('run').textContent = 'run';
+      return;
+    }
+    $('run').textContent = 'pause';
+    timer = setInterval(() => {
+      const i = Number(slider.value) + 1;
+      if (i >= frames.length) {
+        clearInterval(timer);
+        timer = null;
+        $('run').textContent = 'run';
+        return;
+      }
+      show(i);
+    }, 1000 / (Number($('speed').value) || 1));
+  });
+  show(0);
+}
+
+// ---- start -----------------------------------------------------------------------------
+
+async function main() {
+  setupControls();
+  setupInteraction();
+  try {
+    const mode = await api('GET', '/api/mode');
+    if (mode.live) {
+      startLive();
+      return;
+    }
+    net = await api('GET', '/api/net');
+    $('title').textContent = net.name + (net.layout === 'layered' ? ' (automatic layout)' : '');
+    document.title = net.name + ' — gspn';
+    scaleCoordinates();
+    drawNet();
+    fit();
+    if (mode.replay) {
+      await startReplay();
+      return;
+    }
+    applyState(await api('GET', '/api/sim/state'));
+  } catch (e) {
+    status(e.message);
+  }
+}
+
+main();

@@ -1,0 +1,282 @@
+//! The live view of a running plan: the run's events folded into one snapshot (marking,
+//! clock, agents, recent events), pushed to every browser over a WebSocket.
+//!
+//! A browser that connects — first, late, or again after losing the connection — gets the
+//! net first, then the current snapshot, then a new snapshot whenever something changed, at
+//! most one per [`FRAME`]: events are coalesced to what a browser can draw, and a slow
+//! browser only ever skips to the latest state (the fold never waits for it).
+
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Duration;
+
+use axum::extract::State;
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::response::Response;
+use serde_json::{Map, Value, json};
+use tokio::sync::watch;
+
+use crate::net::Net;
+use crate::runtime::{EventKind, Events, Received, RuntimeHandle};
+use crate::web::WebState;
+use crate::web::api::net_json;
+
+/// Shortest time between two snapshots sent to one browser.
+pub const FRAME: Duration = Duration::from_millis(50);
+
+/// Events kept for the log (the oldest are dropped past this).
+const LOG_KEEP: usize = 500;
+
+/// A running plan as the viewer shows it. Cheap to clone.
+#[derive(Clone, Debug)]
+pub struct LiveRun {
+    inner: Arc<LiveInner>,
+}
+
+#[derive(Debug)]
+struct LiveInner {
+    handle: Arc<RuntimeHandle>,
+    snapshot: Mutex<Snapshot>,
+    version: watch::Sender<u64>,
+}
+
+#[derive(Debug)]
+struct Snapshot {
+    tokens: Vec<u32>,
+    time: f64,
+    firings: u64,
+    stopped: Option<String>,
+    /// Events missed because the fold fell behind the bus.
+    lagged: u64,
+    log: VecDeque<Value>,
+}
+
+impl LiveRun {
+    /// Follows `handle`'s run through `events` (take them with
+    /// [`RuntimeHandle::events`] before wrapping the handle in an `Arc`). Spawns the task
+    /// that folds the events: call it inside a tokio runtime.
+    pub fn start(handle: Arc<RuntimeHandle>, events: Events) -> LiveRun {
+        let tokens = handle.net().initial_marking().into_vec();
+        let (version, _) = watch::channel(0);
+        let live = LiveRun {
+            inner: Arc::new(LiveInner {
+                handle,
+                snapshot: Mutex::new(Snapshot {
+                    tokens,
+                    time: 0.0,
+                    firings: 0,
+                    stopped: None,
+                    lagged: 0,
+                    log: VecDeque::new(),
+                }),
+                version,
+            }),
+        };
+        tokio::spawn(live.clone().fold(events));
+        live
+    }
+
+    /// The run's handle (to stop it, or wait for it).
+    pub fn handle(&self) -> &Arc<RuntimeHandle> {
+        &self.inner.handle
+    }
+
+    fn net(&self) -> &Net {
+        self.inner.handle.net()
+    }
+
+    fn snapshot(&self) -> MutexGuard<'_, Snapshot> {
+        self.inner
+            .snapshot
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    async fn fold(self, mut events: Events) {
+        while let Some(r) = events.recv().await {
+            {
+                let net = self.net();
+                let mut s = self.snapshot();
+                match r {
+                    Received::Lagged(n) => s.lagged += n,
+                    Received::Event(e) => {
+                        s.time = s.time.max(e.time);
+                        match &e.kind {
+                            EventKind::Fired { marking, .. } => {
+                                s.firings += 1;
+                                s.tokens.copy_from_slice(marking.as_slice());
+                            }
+                            EventKind::Stopped { reason } => s.stopped = Some(reason.to_string()),
+                            _ => {}
+                        }
+                        if s.log.len() == LOG_KEEP {
+                            s.log.pop_front();
+                        }
+                        let mut v = serde_json::to_value(&e).unwrap_or(Value::Null);
+                        v["text"] = json!(describe(net, &e.kind));
+                        if let Some(m) = v.as_object_mut() {
+                            m.remove("marking");
+                        }
+                        s.log.push_back(v);
+                    }
+                }
+            }
+            self.inner.version.send_modify(|v| *v += 1);
+        }
+        // The bus closed: the run is over.
+        let summary = self.inner.handle.wait().await;
+        {
+            let mut s = self.snapshot();
+            s.tokens.copy_from_slice(summary.marking.as_slice());
+            s.stopped.get_or_insert_with(|| summary.stopped.to_string());
+        }
+        self.inner.version.send_modify(|v| *v += 1);
+    }
+
+    /// The snapshot as JSON, with the log entries after `after_seq` (all kept ones if `None`).
+    async fn state_json(&self, after_seq: Option<u64>) -> Value {
+        let agents = self.inner.handle.agents().await;
+        let net = self.net();
+        let mut per_place: Vec<Map<String, Value>> = vec![Map::new(); net.place_count()];
+        for a in &agents {
+            let state = serde_json::to_value(a.state).unwrap_or(Value::Null);
+            let key = state.as_str().unwrap_or("?").to_string();
+            let count = per_place[a.place.index()].entry(key).or_insert(json!(0u64));
+            *count = json!(count.as_u64().unwrap_or(0) + 1);
+        }
+        let agents_by_place: Map<String, Value> = net
+            .places()
+            .iter()
+            .zip(per_place)
+            .filter(|(_, m)| !m.is_empty())
+            .map(|(p, m)| (p.name.clone(), Value::Object(m)))
+            .collect();
+        let s = self.snapshot();
+        let log: Vec<&Value> = s
+            .log
+            .iter()
+            .filter(|e| match after_seq {
+                Some(after) => e["seq"].as_u64().is_some_and(|q| q > after),
+                None => true,
+            })
+            .collect();
+        let firable: Vec<&str> = net
+            .firable(&s.tokens)
+            .into_iter()
+            .map(|t| net.transition(t).name.as_str())
+            .collect();
+        json!({
+            "type": "state",
+            "firable": firable,
+            "tokens": s.tokens,
+            "marking": crate::web::api::by_place(net, &s.tokens),
+            "text": net.format_marking(&s.tokens),
+            "time": s.time,
+            "firings": s.firings,
+            "stopped": s.stopped,
+            "lagged": s.lagged,
+            "agents": agents_by_place,
+            "log": log,
+        })
+    }
+}
+
+/// One line for the event log, with names instead of indices.
+fn describe(net: &Net, kind: &EventKind) -> String {
+    let place = |p: crate::net::PlaceId| net.place(p).name.as_str();
+    match kind {
+        EventKind::Fired { transition, .. } => {
+            format!("{} fired", net.transition(*transition).name)
+        }
+        EventKind::AgentSpawned { agent, place: p } => {
+            format!("{agent:?} spawned in {}", place(*p))
+        }
+        EventKind::ActionStarted {
+            agent, place: p, ..
+        } => format!("{agent:?} started the action of {}", place(*p)),
+        EventKind::ActionEnded {
+            agent,
+            place: p,
+            outcome,
+        } => format!("{agent:?} ended the action of {}: {outcome:?}", place(*p)),
+        EventKind::AgentEnded { agent } => format!("{agent:?} ended"),
+        EventKind::Error { message } => format!("error: {message}"),
+        EventKind::Stopped { reason } => format!("stopped: {reason}"),
+    }
+}
+
+/// `GET /api/live/state`: the current snapshot (404 without a live run).
+pub(crate) async fn state(State(state): State<WebState>) -> Response {
+    use axum::response::IntoResponse;
+    match state.live() {
+        Some(live) => axum::Json(live.state_json(None).await).into_response(),
+        None => no_live(),
+    }
+}
+
+/// `POST /api/live/stop`: asks the run to stop.
+pub(crate) async fn stop(State(state): State<WebState>) -> Response {
+    use axum::response::IntoResponse;
+    match state.live() {
+        Some(live) => {
+            live.handle().stop();
+            axum::Json(json!({ "stopping": true })).into_response()
+        }
+        None => no_live(),
+    }
+}
+
+fn no_live() -> Response {
+    crate::web::api::error(axum::http::StatusCode::NOT_FOUND, "no live run")
+}
+
+/// `GET /api/live/ws`: the net, the snapshot, then coalesced snapshots.
+pub(crate) async fn ws(State(state): State<WebState>, upgrade: WebSocketUpgrade) -> Response {
+    use axum::response::IntoResponse;
+    match state.live().cloned() {
+        Some(live) => upgrade
+            .on_upgrade(move |socket| follow(socket, live))
+            .into_response(),
+        None => no_live(),
+    }
+}
+
+async fn follow(mut socket: WebSocket, live: LiveRun) {
+    let mut net = net_json(live.net(), live.handle().seed());
+    net["type"] = json!("net");
+    if socket
+        .send(Message::Text(net.to_string().into()))
+        .await
+        .is_err()
+    {
+        return;
+    }
+    let mut version = live.inner.version.subscribe();
+    let mut last_seq: Option<u64> = None;
+    loop {
+        version.borrow_and_update();
+        let msg = live.state_json(last_seq).await;
+        if let Some(seq) = msg["log"]
+            .as_array()
+            .and_then(|l| l.last())
+            .and_then(|e| e["seq"].as_u64())
+        {
+            last_seq = Some(seq);
+        }
+        if socket
+            .send(Message::Text(msg.to_string().into()))
+            .await
+            .is_err()
+        {
+            return;
+        }
+        tokio::time::sleep(FRAME).await;
+        tokio::select! {
+            changed = version.changed() => if changed.is_err() { return },
+            incoming = socket.recv() => match incoming {
+                Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
+                Some(Ok(_)) => {}
+            },
+        }
+    }
+}

@@ -1,0 +1,82 @@
+//! The analysis panel's data: properties of the state space, steady-state measures, dead
+//! markings with the firing sequence that reaches each — or why they cannot be computed.
+
+use serde_json::{Value, json};
+
+use crate::analysis::measures::{Solver, SolverOptions};
+use crate::analysis::properties::Properties;
+use crate::analysis::state_space::{AnalysisError, Options, StateSpace};
+use crate::net::Net;
+use crate::web::api::{by_place, by_transition};
+
+/// Everything the panel shows, as JSON; `{"error", "kind"}` when the state space cannot be
+/// built (unbounded net, too many states, timeless trap).
+pub(crate) fn analyse(net: &Net, max_states: usize) -> Value {
+    let opts = Options {
+        max_states,
+        progress: false,
+        threads: 0,
+    };
+    let ss = match StateSpace::build(net, &opts) {
+        Ok(ss) => ss,
+        Err(e) => {
+            let kind = match &e {
+                AnalysisError::Unbounded { .. } => "unbounded",
+                AnalysisError::TooManyStates { .. } => "too_many_states",
+                AnalysisError::TimelessTrap { .. } => "timeless_trap",
+            };
+            let mut v = json!({ "error": e.to_string(), "kind": kind });
+            if let AnalysisError::Unbounded { places } = &e {
+                v["places"] = json!(places);
+            }
+            return v;
+        }
+    };
+    let props = Properties::compute(net, &ss);
+    let dead: Vec<Value> = props
+        .dead_markings
+        .iter()
+        .map(|d| {
+            let path: Vec<&str> = d
+                .path
+                .iter()
+                .map(|&t| net.transition(t).name.as_str())
+                .collect();
+            json!({
+                "marking": by_place(net, &d.marking),
+                "text": net.format_marking(&d.marking),
+                "path": path,
+            })
+        })
+        .collect();
+    let mut v = json!({
+        "name": net.name(),
+        "reachable": props.reachable,
+        "tangible": props.tangible,
+        "vanishing": props.vanishing,
+        "edges": props.edges,
+        "safe": props.safe,
+        "reversible": props.reversible,
+        "deadlock_free": props.deadlock_free,
+        "place_bounds": by_place(net, &props.place_bounds),
+        "liveness": by_transition(net, &props.liveness),
+        "dead_markings": dead,
+    });
+    if ss.tangible_count() == 0 {
+        v["steady_error"] = json!("no tangible marking: time never passes");
+        return v;
+    }
+    let solver = Solver::new(net, &ss);
+    match solver.steady_state(&SolverOptions::default()) {
+        Ok(lim) => {
+            let m = solver.measures(&lim.pi);
+            v["steady"] = json!({
+                "ergodic": lim.ergodic,
+                "mean_tokens": by_place(net, &m.mean_tokens),
+                "throughput": by_transition(net, &m.throughput),
+            });
+        }
+        Err(e) => v["steady_error"] = json!(e.to_string()),
+    }
+    v
+}

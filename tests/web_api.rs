@@ -1,0 +1,357 @@
+//! The viewer's server: its JSON API plays the same seeded token game as `plan-runner
+//! simulate`, reports the file's positions, analyses the net, and serves a page that loads
+//! nothing from another host.
+#![cfg(feature = "web")]
+
+mod common;
+
+use std::path::Path;
+
+use assert_cmd::Command;
+use axum::body::Body;
+use axum::http::{Request, StatusCode, header};
+use gspn::io::{ReadOptions, read_net};
+use gspn::sim::Simulator;
+use gspn::web::{ASSETS, WebState, router, serve};
+use serde_json::{Value, json};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tower::ServiceExt;
+
+const PATROL: &str =
+    "thesis/caldeira_2020_package/ros_TemperaturePatrolV2/gspn_temperature_patrol.xml";
+
+fn state_for(path: &Path, seed: u64) -> WebState {
+    let loaded = read_net(path, &ReadOptions::default()).unwrap();
+    WebState::new(loaded.net, None, seed)
+}
+
+/// One request through the router; the status and the body as JSON (or as a string).
+async fn call(
+    state: &WebState,
+    method: &str,
+    uri: &str,
+    body: Option<Value>,
+) -> (StatusCode, Value) {
+    let mut req = Request::builder().method(method).uri(uri);
+    let body = match body {
+        Some(v) => {
+            req = req.header(header::CONTENT_TYPE, "application/json");
+            Body::from(v.to_string())
+        }
+        None => Body::empty(),
+    };
+    let res = router(state.clone())
+        .oneshot(req.body(body).unwrap())
+        .await
+        .unwrap();
+    let status = res.status();
+    let bytes = axum::body::to_bytes(res.into_body(), usize::MAX)
+        .await
+        .unwrap();
+    let text = String::from_utf8(bytes.to_vec()).unwrap();
+    (
+        status,
+        serde_json::from_str(&text).unwrap_or(Value::String(text)),
+    )
+}
+
+#[tokio::test]
+async fn five_seeded_steps_give_the_marking_of_plan_runner_simulate() {
+    let path = common::fixture(PATROL);
+    let state = state_for(&path, 0);
+    let seed = 11;
+    let (status, _) = call(
+        &state,
+        "POST",
+        "/api/sim/reset",
+        Some(json!({ "seed": seed })),
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK);
+    let mut last = Value::Null;
+    for _ in 0..5 {
+        let (status, v) = call(&state, "POST", "/api/sim/step", Some(json!({ "n": 1 }))).await;
+        assert_eq!(status, StatusCode::OK, "{v}");
+        assert_eq!(v["fired"], 1);
+        last = v;
+    }
+    assert_eq!(last["seed"], seed);
+    assert_eq!(last["firings"], 5);
+
+    // The library's token game with the same seed.
+    let net = state.net();
+    let mut sim = Simulator::new(net, seed);
+    sim.run_steps(5).unwrap();
+    let tokens: Vec<u32> = serde_json::from_value(last["tokens"].clone()).unwrap();
+    assert_eq!(tokens, sim.marking().as_slice());
+    assert_eq!(last["time"].as_f64().unwrap(), sim.time());
+    for (p, place) in net.places().iter().enumerate() {
+        assert_eq!(last["marking"][&place.name], sim.marking().as_slice()[p]);
+    }
+
+    // The command line, with the same seed.
+    let out = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .args([
+            "simulate",
+            path.to_str().unwrap(),
+            "--seed",
+            "11",
+            "--steps",
+            "5",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let cli: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cli_trace = cli["trace"].as_array().unwrap();
+    assert_eq!(cli_trace.len(), 5);
+    assert_eq!(cli_trace[4]["marking"], last["text"]);
+    let page_trace = last["trace"].as_array().unwrap();
+    for (a, b) in cli_trace.iter().zip(page_trace) {
+        assert_eq!(a["transition"], b["transition"]);
+        assert_eq!(a["time"], b["time"]);
+    }
+}
+
+#[tokio::test]
+async fn stepping_in_one_request_equals_stepping_one_by_one() {
+    let state = state_for(&common::fixture(PATROL), 4);
+    let (_, many) = call(&state, "POST", "/api/sim/step", Some(json!({ "n": 40 }))).await;
+    call(&state, "POST", "/api/sim/reset", Some(json!({}))).await;
+    let mut one = Value::Null;
+    for _ in 0..40 {
+        one = call(&state, "POST", "/api/sim/step", None).await.1;
+    }
+    assert_eq!(many["tokens"], one["tokens"]);
+    assert_eq!(many["time"], one["time"]);
+    assert_eq!(many["firings"], 40);
+}
+
+#[tokio::test]
+async fn firing_by_hand_needs_a_firable_transition() {
+    let state = state_for(&common::fixture("greatspn/cyc3/cyc3_ss.PNPRO"), 1);
+    let (status, v) = call(
+        &state,
+        "POST",
+        "/api/sim/fire",
+        Some(json!({"transition": "T3"})),
+    )
+    .await;
+    assert_eq!(status, StatusCode::CONFLICT, "{v}");
+    let (status, _) = call(
+        &state,
+        "POST",
+        "/api/sim/fire",
+        Some(json!({"transition": "zz"})),
+    )
+    .await;
+    assert_eq!(status, StatusCode::NOT_FOUND);
+    let (status, v) = call(
+        &state,
+        "POST",
+        "/api/sim/fire",
+        Some(json!({"transition": "T1"})),
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(v["text"], "P1=1,P2=1");
+    assert_eq!(v["firable"], json!(["t2"]));
+    assert_eq!(v["vanishing"], true);
+    assert_eq!(v["trace"][0]["manual"], true);
+    let (_, v) = call(&state, "GET", "/api/sim/state", None).await;
+    assert_eq!(v["tokens"], json!([1, 1, 0]));
+}
+
+#[tokio::test]
+async fn net_positions_are_the_files_and_nets_without_them_get_a_layout() {
+    let path = common::fixture("thesis/caldeira_2020_dev/example_gspn.xml");
+    let net = read_net(&path, &ReadOptions::default()).unwrap().net;
+    let state = state_for(&path, 0);
+    let (status, v) = call(&state, "GET", "/api/net", None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(v["layout"], "file");
+    let places = v["places"].as_array().unwrap();
+    assert_eq!(places.len(), net.place_count());
+    for (p, j) in net.places().iter().zip(places) {
+        let pos = p.position.unwrap();
+        assert_eq!(j["name"], p.name.as_str());
+        assert_eq!(j["tokens"], p.initial);
+        assert_eq!(
+            (j["x"].as_f64().unwrap(), j["y"].as_f64().unwrap()),
+            (pos.x, pos.y)
+        );
+    }
+    for (t, j) in net
+        .transitions()
+        .iter()
+        .zip(v["transitions"].as_array().unwrap())
+    {
+        let pos = t.position.unwrap();
+        assert_eq!(
+            (j["x"].as_f64().unwrap(), j["y"].as_f64().unwrap()),
+            (pos.x, pos.y)
+        );
+    }
+    let arcs = v["arcs"].as_array().unwrap();
+    assert_eq!(arcs.len(), net.arcs().len());
+    let bends: usize = arcs
+        .iter()
+        .map(|a| a["points"].as_array().unwrap().len())
+        .sum();
+    assert_eq!(
+        bends,
+        net.arcs().iter().map(|a| a.points.len()).sum::<usize>()
+    );
+
+    // The temperature patrol file has no positions: a layered layout, no two nodes on one spot.
+    let state = state_for(&common::fixture(PATROL), 0);
+    let (_, v) = call(&state, "GET", "/api/net", None).await;
+    assert_eq!(v["layout"], "layered");
+    let mut spots: Vec<(i64, i64)> = v["places"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .chain(v["transitions"].as_array().unwrap())
+        .map(|n| {
+            (
+                n["x"].as_f64().unwrap() as i64,
+                n["y"].as_f64().unwrap() as i64,
+            )
+        })
+        .collect();
+    let n = spots.len();
+    assert_eq!(n, 16 + 24);
+    spots.sort_unstable();
+    spots.dedup();
+    assert_eq!(spots.len(), n);
+    let t = &v["transitions"].as_array().unwrap()[0];
+    assert!(t["kind"] == "exponential" || t["kind"] == "immediate");
+}
+
+#[tokio::test]
+async fn analysis_reports_properties_measures_and_dead_markings() {
+    // cyc3, single server: E[P1] = 10/7, every throughput 6/7.
+    let state = state_for(&common::fixture("greatspn/cyc3/cyc3_ss.PNPRO"), 0);
+    let (status, v) = call(&state, "GET", "/api/analysis", None).await;
+    assert_eq!(status, StatusCode::OK, "{v}");
+    assert_eq!(
+        (v["tangible"].as_u64(), v["vanishing"].as_u64()),
+        (Some(3), Some(2))
+    );
+    assert_eq!(v["deadlock_free"], true);
+    let mean = v["steady"]["mean_tokens"]["P1"].as_f64().unwrap();
+    assert!((mean - 10.0 / 7.0).abs() < 1e-9, "{mean}");
+    let thr = v["steady"]["throughput"]["t2"].as_f64().unwrap();
+    assert!((thr - 6.0 / 7.0).abs() < 1e-9, "{thr}");
+
+    // pipediag: two dead markings, each with the firing sequence that reaches it.
+    let path = common::fixture("thesis/azevedo_2018/pipediag.xml");
+    let state = state_for(&path, 0);
+    let (_, v) = call(&state, "GET", "/api/analysis", None).await;
+    let dead = v["dead_markings"].as_array().unwrap();
+    assert_eq!(dead.len(), 2, "{v}");
+    let net = state.net();
+    for d in dead {
+        let mut m = net.initial_marking();
+        for name in d["path"].as_array().unwrap() {
+            let t = net.transition_by_name(name.as_str().unwrap()).unwrap();
+            assert!(net.firable(&m).contains(&t));
+            net.fire(&mut m, t);
+        }
+        assert_eq!(net.format_marking(&m), d["text"].as_str().unwrap());
+        assert!(net.firable(&m).is_empty());
+    }
+}
+
+#[tokio::test]
+async fn an_unbounded_net_is_an_analysis_error_in_json() {
+    let mut b = gspn::net::NetBuilder::new("grow");
+    let p = b.place("p", 0);
+    let t = b.exponential("t", 1.0, gspn::net::Servers::Single);
+    b.output(t, p, 1);
+    let state = WebState::new(b.build().unwrap(), None, 0);
+    let (status, v) = call(&state, "GET", "/api/analysis", None).await;
+    assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY);
+    assert_eq!(v["kind"], "unbounded");
+    assert_eq!(v["places"], json!(["p"]));
+}
+
+/// Every `http://` or `https://` in `text`, minus XML namespace names (never fetched).
+fn foreign_urls(text: &str) -> Vec<String> {
+    const NAMESPACES: &[&str] = &["http://www.w3.org/2000/svg"];
+    let mut out = Vec::new();
+    for scheme in ["http://", "https://"] {
+        let mut rest = text;
+        while let Some(i) = rest.find(scheme) {
+            let url: String = rest[i..]
+                .chars()
+                .take_while(|c| !c.is_whitespace() && !"'\"<>)".contains(*c))
+                .collect();
+            if !NAMESPACES.contains(&url.as_str()) {
+                out.push(url);
+            }
+            rest = &rest[i + scheme.len()..];
+        }
+    }
+    out
+}
+
+#[tokio::test]
+async fn the_page_is_served_from_the_binary_and_loads_nothing_from_elsewhere() {
+    // A real server on a free port, spoken to over TCP.
+    let state = state_for(&common::fixture(PATROL), 0);
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let server = tokio::spawn(serve(listener, state));
+    for asset in ASSETS {
+        let mut stream = tokio::net::TcpStream::connect(addr).await.unwrap();
+        let req = format!(
+            "GET {} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n",
+            asset.path
+        );
+        stream.write_all(req.as_bytes()).await.unwrap();
+        let mut res = String::new();
+        stream.read_to_string(&mut res).await.unwrap();
+        let (head, body) = res.split_once("\r\n\r\n").unwrap();
+        assert!(head.starts_with("HTTP/1.1 200"), "{head}");
+        let head = head.to_ascii_lowercase();
+        assert!(
+            head.contains("content-security-policy: default-src 'self'"),
+            "{head}"
+        );
+        assert!(
+            head.contains(&format!("content-type: {}", asset.mime)),
+            "{head}"
+        );
+        assert_eq!(body, asset.body);
+        assert_eq!(foreign_urls(body), Vec::<String>::new(), "{}", asset.path);
+    }
+    server.abort();
+
+    let html = ASSETS.iter().find(|a| a.path == "/").unwrap().body;
+    for id in ["step", "step-n", "run", "reset", "seed", "trace"] {
+        assert!(html.contains(&format!("id=\"{id}\"")), "#{id} missing");
+    }
+    assert!(html.contains("src=\"/app.js\""));
+    let js = ASSETS.iter().find(|a| a.path == "/app.js").unwrap().body;
+    for hook in [
+        "'data-place'",
+        "'data-tokens'",
+        "'data-transition'",
+        "'data-enabled'",
+    ] {
+        assert!(js.contains(hook), "{hook} missing from app.js");
+    }
+    for api in [
+        "/api/net",
+        "/api/sim/state",
+        "/api/sim/step",
+        "/api/sim/reset",
+        "/api/sim/fire",
+        "/api/analysis",
+    ] {
+        assert!(js.contains(api), "app.js never calls {api}");
+    }
+}
