@@ -24,6 +24,7 @@ pub(crate) fn analyse(net: &Net, max_states: usize) -> Value {
                 AnalysisError::Unbounded { .. } => "unbounded",
                 AnalysisError::TooManyStates { .. } => "too_many_states",
                 AnalysisError::TimelessTrap { .. } => "timeless_trap",
+                AnalysisError::VanishingLoopTooLarge { .. } => "vanishing_loop_too_large",
             };
             let mut v = json!({ "error": e.to_string(), "kind": kind });
             if let AnalysisError::Unbounded { places } = &e {
