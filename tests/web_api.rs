@@ -399,3 +399,17 @@ async fn save_layout_gives_a_pnpro_with_the_moved_positions() {
     .await;
     assert_eq!(status, StatusCode::BAD_REQUEST);
 }
+
+#[test]
+fn serve_refuses_bad_input_with_exit_code_2() {
+    let bad = common::fixture("thesis/azevedo_2020/ros/gspn_thesis_test_case.xml");
+    for file in [bad.to_str().unwrap(), "/nonexistent/net.xml"] {
+        let out = Command::cargo_bin("plan-runner")
+            .unwrap()
+            .args(["serve", file, "--addr", "127.0.0.1:0"])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{file}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("error"));
+    }
+}
