@@ -17,6 +17,7 @@
 //! | `POST /api/sim/fire {transition}` | fire one firable transition by hand (409 if it may not fire) |
 //! | `GET /api/analysis` | properties, steady-state mean tokens and throughputs, dead markings with a firing sequence to each; `{error, kind}` (422) for an unbounded net |
 //! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`replay`]), or the token game |
+//! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
 //! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal |
 //! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log` |
 //! | `POST /api/live/stop` | asks the live run to stop |
@@ -218,6 +219,7 @@ pub fn router(state: WebState) -> Router {
         .route("/api/sim/fire", post(api::sim_fire))
         .route("/api/analysis", get(api::analysis))
         .route("/api/mode", get(mode))
+        .route("/api/layout", post(api::save_layout))
         .route("/api/replay", get(replay_frames))
         .route("/api/live/state", get(live::state))
         .route("/api/live/stop", post(live::stop))

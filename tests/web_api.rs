@@ -355,3 +355,61 @@ async fn the_page_is_served_from_the_binary_and_loads_nothing_from_elsewhere() {
         assert!(js.contains(api), "app.js never calls {api}");
     }
 }
+
+#[tokio::test]
+async fn save_layout_gives_a_pnpro_with_the_moved_positions() {
+    let state = state_for(&common::fixture("greatspn/cyc3/cyc3_ss.PNPRO"), 0);
+    let places = json!([[1.0, 2.0], [5.5, 2.0], [9.0, 4.0]]);
+    let transitions = json!([[3.0, 1.0], [7.0, 1.5], [6.0, 8.0]]);
+    let (status, v) = call(
+        &state,
+        "POST",
+        "/api/layout",
+        Some(json!({ "places": places, "transitions": transitions })),
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK, "{v}");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("cyc3.PNPRO");
+    std::fs::write(&file, v["pnpro"].as_str().unwrap()).unwrap();
+    let back = read_net(&file, &ReadOptions::default()).unwrap().net;
+    assert!(
+        back.diff(state.net()).is_empty(),
+        "{:?}",
+        back.diff(state.net())
+    );
+    for (p, want) in back.places().iter().zip(places.as_array().unwrap()) {
+        let pos = p.position.unwrap();
+        assert_eq!(json!([pos.x, pos.y]), *want, "{}", p.name);
+    }
+    for (t, want) in back
+        .transitions()
+        .iter()
+        .zip(transitions.as_array().unwrap())
+    {
+        let pos = t.position.unwrap();
+        assert_eq!(json!([pos.x, pos.y]), *want, "{}", t.name);
+    }
+    let (status, _) = call(
+        &state,
+        "POST",
+        "/api/layout",
+        Some(json!({ "places": [[0.0, 0.0]], "transitions": [] })),
+    )
+    .await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
+}
+
+#[test]
+fn serve_refuses_bad_input_with_exit_code_2() {
+    let bad = common::fixture("thesis/azevedo_2020/ros/gspn_thesis_test_case.xml");
+    for file in [bad.to_str().unwrap(), "/nonexistent/net.xml"] {
+        let out = Command::cargo_bin("plan-runner")
+            .unwrap()
+            .args(["serve", file, "--addr", "127.0.0.1:0"])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{file}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("error"));
+    }
+}

@@ -220,3 +220,38 @@ pub(crate) async fn analysis(State(state): State<WebState>) -> Response {
     };
     (status, Json(value.clone())).into_response()
 }
+
+/// Body of `POST /api/layout`.
+#[derive(Debug, Deserialize)]
+pub(crate) struct LayoutBody {
+    /// `[x, y]` per place, in the file's units.
+    places: Vec<[f64; 2]>,
+    /// `[x, y]` per transition.
+    transitions: Vec<[f64; 2]>,
+}
+
+/// `POST /api/layout {places, transitions}`: the net with these positions, as a GreatSPN
+/// PNPRO document (`{"pnpro": "..."}`) for the page to save.
+pub(crate) async fn save_layout(
+    State(state): State<WebState>,
+    Json(b): Json<LayoutBody>,
+) -> Response {
+    let pos = |v: &[[f64; 2]]| -> Vec<crate::net::Position> {
+        v.iter()
+            .map(|&[x, y]| crate::net::Position { x, y })
+            .collect()
+    };
+    let net = &state.inner.net;
+    match crate::web::layout::with_positions(net, &pos(&b.places), &pos(&b.transitions)) {
+        None => error(
+            StatusCode::BAD_REQUEST,
+            format!(
+                "expected {} place and {} transition positions",
+                net.place_count(),
+                net.transition_count()
+            ),
+        ),
+        Some(Err(e)) => error(StatusCode::UNPROCESSABLE_ENTITY, e.to_string()),
+        Some(Ok(n)) => Json(json!({ "pnpro": crate::io::pnpro::write(&n) })).into_response(),
+    }
+}

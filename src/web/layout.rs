@@ -11,7 +11,7 @@ use std::collections::VecDeque;
 
 use serde::Serialize;
 
-use crate::net::{ArcKind, Net, Position};
+use crate::net::{ArcKind, Net, NetBuilder, NetError, Place, Position, Transition};
 
 /// Horizontal distance between layers.
 const DX: f64 = 90.0;
@@ -73,6 +73,35 @@ pub fn layout(net: &Net) -> Layout {
         },
         None => layered(net),
     }
+}
+
+/// `net` with the given positions (one per place, one per transition, as in [`Layout`]);
+/// `None` when the counts do not match the net.
+pub fn with_positions(
+    net: &Net,
+    places: &[Position],
+    transitions: &[Position],
+) -> Option<Result<Net, NetError>> {
+    if places.len() != net.place_count() || transitions.len() != net.transition_count() {
+        return None;
+    }
+    let mut b = NetBuilder::new(net.name());
+    for (p, &pos) in net.places().iter().zip(places) {
+        b.add_place(Place {
+            position: Some(pos),
+            ..p.clone()
+        });
+    }
+    for (t, &pos) in net.transitions().iter().zip(transitions) {
+        b.add_transition(Transition {
+            position: Some(pos),
+            ..t.clone()
+        });
+    }
+    for a in net.arcs() {
+        b.arc(a.kind, a.place, a.transition, a.weight, a.points.clone());
+    }
+    Some(b.build())
 }
 
 /// Nodes are places `0..np` then transitions `np..np+nt`.

@@ -12,6 +12,7 @@ const R = 18; // place radius
 const TH = 30; // transition height
 
 let net = null;
+let scale = 1; // drawing units per file unit
 let state = null;
 let view = { x: 0, y: 0, k: 1 };
 let runTimer = null;
@@ -83,6 +84,7 @@ function scaleCoordinates() {
   if (!nearest.length) return;
   const s = 70 / nearest[Math.floor(nearest.length / 2)];
   if (s <= 1) return;
+  scale = s;
   for (const n of net.places.concat(net.transitions)) {
     n.x *= s;
     n.y *= s;
@@ -321,6 +323,24 @@ function setupInteraction() {
   });
 }
 
+// Positions back in the file's units, as a GreatSPN project the browser downloads.
+async function saveLayout() {
+  try {
+    const at = (n) => [n.x / scale, n.y / scale];
+    const r = await api('POST', '/api/layout', {
+      places: net.places.map(at),
+      transitions: net.transitions.map(at),
+    });
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(new Blob([r.pnpro], { type: 'application/xml' }));
+    a.download = net.name + '.PNPRO';
+    a.click();
+    URL.revokeObjectURL(a.href);
+  } catch (e) {
+    status(e.message);
+  }
+}
+
 // ---- token game ------------------------------------------------------------------------
 
 async function act(method, path, body) {
@@ -373,6 +393,7 @@ function setupControls() {
     if (runTimer !== null) startRun();
   });
   $('fit').addEventListener('click', fit);
+  $('save-layout').addEventListener('click', saveLayout);
   $('analyze').addEventListener('click', analyse);
 }
 
