@@ -1,18 +1,18 @@
-//! Embedding the runtime in a running service. axum is not a dependency of this crate (the
-//! viewer behind feature `web` brings it later), so this is a plain tokio TCP service: the
-//! plan runs in the background in real time, and each connection gets the current marking
-//! and progress as one JSON line. `stop` on a connection stops the plan.
+//! Embedding the runtime in an axum service: the plan runs in the background in real time
+//! (twice as fast), `GET /marking` returns the current marking and progress as JSON, and
+//! `POST /stop` stops the plan; the service exits when the plan has stopped.
 //!
 //! ```text
-//! cargo run --example embed_service          # then: nc 127.0.0.1 7878
+//! cargo run --example embed_service     # then: curl 127.0.0.1:7878/marking
+//!                                       #       curl -X POST 127.0.0.1:7878/stop
 //! ```
 
 use std::sync::Arc;
 
+use axum::{Json, Router, extract::State, routing::get, routing::post};
 use gspn::net::{NetBuilder, Servers};
-use gspn::runtime::Runtime;
-use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::TcpListener;
+use gspn::runtime::{Runtime, RuntimeHandle};
+use serde_json::{Value, json};
 
 #[tokio::main]
 async fn main() -> std::io::Result<()> {
@@ -35,7 +35,7 @@ async fn main() -> std::io::Result<()> {
     b.output(full, charger, 1);
     let net = b.build().expect("valid net");
 
-    // Real time, twice as fast; no user actions: every place is net-timed.
+    // No user actions: every place is net-timed. The runtime lives in this tokio runtime.
     let handle = Arc::new(
         Runtime::builder(net)
             .time_scale(0.5)
@@ -43,33 +43,34 @@ async fn main() -> std::io::Result<()> {
             .spawn()
             .expect("spawn"),
     );
-    let listener = TcpListener::bind("127.0.0.1:7878").await?;
-    println!("listening on 127.0.0.1:7878 (send `stop` to stop the plan)");
-    loop {
-        tokio::select! {
-            accepted = listener.accept() => {
-                let (mut sock, _) = accepted?;
-                let h = Arc::clone(&handle);
-                tokio::spawn(async move {
-                    let mut buf = [0u8; 16];
-                    let n = sock.read(&mut buf).await.unwrap_or(0);
-                    if buf[..n].starts_with(b"stop") {
-                        h.stop();
-                    }
-                    let m = h.marking().await;
-                    let p = h.progress();
-                    let line = serde_json::json!({
-                        "marking": h.net().format_marking(&m),
-                        "firings": p.firings(),
-                        "time": p.time(),
-                    });
-                    let _ = sock.write_all(format!("{line}\n").as_bytes()).await;
-                });
-            }
-            s = handle.wait() => {
-                println!("plan stopped: {} after {} firings", s.stopped, s.firings);
-                return Ok(());
-            }
+
+    let app = Router::new()
+        .route("/marking", get(marking))
+        .route("/stop", post(stop))
+        .with_state(Arc::clone(&handle));
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:7878").await?;
+    println!("listening on http://127.0.0.1:7878 (GET /marking, POST /stop)");
+    let served = axum::serve(listener, app).with_graceful_shutdown({
+        let h = Arc::clone(&handle);
+        async move {
+            let s = h.wait().await;
+            println!("plan stopped: {} after {} firings", s.stopped, s.firings);
         }
-    }
+    });
+    served.await
+}
+
+async fn marking(State(h): State<Arc<RuntimeHandle>>) -> Json<Value> {
+    let m = h.marking().await;
+    let p = h.progress();
+    Json(json!({
+        "marking": h.net().format_marking(&m),
+        "firings": p.firings(),
+        "time": p.time(),
+    }))
+}
+
+async fn stop(State(h): State<Arc<RuntimeHandle>>) -> &'static str {
+    h.stop();
+    "stopping\n"
 }
