@@ -4,26 +4,13 @@
 
 mod common;
 
-use gspn::net::{Net, NetBuilder, Servers};
+use gspn::net::{Net, Servers};
 use gspn::runtime::{EventKind, Received, Runtime};
 
 /// cyc3, single server (fixtures/greatspn/cyc3/cyc3_ss.PNPRO): P1 (2) → T1 (1) → P2 → t2 →
 /// P3 → T3 (2) → P1. E[P1] = 10/7, E[P3] = 4/7, throughput 6/7.
 fn cyc3() -> Net {
-    let mut b = NetBuilder::new("cyc3");
-    let p1 = b.place("P1", 2);
-    let p2 = b.place("P2", 0);
-    let p3 = b.place("P3", 0);
-    let t1 = b.exponential("T1", 1.0, Servers::Single);
-    let t2 = b.immediate("t2", 1.0, 1);
-    let t3 = b.exponential("T3", 2.0, Servers::Single);
-    b.input(p1, t1, 1);
-    b.output(t1, p2, 1);
-    b.input(p2, t2, 1);
-    b.output(t2, p3, 1);
-    b.input(p3, t3, 1);
-    b.output(t3, p1, 1);
-    b.build().unwrap()
+    common::cyc3(Servers::Single)
 }
 
 #[tokio::test(start_paused = true)]

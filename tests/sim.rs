@@ -1,28 +1,15 @@
 //! The token game: priorities, weights, policies, server semantics, dead markings, timeless
 //! traps, determinism, and Monte-Carlo estimates against exact answers.
 
+mod common;
+
 use gspn::net::{Net, NetBuilder, PlaceId, Servers, TransitionId};
 use gspn::policy::{Pattern, Policy, Rule};
 use gspn::sim::{Horizon, MonteCarlo, RunEnd, SimError, Simulator, Step};
 
 /// GreatSPN's cyc3 (fixtures/greatspn/cyc3): P1 (2) → T1 (rate 1) → P2 → t2 (imm) → P3 →
 /// T3 (rate 2) → P1.
-fn cyc3(servers: Servers) -> Net {
-    let mut b = NetBuilder::new("cyc3");
-    let p1 = b.place("P1", 2);
-    let p2 = b.place("P2", 0);
-    let p3 = b.place("P3", 0);
-    let t1 = b.exponential("T1", 1.0, servers);
-    let t2 = b.immediate("t2", 1.0, 1);
-    let t3 = b.exponential("T3", 2.0, servers);
-    b.input(p1, t1, 1);
-    b.output(t1, p2, 1);
-    b.input(p2, t2, 1);
-    b.output(t2, p3, 1);
-    b.input(p3, t3, 1);
-    b.output(t3, p1, 1);
-    b.build().unwrap()
-}
+use common::cyc3;
 
 /// A choice: `p` feeds immediate `a` (weight 1) and `b` (weight 3), each leading to its own
 /// place from which an exponential transition returns the token.

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use gspn::net::{Net, NetBuilder, Servers};
+
 /// A fixture file: `$CARGO_MANIFEST_DIR/../shared/fixtures/<rel>`, else `/work/shared/...`.
 pub fn fixture(rel: &str) -> PathBuf {
     let local = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -77,4 +79,22 @@ fn t975(df: usize) -> f64 {
         60..=119 => 2.000,
         _ => 1.980,
     }
+}
+
+/// cyc3 of the GreatSPN fixtures (`greatspn/cyc3`), built in code: two tokens cycle through
+/// P1 --T1 (rate 1)--> P2 --t2 (immediate)--> P3 --T3 (rate 2)--> P1. With single servers
+/// π over (2,0,0), (1,0,1), (0,0,2) is (4,2,1)/7: E[P1] = 10/7, E[P3] = 4/7, throughputs 6/7.
+pub fn cyc3(servers: Servers) -> Net {
+    let mut b = NetBuilder::new("cyc3");
+    let (p1, p2, p3) = (b.place("P1", 2), b.place("P2", 0), b.place("P3", 0));
+    let t1 = b.exponential("T1", 1.0, servers);
+    let t2 = b.immediate("t2", 1.0, 1);
+    let t3 = b.exponential("T3", 2.0, servers);
+    b.input(p1, t1, 1);
+    b.output(t1, p2, 1);
+    b.input(p2, t2, 1);
+    b.output(t2, p3, 1);
+    b.input(p3, t3, 1);
+    b.output(t3, p1, 1);
+    b.build().expect("cyc3 is a valid net")
 }
