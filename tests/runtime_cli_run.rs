@@ -15,18 +15,16 @@ fn bin() -> Command {
 #[test]
 fn a_bare_net_runs_net_timed_and_prints_the_json_summary() {
     let net = common::fixture("greatspn/cyc3/cyc3_ss.PNPRO");
-    let out = bin()
-        .args([
-            "run",
-            net.to_str().unwrap(),
-            "--seed",
-            "5",
-            "--max-firings",
-            "300",
-            "--json",
-        ])
-        .output()
-        .unwrap();
+    let args = [
+        "run",
+        net.to_str().unwrap(),
+        "--seed",
+        "5",
+        "--max-firings",
+        "300",
+        "--json",
+    ];
+    let out = bin().args(args).output().unwrap();
     assert_eq!(
         out.status.code(),
         Some(0),
@@ -56,18 +54,7 @@ fn a_bare_net_runs_net_timed_and_prints_the_json_summary() {
     let tokens = m["P1"].as_u64().unwrap() + m["P2"].as_u64().unwrap() + m["P3"].as_u64().unwrap();
     assert_eq!(tokens, 2, "cyc3 keeps its two tokens");
     // The same seed gives the same run.
-    let again = bin()
-        .args([
-            "run",
-            net.to_str().unwrap(),
-            "--seed",
-            "5",
-            "--max-firings",
-            "300",
-            "--json",
-        ])
-        .output()
-        .unwrap();
+    let again = bin().args(args).output().unwrap();
     assert_eq!(out.stdout, again.stdout);
 }
 

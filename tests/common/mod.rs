@@ -1,20 +1,13 @@
 //! Shared helpers for behaviour tests.
-#![allow(dead_code)]
-
-use std::path::PathBuf;
+#![allow(dead_code, unused_imports)]
 
 use gspn::net::{Net, NetBuilder, Servers};
 
-/// A fixture file: `$CARGO_MANIFEST_DIR/../shared/fixtures/<rel>`, else `/work/shared/...`.
-pub fn fixture(rel: &str) -> PathBuf {
-    let local = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/fixtures")
-        .join(rel);
-    if local.exists() {
-        return local;
-    }
-    PathBuf::from("/work/shared/fixtures").join(rel)
-}
+#[path = "../support/shared_fixtures.rs"]
+mod shared_fixtures;
+/// A fixture file under `../shared/fixtures` (else `/work/shared/fixtures`); one lookup for
+/// every behaviour test.
+pub use shared_fixtures::fixture;
 
 /// Batch means over a single run: the time axis cut into `n` batches of length `len`; each
 /// statistic is either a time integral (`advance`) or a count (`count`), divided by `len`.
