@@ -31,6 +31,7 @@
 //! # }
 //! ```
 
+mod analysis_job;
 mod api;
 pub mod layout;
 mod live;
@@ -46,7 +47,6 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use serde_json::{Value, json};
 use tokio::net::TcpListener;
-use tokio::sync::OnceCell;
 
 use crate::net::Net;
 use crate::policy::Policy;
@@ -102,8 +102,7 @@ struct Inner {
     net: Arc<Net>,
     seed: u64,
     session: Mutex<Session>,
-    analysis: Arc<OnceCell<Value>>,
-    max_states: usize,
+    analysis: Arc<analysis_job::AnalysisJob>,
     live: OnceLock<LiveRun>,
     replay: OnceLock<Arc<Vec<replay::Frame>>>,
 }
@@ -124,13 +123,13 @@ impl WebState {
     ) -> WebState {
         let net = Arc::new(net);
         let session = Session::new(net.clone(), policy.map(Arc::new), seed);
+        let analysis = Arc::new(analysis_job::AnalysisJob::new(net.clone(), max_states));
         WebState {
             inner: Arc::new(Inner {
                 net,
                 seed,
                 session: Mutex::new(session),
-                analysis: Arc::new(OnceCell::new()),
-                max_states,
+                analysis,
                 live: OnceLock::new(),
                 replay: OnceLock::new(),
             }),
@@ -218,10 +217,14 @@ pub fn router(state: WebState) -> Router {
         .route("/api/sim/step", post(api::sim_step))
         .route("/api/sim/fire", post(api::sim_fire))
         .route("/api/analysis", get(api::analysis))
+        .route("/api/analysis/start", post(api::analysis_start))
+        .route("/api/analysis/progress", get(api::analysis_progress))
+        .route("/api/analysis/cancel", post(api::analysis_cancel))
         .route("/api/mode", get(mode))
         .route("/api/layout", post(api::save_layout))
         .route("/api/replay", get(replay_frames))
         .route("/api/live/state", get(live::state))
+        .route("/api/live/world", get(live::world))
         .route("/api/live/stop", post(live::stop))
         .route("/api/live/ws", get(live::ws))
         .fallback(|| async { api::error(StatusCode::NOT_FOUND, "no such route") })
