@@ -217,8 +217,10 @@ pub(crate) async fn analysis(State(state): State<WebState>) -> Response {
         }
         Outcome::Cancelled(progress) => (
             StatusCode::CONFLICT,
-            Json(json!({ "error": "the analysis was cancelled", "kind": "cancelled",
-                         "progress": progress })),
+            Json(
+                json!({ "error": "the analysis was cancelled", "kind": "cancelled",
+                         "progress": progress }),
+            ),
         )
             .into_response(),
     }
