@@ -85,6 +85,16 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/app.js"),
     },
     Asset {
+        path: "/canvas.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/canvas.js"),
+    },
+    Asset {
+        path: "/map.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/map.js"),
+    },
+    Asset {
         path: "/style.css",
         mime: "text/css; charset=utf-8",
         body: include_str!("web/assets/style.css"),
