@@ -2,8 +2,11 @@
 //! and how long each live update takes to reach the screen.
 //!
 //! ```text
-//! cargo run --release --example viewer_bench [-- --places 10000 --runs 5 --seconds 10]
+//! cargo run --release --example viewer_bench [-- --places 10000 --runs 5 --seconds 10 --svg]
 //! ```
+//!
+//! `--svg` forces the SVG renderer (`/?renderer=svg`), which the page otherwise uses only up
+//! to 1,500 nodes, to compare it with the canvas.
 //!
 //! A ring of `places` places (one token in every tenth), no positions (the server computes
 //! the layout). "open": from navigation start to the first paint after the net and its
@@ -69,6 +72,11 @@ async fn main() {
     let n = arg("--places", 10_000) as usize;
     let runs = arg("--runs", 5);
     let seconds = arg("--seconds", 10);
+    let query = if std::env::args().any(|a| a == "--svg") {
+        "?renderer=svg"
+    } else {
+        ""
+    };
     let browser = Browser::start(1400, 900).await;
 
     // ---- open: the token game's page, loaded `runs` times
@@ -81,7 +89,7 @@ async fn main() {
         let start = Instant::now();
         browser
             .client
-            .goto(&format!("http://{addr}/"))
+            .goto(&format!("http://{addr}/{query}"))
             .await
             .expect("goto");
         let drawn = browser
@@ -101,6 +109,14 @@ async fn main() {
             .await;
         assert_eq!(places, n as u64, "every place carries its data-place hook");
     }
+    let renderer = browser
+        .js(
+            "return document.getElementById('net-canvas').classList.contains('hidden') \
+             ? 'svg' : 'canvas';",
+            vec![],
+        )
+        .await;
+    println!("renderer: {}", renderer.as_str().unwrap_or("?"));
     println!(
         "open {n} places: median {:.0} ms (page: navigation start → first paint; runs {:?}); \
          wall from goto {:.0} ms",
@@ -125,7 +141,7 @@ async fn main() {
     let server = tokio::spawn(serve(listener, WebState::for_live(live)));
     browser
         .client
-        .goto(&format!("http://{addr}/"))
+        .goto(&format!("http://{addr}/{query}"))
         .await
         .expect("goto");
     browser

@@ -2,9 +2,10 @@
 //! token game, and shows its analysis.
 //!
 //! Every asset (HTML, JavaScript, CSS — plain, hand-written, no framework) is compiled into
-//! the binary ([`ASSETS`]), and every response forbids the page to load anything from another
-//! origin (`Content-Security-Policy: default-src 'self'`), so the viewer works with the
-//! network off.
+//! the binary ([`ASSETS`]). The page draws a net in SVG, or past 1,500 nodes on a canvas (the
+//! test hooks then sit on hidden elements), and a live run's simulated world as a 2D map.
+//! Every response forbids the page to load anything from another origin
+//! (`Content-Security-Policy: default-src 'self'`), so the viewer works with the network off.
 //!
 //! # API
 //!
@@ -15,13 +16,17 @@
 //! | `POST /api/sim/reset {seed}` | back to the initial marking, with that seed |
 //! | `POST /api/sim/step {n}` | fire `n` transitions drawn by the token game: after a reset with seed S, `n` steps are exactly `plan-runner simulate --seed S --steps n` |
 //! | `POST /api/sim/fire {transition}` | fire one firable transition by hand (409 if it may not fire) |
-//! | `GET /api/analysis` | properties, steady-state mean tokens and throughputs, dead markings with a firing sequence to each; `{error, kind}` (422) for an unbounded net |
+//! | `GET /api/analysis` | properties, steady-state mean tokens and throughputs, dead markings with a firing sequence to each; `{error, kind}` (422) for an unbounded net; starts the analysis if needed and waits for it (409 `kind: "cancelled"` if it is cancelled meanwhile) |
+//! | `POST /api/analysis/start` | starts the analysis on a blocking thread (unless it is running or done); the progress |
+//! | `GET /api/analysis/progress` | `{state: idle\|running\|cancelling\|cancelled\|done, phase: "state space"\|"properties"\|"steady state", markings, seconds}`: markings found so far by the state-space search |
+//! | `POST /api/analysis/cancel` | stops a running analysis (the search within one block of ~1,000 markings, later phases before they start); the progress |
 //! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`replay`]), or the token game |
 //! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
 //! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal |
-//! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log` |
+//! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log`, and `world` with a world feed |
+//! | `GET /api/live/world` | the latest value of the run's simulated world ([`LiveRun::with_world`]: map and robots, metres, y up); 404 without a feed |
 //! | `POST /api/live/stop` | asks the live run to stop |
-//! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "state", ...}` snapshots (log entries since the previous one), at most one per [`FRAME`] |
+//! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "state", ...}` snapshots (log entries since the previous one, `world` with a world feed), at most one per [`FRAME`]; a new event or world value wakes the next one |
 //!
 //! ```no_run
 //! # async fn demo(net: gspn::net::Net) -> std::io::Result<()> {

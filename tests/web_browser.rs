@@ -555,6 +555,30 @@ async fn a_large_net_is_drawn_on_a_canvas_with_the_same_hooks() {
     )
     .await;
     b.screenshot(&screenshot_path("large-net-zoomed.png")).await;
+    // Click a green transition in the window: it fires (hit-testing on the canvas).
+    let target = b
+        .js(
+            "const c = document.getElementById('net-canvas'); const r = c.getBoundingClientRect();\
+             for (let i = 0; i < net.transitions.length; i++) {\
+               const t = net.transitions[i];\
+               const x = r.left + t.x * view.k + view.x, y = r.top + t.y * view.k + view.y;\
+               if (!transEnabled[i] || x < r.left + 10 || x > r.right - 10 || y < r.top + 10 \
+                   || y > r.bottom - 10) continue;\
+               const o = {clientX: x, clientY: y, bubbles: true};\
+               c.dispatchEvent(new MouseEvent('mousedown', o));\
+               window.dispatchEvent(new MouseEvent('mouseup', o));\
+               return t.name;\
+             }\
+             return null;",
+            vec![],
+        )
+        .await;
+    let target = target.as_str().expect("a green transition in the window");
+    wait_firings(&b, 26).await;
+    let s = http_get(addr, "/api/sim/state").await;
+    let last = s["trace"].as_array().unwrap().last().unwrap().clone();
+    assert_eq!(last["transition"], target);
+    assert_eq!(last["manual"], true);
     b.close().await;
     server.abort();
 }

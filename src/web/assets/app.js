@@ -725,6 +725,9 @@ async function startReplay() {
     slider.value = String(i);
     f.tokens.forEach((k, p) => setTokens(p, k));
     setFired(f.transition ? transitionIndex(f.transition) : -1);
+    const items = $('trace').children;
+    for (const li of $('trace').querySelectorAll('li.current')) li.classList.remove('current');
+    if (i > 0 && items[i - 1]) items[i - 1].classList.add('current');
     $('frame').textContent = i + '/' + (frames.length - 1);
     $('clock').textContent = 'time ' + fmt(f.time) + ', ' + i + ' firings' +
       (f.transition ? ' — ' + f.transition + ' fired' : '');

@@ -14,7 +14,9 @@ const BIG = 1500;
 const cvs = { on: false, el: null, ctx: null, dirty: false, arcPts: [], base: null, baseKey: null };
 
 function canvasInit() {
-  cvs.on = net.places.length + net.transitions.length > BIG;
+  // `?renderer=svg` or `?renderer=canvas` forces one (to compare them).
+  const forced = new URLSearchParams(location.search).get('renderer');
+  cvs.on = forced ? forced === 'canvas' : net.places.length + net.transitions.length > BIG;
   cvs.el = $('net-canvas');
   $('net').classList.toggle('hidden', cvs.on);
   cvs.el.classList.toggle('hidden', !cvs.on);

@@ -63,11 +63,13 @@ function drawMapStatic(w) {
     if (p && q) mapEl('line', { class: 'edge', x1: p.x, y1: -p.y, x2: q.x, y2: -q.y }, g);
   }
   const s = map.size;
+  // Names below the marker, clear of a robot standing on it (robot names go above).
+  const robotR = Math.max(0, ...(w.robots || []).map((r) => r.radius || 0));
   for (const l of m.locations || []) {
     const lg = mapEl('g', { class: 'location', 'data-location': l.name,
       transform: 'translate(' + l.x + ',' + -l.y + ')' }, g);
     mapEl('rect', { x: -s * 0.35, y: -s * 0.35, width: s * 0.7, height: s * 0.7 }, lg);
-    const t = mapEl('text', { y: -s * 0.6, 'font-size': s }, lg);
+    const t = mapEl('text', { y: Math.max(s * 0.35, robotR) + s * 1.1, 'font-size': s }, lg);
     t.textContent = l.name;
   }
 }
