@@ -16,11 +16,12 @@ use fantoccini::wd::Capabilities;
 use fantoccini::{Client, ClientBuilder, Locator};
 use serde_json::{Value, json};
 
-/// Where chromedriver is: `$CHROMEDRIVER`, else the first `chromedriver` on `$PATH`, else
-/// the Debian package's path.
+/// Where chromedriver is: `$CHROMEDRIVER` (when set, nothing else is tried), else the first
+/// `chromedriver` on `$PATH`, else the Debian package's path.
 pub fn chromedriver_path() -> Option<PathBuf> {
     if let Some(p) = std::env::var_os("CHROMEDRIVER") {
-        return Some(PathBuf::from(p));
+        let p = PathBuf::from(p);
+        return p.is_file().then_some(p);
     }
     let on_path = std::env::var_os("PATH").and_then(|paths| {
         std::env::split_paths(&paths)
