@@ -603,7 +603,7 @@ async fn a_long_analysis_shows_its_progress_on_the_page_and_can_be_cancelled() {
     let progress = b
         .wait_js(
             "const t = document.getElementById('analysis-progress').textContent;\
-             return /running \\(state space\\), [1-9][0-9,]* markings/.test(t) && t;",
+             return /running \\([a-z ]+\\), [1-9][0-9,]* markings/.test(t) && t;",
             WAIT,
             "the analysis progress",
         )
