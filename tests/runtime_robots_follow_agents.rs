@@ -50,7 +50,7 @@ async fn each_agent_keeps_its_robot_through_every_firing() {
     let events = h.events();
     let summary = h.wait().await;
     assert_eq!(summary.firings, 60);
-    let seen = seen.lock().unwrap();
+    let seen = seen.lock().unwrap().clone();
     // Agents 0 and 1 start in `a`, agent 2 in `b`: robots in that order.
     for (agent, robot, _) in seen.iter() {
         let expected = ["r1", "r2", "r3"][*agent as usize];
