@@ -100,6 +100,16 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/map.js"),
     },
     Asset {
+        path: "/analysis.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/analysis.js"),
+    },
+    Asset {
+        path: "/live.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/live.js"),
+    },
+    Asset {
         path: "/style.css",
         mime: "text/css; charset=utf-8",
         body: include_str!("web/assets/style.css"),

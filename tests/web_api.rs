@@ -335,14 +335,25 @@ async fn the_page_is_served_from_the_binary_and_loads_nothing_from_elsewhere() {
         assert!(html.contains(&format!("id=\"{id}\"")), "#{id} missing");
     }
     assert!(html.contains("src=\"/app.js\""));
-    let js = ASSETS.iter().find(|a| a.path == "/app.js").unwrap().body;
+    let js: String = ASSETS
+        .iter()
+        .filter(|a| a.path.ends_with(".js"))
+        .map(|a| a.body)
+        .collect();
+    for script in ASSETS.iter().filter(|a| a.path.ends_with(".js")) {
+        assert!(
+            html.contains(&format!("src=\"{}\"", script.path)),
+            "the page never loads {}",
+            script.path
+        );
+    }
     for hook in [
         "'data-place'",
         "'data-tokens'",
         "'data-transition'",
         "'data-enabled'",
     ] {
-        assert!(js.contains(hook), "{hook} missing from app.js");
+        assert!(js.contains(hook), "{hook} missing from the scripts");
     }
     for api in [
         "/api/net",
@@ -351,8 +362,14 @@ async fn the_page_is_served_from_the_binary_and_loads_nothing_from_elsewhere() {
         "/api/sim/reset",
         "/api/sim/fire",
         "/api/analysis",
+        "/api/analysis/start",
+        "/api/analysis/progress",
+        "/api/analysis/cancel",
+        "/api/live/ws",
+        "/api/live/stop",
+        "/api/replay",
     ] {
-        assert!(js.contains(api), "app.js never calls {api}");
+        assert!(js.contains(api), "the page never calls {api}");
     }
 }
 

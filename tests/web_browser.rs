@@ -280,7 +280,15 @@ async fn the_page_loads_everything_from_its_own_server() {
     for url in &loaded {
         assert!(url.starts_with(&origin), "{url} is not from {origin}");
     }
-    for asset in ["style.css", "canvas.js", "map.js", "app.js", "api/net"] {
+    for asset in [
+        "style.css",
+        "canvas.js",
+        "map.js",
+        "analysis.js",
+        "live.js",
+        "app.js",
+        "api/net",
+    ] {
         assert!(
             loaded.contains(&format!("{origin}{asset}")),
             "{asset} not loaded: {loaded:?}"
