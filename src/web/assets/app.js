@@ -238,11 +238,12 @@ function arcPoints(i) {
   const fromPlace = a.kind !== 'output';
   const bends = a.points.map((q) => [q[0], q[1]]);
   const [from, to] = fromPlace ? [pc, tc] : [tc, pc];
-  if (net.layout === 'layered' && !bends.length && from[0] > to[0] + 1 && to[1] > from[1] - 1) {
-    // A layered layout's arc back to an earlier layer, on the same row or one below (a
-    // band wrapped), would run over the arcs between them: route it under the source's row,
-    // leaving and entering on a slant so that it misses the names under the nodes.
-    const below = from[1] + 48;
+  if (net.layout === 'layered' && !bends.length && from[0] > to[0] + 1 &&
+      Math.abs(from[1] - to[1]) < 1) {
+    // A layered layout's arc back to an earlier layer of the same row would run over the
+    // arcs between them: route it under the row, leaving and entering on a slant so that it
+    // misses the names under the nodes.
+    const below = from[1] + 38;
     bends.push([from[0] + 40, below], [to[0] - 40, below]);
   }
   const pts = fromPlace ? [pc, ...bends, tc] : [tc, ...bends, pc];
