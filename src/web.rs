@@ -19,7 +19,7 @@
 //! | `GET /api/analysis` | properties, steady-state mean tokens and throughputs, dead markings with a firing sequence to each; `{error, kind}` (422) for an unbounded net; starts the analysis if needed and waits for it (409 `kind: "cancelled"` if it is cancelled meanwhile) |
 //! | `POST /api/analysis/start` | starts the analysis on a blocking thread (unless it is running or done); the progress |
 //! | `GET /api/analysis/progress` | `{state: idle\|running\|cancelling\|cancelled\|done, phase: "state space"\|"properties"\|"steady state", markings, seconds}`: markings found so far by the state-space search |
-//! | `POST /api/analysis/cancel` | stops a running analysis (the search within one block of ~1,000 markings, later phases before they start); the progress |
+//! | `POST /api/analysis/cancel` | stops a running analysis (the search within one block of ~1,000 markings, the steady-state solver at its next sweep, the properties before they start); the progress |
 //! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`replay`]), or the token game |
 //! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
 //! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal |

@@ -75,3 +75,28 @@ fn a_chain_with_two_absorbing_ends_gets_its_limiting_distribution() {
     }
     assert_eq!(mean[start.index()], 0.0);
 }
+
+#[test]
+fn a_raised_cancel_flag_stops_the_solver_with_cancelled() {
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+
+    use gspn::analysis::ctmc::SolveError;
+
+    let path = common::fixture("kanban/kanban_gspn_N2.pnml");
+    let net = read_net(&path, &ReadOptions::default()).unwrap().net;
+    let ss = StateSpace::build(&net, &Options::default()).unwrap();
+    let solver = Solver::new(&net, &ss);
+    for (method, direct_limit) in [(Method::Auto, 0), (Method::Power, 0)] {
+        let opts = SolverOptions {
+            method,
+            direct_limit,
+            cancel: Some(Arc::new(AtomicBool::new(true))),
+            ..SolverOptions::default()
+        };
+        match solver.steady_state(&opts) {
+            Err(SolveError::Cancelled { .. }) => {}
+            other => panic!("{method:?}: expected Cancelled, got {other:?}"),
+        }
+    }
+}

@@ -481,6 +481,24 @@ async fn a_long_analysis_shows_progress_and_can_be_cancelled() {
     assert!(end["markings"].as_u64().unwrap() < 454_475, "{end}");
 }
 
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_cancel_during_the_steady_state_stops_the_solver() {
+    // Kanban N = 4 again: once the search is over, the Gauss–Seidel sweeps take seconds;
+    // a cancel then ends the job in the steady-state phase, with every marking counted.
+    let state = state_for(&common::fixture("kanban/kanban_gspn_N4.pnml"), 0);
+    call(&state, "POST", "/api/analysis/start", None).await;
+    let solving = progress_until(&state, |p| {
+        p["phase"] == "steady state" || p["state"] != "running"
+    })
+    .await;
+    assert_eq!(solving["state"], "running", "{solving}");
+    call(&state, "POST", "/api/analysis/cancel", None).await;
+    let end = progress_until(&state, |p| p["state"] != "cancelling").await;
+    assert_eq!(end["state"], "cancelled", "{end}");
+    assert_eq!(end["phase"], "steady state", "{end}");
+    assert_eq!(end["markings"], 454_475, "{end}");
+}
+
 #[tokio::test]
 async fn a_finished_analysis_is_reported_done_and_kept() {
     let state = state_for(&common::fixture(PATROL), 0);

@@ -152,6 +152,7 @@ impl<'a> Solver<'a> {
                 opts.tolerance * scale,
                 opts.max_iterations,
                 opts.method == Method::Auto,
+                opts.cancel.as_deref(),
             );
             drop(columns);
             match solved {
@@ -163,6 +164,7 @@ impl<'a> Solver<'a> {
                         absorption: vec![1.0],
                     });
                 }
+                Err(e @ SolveError::Cancelled { .. }) => return Err(e),
                 Err(e) if opts.method != Method::Auto => return Err(e),
                 // Auto goes on to the other solvers on the row form.
                 Err(_) => {}

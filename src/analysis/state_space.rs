@@ -32,6 +32,7 @@ pub(crate) mod explore;
 mod packing;
 pub(crate) mod table;
 
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use thiserror::Error;
@@ -125,7 +126,7 @@ pub enum AnalysisError {
 #[derive(Debug, Default)]
 pub struct Monitor {
     markings: AtomicUsize,
-    cancelled: AtomicBool,
+    cancelled: Arc<AtomicBool>,
 }
 
 impl Monitor {
@@ -137,6 +138,13 @@ impl Monitor {
     /// Asks the search to stop as soon as it next looks.
     pub fn cancel(&self) {
         self.cancelled.store(true, Ordering::Relaxed);
+    }
+
+    /// The cancel flag itself, to hand to the steady-state solver
+    /// ([`SteadyOptions::cancel`](crate::analysis::ctmc::SteadyOptions::cancel)) so one
+    /// cancel stops the whole analysis.
+    pub fn cancel_flag(&self) -> Arc<AtomicBool> {
+        Arc::clone(&self.cancelled)
     }
 
     /// Whether [`Monitor::cancel`] was called.

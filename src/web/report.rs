@@ -3,6 +3,7 @@
 
 use serde_json::{Value, json};
 
+use crate::analysis::ctmc::SolveError;
 use crate::analysis::measures::{Solver, SolverOptions};
 use crate::analysis::properties::Properties;
 use crate::analysis::state_space::{AnalysisError, Options, StateSpace};
@@ -82,7 +83,11 @@ pub(crate) fn analyse(net: &Net, max_states: usize, progress: &Progress) -> Valu
         return cancelled();
     }
     let solver = Solver::new(net, &ss);
-    match solver.steady_state(&SolverOptions::default()) {
+    let opts = SolverOptions {
+        cancel: Some(progress.monitor.cancel_flag()),
+        ..SolverOptions::default()
+    };
+    match solver.steady_state(&opts) {
         Ok(lim) => {
             let m = solver.measures(&lim.pi);
             v["steady"] = json!({
@@ -91,6 +96,7 @@ pub(crate) fn analyse(net: &Net, max_states: usize, progress: &Progress) -> Valu
                 "throughput": by_transition(net, &m.throughput),
             });
         }
+        Err(SolveError::Cancelled { .. }) => return cancelled(),
         Err(e) => v["steady_error"] = json!(e.to_string()),
     }
     v

@@ -6,6 +6,8 @@
 //! state of Kanban N = 4 (454,475 states, 4 M entries) needs 24 MB for its generator instead
 //! of 96 MB for rows plus columns.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use rustc_hash::FxHashMap;
 
 use super::SolveError;
@@ -164,12 +166,16 @@ impl Columns {
         omega: f64,
         tol: f64,
         max_iterations: usize,
+        cancel: Option<&AtomicBool>,
     ) -> Result<usize, SolveError> {
         let exit = &self.exit;
         let mut residual = f64::INFINITY;
         let mut threshold = tol;
         let mut sweeps = 0;
         while sweeps < max_iterations {
+            if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return Err(SolveError::Cancelled { iterations: sweeps });
+            }
             // The largest change `q_j·|Δπ_j|` of a sweep estimates the residual; the real one is
             // computed only once the estimate is small (it costs a sweep).
             let mut change = 0.0f64;
@@ -216,14 +222,17 @@ impl Columns {
         tol: f64,
         max_iterations: usize,
         fallback: bool,
+        cancel: Option<&AtomicBool>,
     ) -> Result<Vec<f64>, SolveError> {
         let mut pi = vec![1.0 / self.n as f64; self.n];
-        match self.sor(&mut pi, 1.0, tol, max_iterations) {
+        match self.sor(&mut pi, 1.0, tol, max_iterations, cancel) {
             Ok(_) => Ok(pi),
+            Err(e @ SolveError::Cancelled { .. }) => Err(e),
             Err(e) if !fallback => Err(e),
             Err(_) => {
                 pi.fill(1.0 / self.n as f64);
-                self.sor(&mut pi, 0.7, tol, max_iterations).map(|_| pi)
+                self.sor(&mut pi, 0.7, tol, max_iterations, cancel)
+                    .map(|_| pi)
             }
         }
     }
@@ -241,12 +250,20 @@ mod tests {
         let c = Columns::from_rows(n, |i, out| out.push((((i + 1) % n) as u32, rate(i))));
         assert!(matches!(c.rates, Rates::Plain(_)));
         assert_eq!(c.rows.len(), n);
-        let pi = c.gauss_seidel(1e-12, 10, false).unwrap();
+        let pi = c.gauss_seidel(1e-12, 10, false, None).unwrap();
         // π_i ∝ 1/rate(i) on a ring.
         let z: f64 = (0..n).map(|i| 1.0 / rate(i)).sum();
         for i in [0, 1, n / 2, n - 1] {
             assert!((pi[i] - 1.0 / rate(i) / z).abs() < 1e-12, "state {i}");
         }
+    }
+
+    #[test]
+    fn a_raised_cancel_flag_stops_the_sweeps() {
+        let c = Columns::from_rows(3, |i, out| out.push((((i + 1) % 3) as u32, 1.0)));
+        let flag = AtomicBool::new(true);
+        let err = c.gauss_seidel(1e-14, 100, true, Some(&flag)).unwrap_err();
+        assert_eq!(err, SolveError::Cancelled { iterations: 0 });
     }
 
     #[test]
@@ -260,7 +277,7 @@ mod tests {
         });
         assert!(matches!(&c.rates, Rates::Interned { values, .. } if values.len() == 2));
         assert_eq!(c.exit, [1.0, 2.0]);
-        let pi = c.gauss_seidel(1e-14, 100, true).unwrap();
+        let pi = c.gauss_seidel(1e-14, 100, true, None).unwrap();
         assert!((pi[0] - 2.0 / 3.0).abs() < 1e-12);
         assert!(c.residual(&pi) < 1e-14);
     }

@@ -1,6 +1,9 @@
 //! Steady state of an irreducible chain: sparse LU for small chains, Gauss–Seidel (with
 //! fallbacks) for large ones, always ending with a residual check `‖πQ‖∞ ≤ tolerance`.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use super::{Columns, Ctmc, lu};
 
 /// How [`Ctmc::steady_state`] solves πQ = 0.
@@ -31,6 +34,9 @@ pub struct SteadyOptions {
     pub max_iterations: usize,
     /// Largest chain solved by sparse LU under [`Method::Auto`].
     pub direct_limit: usize,
+    /// Set to `true` (from another thread) to stop an iterative solver at its next sweep
+    /// with [`SolveError::Cancelled`]; the viewer's cancel button uses it.
+    pub cancel: Option<Arc<AtomicBool>>,
 }
 
 impl Default for SteadyOptions {
@@ -40,6 +46,7 @@ impl Default for SteadyOptions {
             tolerance: 1e-12,
             max_iterations: 50_000,
             direct_limit: 5_000,
+            cancel: None,
         }
     }
 }
@@ -56,6 +63,12 @@ pub enum SolveError {
         iterations: usize,
         /// Its final `‖πQ‖∞`.
         residual: f64,
+    },
+    /// [`SteadyOptions::cancel`] was raised.
+    #[error("the steady-state solver was cancelled after {iterations} sweeps")]
+    Cancelled {
+        /// Sweeps done.
+        iterations: usize,
     },
     /// The sparse LU failed (a singular or non-finite system).
     #[error("sparse LU failed: {0}")]
@@ -105,11 +118,15 @@ impl Ctmc {
                     tol,
                     opts.max_iterations,
                     opts.method == Method::Auto,
+                    opts.cancel.as_deref(),
                 ),
-                Method::Power | Method::Auto => self.power(tol, opts.max_iterations * 20),
+                Method::Power | Method::Auto => {
+                    self.power(tol, opts.max_iterations * 20, opts.cancel.as_deref())
+                }
             };
             match attempt {
                 Ok(pi) => return Ok(pi),
+                Err(e @ SolveError::Cancelled { .. }) => return Err(e),
                 Err(e) => last = e,
             }
         }
@@ -156,13 +173,23 @@ impl Ctmc {
         if self.residual(&pi) <= tol {
             return Ok(pi);
         }
-        self.columns()
-            .sor(&mut pi, 1.0, tol, opts.max_iterations.min(1_000))?;
+        self.columns().sor(
+            &mut pi,
+            1.0,
+            tol,
+            opts.max_iterations.min(1_000),
+            opts.cancel.as_deref(),
+        )?;
         Ok(pi)
     }
 
     /// Power iteration on `P = I + Q/Λ`, `Λ = 1.05·max exit rate` (aperiodic by the self-loops).
-    fn power(&self, tol: f64, max_iterations: usize) -> Result<Vec<f64>, SolveError> {
+    fn power(
+        &self,
+        tol: f64,
+        max_iterations: usize,
+        cancel: Option<&AtomicBool>,
+    ) -> Result<Vec<f64>, SolveError> {
         let n = self.n;
         let exit = self.exit_rates();
         let lambda = 1.05 * exit.iter().fold(0.0f64, |m, &x| m.max(x));
@@ -170,6 +197,9 @@ impl Ctmc {
         let mut next = vec![0.0; n];
         let mut residual = f64::INFINITY;
         for it in 1..=max_iterations {
+            if it % 50 == 0 && cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                return Err(SolveError::Cancelled { iterations: it });
+            }
             for ((x, &p), &q) in next.iter_mut().zip(&pi).zip(&exit) {
                 *x = p * (1.0 - q / lambda);
             }
