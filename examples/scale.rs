@@ -3,8 +3,11 @@
 //! ```text
 //! cargo run --release --example scale -- --places 4 --agents 100000 --firings 1000000
 //! cargo run --release --example scale -- --places 1000 --agents 1000 --firings 1000000 --net-timed
-//! cargo run --release --example scale -- --places 4 --agents 100000 --firings 100000 --mode actor
+//! cargo run --release --example scale -- --places 4 --agents 100000 --firings 100000 --mode light
 //! ```
+//!
+//! `--mode actor` (the default: one kameo actor per agent, running its actions) or `light`
+//! (a record per agent, actions as tasks of the place actor).
 //!
 //! Prints one JSON line: `{places, agents, startup_s, firings, firings_per_s, peak_rss_mb,
 //! idle_cpu_percent, ...}`. Two phases: (1) an idle plan — every action waiting — measured
@@ -83,8 +86,8 @@ async fn main() {
         .position(|a| a == "--mode")
         .map(|i| args[i + 1].as_str())
     {
-        Some("actor") => AgentMode::Actor,
-        _ => AgentMode::Light,
+        Some("light") => AgentMode::Light,
+        _ => AgentMode::Actor,
     };
     let (net, ts) = ring(k, n);
 

@@ -46,11 +46,12 @@ pub enum AgentState {
 /// How agents are represented.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum AgentMode {
-    /// A record in the supervisor; actions are tasks hosted by the place actors.
-    #[default]
+    /// A record in the supervisor; actions are tasks hosted by the place actors (about
+    /// 1 KB per agent instead of 7 KB: for plans with very many agents and little memory).
     Light,
-    /// A record plus a kameo actor per agent, spawned and killed with its token, running
-    /// the agent's actions in its own task.
+    /// The default, as DESIGN.md has it: a record plus a kameo actor per agent, spawned and
+    /// killed with its token, running the agent's actions in its own task.
+    #[default]
     Actor,
 }
 

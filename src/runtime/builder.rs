@@ -157,7 +157,7 @@ impl RuntimeBuilder {
         self
     }
 
-    /// Light agents (records) or one kameo actor per agent.
+    /// One kameo actor per agent (the default) or light agents (records).
     pub fn agent_mode(mut self, mode: AgentMode) -> Self {
         self.agent_mode = mode;
         self
