@@ -30,6 +30,8 @@
 //! become ids. Every mistake is a [`LoadError`] with the plan's line and column: unknown keys,
 //! a place or transition that does not exist, a bad probability, a bad predicate.
 
+pub mod map;
+
 use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -68,6 +70,8 @@ pub struct Plan {
     pub stop: StopConditions,
     /// Things accepted but worth saying (from the net reader and from the plan).
     pub warnings: Vec<String>,
+    /// The room simulated robots drive in (`[map]`), when the plan has one.
+    pub map: Option<map::Map>,
 }
 
 /// What a place does when tokens enter it.
@@ -128,6 +132,7 @@ impl Plan {
             rule_spans: Vec::new(),
             stop: StopConditions::default(),
             warnings: loaded.warnings,
+            map: None,
         }
     }
 
@@ -169,6 +174,10 @@ pub struct PlanFile {
     pub policy: Vec<Spanned<RuleFile>>,
     /// When the run ends.
     pub stop: Option<StopFile>,
+    /// The room for simulated robots (feature `sim`): locations, the topological map, walls,
+    /// obstacles; see `docs/plans.md`.
+    #[schemars(with = "Option<map::MapFile>")]
+    pub map: Option<Spanned<map::MapFile>>,
 }
 
 /// The value of a net parameter: a number or an expression the net reader evaluates.
@@ -400,6 +409,24 @@ impl PlanFile {
             stop.max_firings = s.max_firings;
         }
 
+        let map = match &self.map {
+            Some(m) => Some(m.get_ref().resolve(&net, m.span(), &at)?),
+            None => None,
+        };
+        if let Some(m) = &map {
+            // Built-in robot actions (`goto L2; measure`) name locations: check them now.
+            for (name, role) in &self.places {
+                if let Some(a) = &role.get_ref().action {
+                    m.program(a).map_err(|e| {
+                        at(
+                            role.span(),
+                            LoadErrorKind::Invalid(format!("place `{}`: {e}", name.get_ref())),
+                        )
+                    })?;
+                }
+            }
+        }
+
         Ok(Plan {
             path: path.to_path_buf(),
             net_path: self.net_path(path),
@@ -412,6 +439,7 @@ impl PlanFile {
             rule_spans,
             stop,
             warnings,
+            map,
         })
     }
 }
