@@ -23,8 +23,13 @@ pub type Vec2 = rapier2d::math::Vector;
 const NEIGHBOUR_DIST: f32 = 2.0;
 /// At most this many nearest neighbours enter ORCA.
 const MAX_NEIGHBOURS: usize = 10;
+/// ORCA keeps this much more than the bodies' radius between robots (m): the top
+/// acceleration can keep a robot from taking ORCA's velocity at once, and a margin absorbs it.
+const SAFETY: f32 = 0.05;
+/// Obstacles farther than this from a robot are left out of its ORCA (m).
+const OBSTACLE_DIST: f32 = 1.5;
 /// A waypoint counts as passed within this distance (m).
-const WAYPOINT_TOL: f32 = 0.35;
+const WAYPOINT_TOL: f32 = 0.6;
 
 /// One robot's body and what it drives to.
 #[derive(Clone, Debug)]
@@ -50,6 +55,8 @@ pub struct Room {
     max_accel: f32,
     dt: f32,
     obstacles: Vec<dodgy_2d::Obstacle>,
+    /// Bounding boxes of `obstacles`: (min, max).
+    boxes: Vec<(Vec2, Vec2)>,
     options: dodgy_2d::AvoidanceOptions,
     grid: Grid,
     contacts: FxHashSet<(u32, u32)>,
@@ -111,6 +118,13 @@ impl Room {
                 }
             })
             .collect();
+        let obstacles: Vec<dodgy_2d::Obstacle> = map
+            .obstacles
+            .iter()
+            .map(polygon)
+            .chain(map.walls.iter().map(slab))
+            .collect();
+        let boxes = obstacles.iter().map(bounds).collect();
         Room {
             phys,
             bodies,
@@ -118,7 +132,8 @@ impl Room {
             max_speed: map.robot.max_speed as f32,
             max_accel: map.robot.max_accel as f32,
             dt,
-            obstacles: map.obstacles.iter().map(polygon).collect(),
+            obstacles,
+            boxes,
             options: dodgy_2d::AvoidanceOptions {
                 obstacle_margin: 0.02,
                 time_horizon: 1.5,
@@ -198,12 +213,11 @@ impl Room {
             .map(|b| dodgy_2d::Agent {
                 position: dv(b.pos),
                 velocity: dv(b.vel),
-                radius: self.radius,
+                radius: self.radius + SAFETY,
                 avoidance_responsibility: 1.0,
             })
             .collect();
-        let obstacles: Vec<Cow<'_, dodgy_2d::Obstacle>> =
-            self.obstacles.iter().map(Cow::Borrowed).collect();
+        let mut obstacles: Vec<Cow<'_, dodgy_2d::Obstacle>> = Vec::new();
         let mut neighbours: Vec<Cow<'_, dodgy_2d::Agent>> = Vec::with_capacity(MAX_NEIGHBOURS);
         let mut new_vel = Vec::with_capacity(self.bodies.len());
         for i in 0..self.bodies.len() {
@@ -224,6 +238,13 @@ impl Room {
                 self.near
                     .select_nth_unstable_by(MAX_NEIGHBOURS, |a, b| a.0.total_cmp(&b.0));
                 self.near.truncate(MAX_NEIGHBOURS);
+            }
+            // Only obstacles the robot could reach within their time horizon matter.
+            obstacles.clear();
+            for (o, &(lo, hi)) in self.obstacles.iter().zip(&self.boxes) {
+                if b.pos.clamp(lo, hi).distance(b.pos) < OBSTACLE_DIST {
+                    obstacles.push(Cow::Borrowed(o));
+                }
             }
             neighbours.clear();
             neighbours.extend(self.near.iter().map(|&(_, j)| Cow::Borrowed(&agents[j])));
@@ -315,6 +336,28 @@ fn polygon(r: &Rect) -> dodgy_2d::Obstacle {
             dodgy_2d::Vec2::new(x0, y1),
         ],
     }
+}
+
+/// A wall as an ORCA obstacle: the segment thickened to a 2 cm slab (counter-clockwise), so
+/// it is solid on both sides.
+fn slab(w: &[f64; 4]) -> dodgy_2d::Obstacle {
+    let (a, b) = (v(w[0], w[1]), v(w[2], w[3]));
+    let n = (b - a).perp().normalize_or_zero() * 0.01;
+    let corners = [a - n, b - n, b + n, a + n];
+    dodgy_2d::Obstacle::Closed {
+        vertices: corners.iter().map(|&c| dv(c)).collect(),
+    }
+}
+
+fn bounds(o: &dodgy_2d::Obstacle) -> (Vec2, Vec2) {
+    let (dodgy_2d::Obstacle::Closed { vertices } | dodgy_2d::Obstacle::Open { vertices }) = o;
+    let mut lo = Vec2::splat(f32::INFINITY);
+    let mut hi = Vec2::splat(f32::NEG_INFINITY);
+    for p in vertices {
+        lo = lo.min(Vec2::new(p.x, p.y));
+        hi = hi.max(Vec2::new(p.x, p.y));
+    }
+    (lo, hi)
 }
 
 /// A uniform grid of robot indices, rebuilt every step (cell = the neighbour distance).
