@@ -68,6 +68,9 @@ pub struct Plan {
     pub rule_spans: Vec<Span>,
     /// When the run ends (besides "nothing can fire any more").
     pub stop: StopConditions,
+    /// Robots bound to the initial agents, in agent order (places in net order, then
+    /// tokens); empty when the plan names none.
+    pub robots: Vec<String>,
     /// Things accepted but worth saying (from the net reader and from the plan).
     pub warnings: Vec<String>,
     /// The room simulated robots drive in (`[map]`), when the plan has one.
@@ -131,6 +134,7 @@ impl Plan {
             policy: Policy::empty(),
             rule_spans: Vec::new(),
             stop: StopConditions::default(),
+            robots: Vec::new(),
             warnings: loaded.warnings,
             map: None,
         }
@@ -174,6 +178,12 @@ pub struct PlanFile {
     pub policy: Vec<Spanned<RuleFile>>,
     /// When the run ends.
     pub stop: Option<StopFile>,
+    /// Robot names bound to the initial agents, in agent order: places in net order, then
+    /// tokens. Each agent keeps its robot as it moves through the net; a net that can create
+    /// or destroy robot tokens (outside resource places) is refused when the run starts.
+    #[serde(default)]
+    #[schemars(with = "Vec<String>")]
+    pub robots: Vec<Spanned<String>>,
     /// The room for simulated robots (feature `sim`): locations, the topological map, walls,
     /// obstacles; see `docs/plans.md`.
     #[schemars(with = "Option<map::MapFile>")]
@@ -409,6 +419,26 @@ impl PlanFile {
             stop.max_firings = s.max_firings;
         }
 
+        let mut robots: Vec<String> = Vec::with_capacity(self.robots.len());
+        for r in &self.robots {
+            let name = r.get_ref();
+            if name.is_empty() || name.contains(char::is_whitespace) {
+                return Err(at(
+                    r.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "robot name `{name}` must be non-empty and without spaces"
+                    )),
+                ));
+            }
+            if robots.iter().any(|n| n == name) {
+                return Err(at(
+                    r.span(),
+                    LoadErrorKind::Invalid(format!("robot `{name}` is listed twice")),
+                ));
+            }
+            robots.push(name.clone());
+        }
+
         let map = match &self.map {
             Some(m) => Some(m.get_ref().resolve(&net, m.span(), &at)?),
             None => None,
@@ -438,6 +468,7 @@ impl PlanFile {
             policy,
             rule_spans,
             stop,
+            robots,
             warnings,
             map,
         })

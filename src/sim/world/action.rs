@@ -53,8 +53,7 @@ impl Action for SimAction {
         let steps = Arc::clone(&self.steps);
         let world = self.world.clone();
         Box::pin(async move {
-            let robot: Option<Arc<str>> = Some(Arc::from(format!("r{}", ctx.agent.0 + 1))); // TEMP
-            let Some(robot) = robot else {
+            let Some(robot) = ctx.robot.clone() else {
                 return Outcome::Failed(format!(
                     "agent {} has no robot: built-in robot actions need `robots` (run with --robots N)",
                     ctx.agent.0

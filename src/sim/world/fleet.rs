@@ -187,7 +187,12 @@ impl Fleet {
                 .location_of_place(p)
                 .ok_or_else(|| FleetError::Unplaced(plan.net.place(p).name.clone()))?;
             for _ in 0..k {
-                let name: Arc<str> = Arc::from(format!("r{}", starts.len() + 1));
+                // The plan's robot names when it lists them (and no count was asked for).
+                let i = starts.len();
+                let name: Arc<str> = match plan.robots.get(i) {
+                    Some(n) if robots.is_none() => Arc::from(n.as_str()),
+                    _ => Arc::from(format!("r{}", i + 1)),
+                };
                 starts.push((name, loc));
             }
         }
@@ -211,9 +216,8 @@ impl Fleet {
             .collect();
         names.sort();
         names.dedup();
-        let robots: Vec<Arc<str>> = starts.into_iter().map(|(n, _)| n).collect();
-        let mut builder = Runtime::from_plan(plan).seed(seed);
-        let _ = robots; // TEMP
+        let bound: Vec<Arc<str>> = starts.into_iter().map(|(n, _)| n).collect();
+        let mut builder = Runtime::from_plan(plan).seed(seed).robots(bound);
         for name in names {
             let action =
                 SimAction::parse(&map, &name, &world).map_err(|reason| FleetError::BadAction {

@@ -17,7 +17,6 @@ pub struct WorldView {
     /// Simulated time (s).
     pub time: f64,
     /// The map (shared between views: it does not change).
-    #[serde(serialize_with = "shared")]
     pub map: Arc<MapView>,
     /// Every robot.
     pub robots: Vec<RobotView>,
@@ -51,7 +50,6 @@ pub struct LocationView {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct RobotView {
     /// The robot's name.
-    #[serde(serialize_with = "shared")]
     pub id: Arc<str>,
     /// The agent it carries now (`null` before its first action).
     pub agent: Option<u64>,
@@ -61,14 +59,6 @@ pub struct RobotView {
     pub y: f64,
     /// Disc radius (m).
     pub radius: f64,
-}
-
-/// Serializes what an `Arc` points to (serde's `rc` feature is not on).
-fn shared<T: Serialize + ?Sized, S: serde::Serializer>(
-    v: &Arc<T>,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    T::serialize(v, s)
 }
 
 impl MapView {
