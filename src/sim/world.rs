@@ -118,6 +118,18 @@ impl std::fmt::Debug for World {
     }
 }
 
+/// A robot at the start: its name, the location whose queue it starts in, and the agent it
+/// carries (when known; the world learns it from the robot's first action otherwise).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RobotStart {
+    /// The robot's name.
+    pub name: Arc<str>,
+    /// Index of its start location in the map.
+    pub location: usize,
+    /// The agent it carries.
+    pub agent: Option<u64>,
+}
+
 /// A running world: its view channel, its metrics, stop.
 #[derive(Clone, Debug)]
 pub struct WorldHandle {
@@ -159,18 +171,13 @@ impl WorldHandle {
 }
 
 impl World {
-    /// Spawns a world on `map` with one robot per `(name, location)`, lined up in the
+    /// Spawns a world on `map` with one robot per [`RobotStart`], lined up in the
     /// locations' queues in this order. `time_scale` as the runtime's (0 = virtual time);
     /// `seed` seeds every robot's draws (one stream per robot).
-    pub fn spawn(
-        map: Arc<Map>,
-        robots: &[(Arc<str>, usize)],
-        time_scale: f64,
-        seed: u64,
-    ) -> WorldHandle {
+    pub fn spawn(map: Arc<Map>, robots: &[RobotStart], time_scale: f64, seed: u64) -> WorldHandle {
         let mut queues = Queues::new(&map);
-        for (r, (_, loc)) in robots.iter().enumerate() {
-            queues.join(*loc, r);
+        for (r, s) in robots.iter().enumerate() {
+            queues.join(s.location, r);
         }
         let mut starts = vec![Vec2::ZERO; robots.len()];
         for l in 0..map.locations.len() {
@@ -184,20 +191,20 @@ impl World {
         let robots: Vec<Robot> = robots
             .iter()
             .enumerate()
-            .map(|(r, (name, loc))| {
+            .map(|(r, s)| {
                 let mut rng = ChaCha8Rng::seed_from_u64(seed);
                 rng.set_stream(r as u64 + 1);
                 Robot {
-                    name: Arc::clone(name),
-                    agent: None,
-                    location: Some(*loc),
+                    name: Arc::clone(&s.name),
+                    agent: s.agent,
+                    location: Some(s.location),
                     arrived: true,
                     goto: None,
                     best: f32::INFINITY,
                     progress_step: 0,
                     turn: None,
                     rng,
-                    patrol_at: map.patrol.iter().position(|&p| p == *loc),
+                    patrol_at: map.patrol.iter().position(|&p| p == s.location),
                     streak: 0,
                     cycles: 0,
                 }

@@ -10,7 +10,7 @@
 
 use std::sync::Arc;
 
-use super::{SimAction, World, WorldHandle};
+use super::{RobotStart, SimAction, World, WorldHandle};
 use crate::analysis::invariants::conserves_tokens;
 use crate::io::plan::{Plan, Role};
 use crate::net::{Net, NetBuilder, Place, PlaceId};
@@ -193,7 +193,13 @@ impl Fleet {
                     Some(n) if robots.is_none() => Arc::from(n.as_str()),
                     _ => Arc::from(format!("r{}", i + 1)),
                 };
-                starts.push((name, loc));
+                // Robots are bound to the initial agents in agent order: agent i carries robot i.
+                let agent = Some(i as u64);
+                starts.push(RobotStart {
+                    name,
+                    location: loc,
+                    agent,
+                });
             }
         }
         if starts.is_empty() {
@@ -216,7 +222,7 @@ impl Fleet {
             .collect();
         names.sort();
         names.dedup();
-        let bound: Vec<Arc<str>> = starts.into_iter().map(|(n, _)| n).collect();
+        let bound: Vec<Arc<str>> = starts.into_iter().map(|s| s.name).collect();
         let mut builder = Runtime::from_plan(plan).seed(seed).robots(bound);
         for name in names {
             let action =
