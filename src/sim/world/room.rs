@@ -84,8 +84,10 @@ impl Room {
     /// A room with the map's walls and obstacles and one robot at each of `starts`.
     pub fn new(map: &Map, starts: &[Vec2]) -> Room {
         let dt = (1.0 / map.step_hz) as f32;
-        let mut phys = PhysicsWorld::default();
-        phys.gravity = Vec2::ZERO;
+        let mut phys = PhysicsWorld {
+            gravity: Vec2::ZERO,
+            ..Default::default()
+        };
         phys.integration_parameters.dt = dt;
         for w in &map.walls {
             let (a, b) = (v(w[0], w[1]), v(w[2], w[3]));
