@@ -13,9 +13,33 @@
 //! between ticks (`dt × time_scale`; with time scale 0, tokio's paused clock jumps straight to
 //! the next tick, so a run is as fast as the computer allows). It steps only while some robot
 //! moves: a world of parked robots costs nothing.
+//!
+//! ```
+//! use gspn::io::{ReadOptions, plan::read_plan};
+//! use gspn::sim::world::Fleet;
+//!
+//! let rt = tokio::runtime::Builder::new_current_thread()
+//!     .enable_all()
+//!     .start_paused(true) // virtual time: as fast as the steps compute
+//!     .build()
+//!     .unwrap();
+//! rt.block_on(async {
+//!     let path = std::path::Path::new("plans/temperature-patrol/plan.toml");
+//!     let mut plan = read_plan(path, &ReadOptions::default()).unwrap();
+//!     plan.stop.time_limit = Some(150.0);
+//!     let fleet = Fleet::new(plan, Some(2)).unwrap();
+//!     let handle = fleet.builder.spawn().unwrap();
+//!     handle.wait().await;
+//!     let m = fleet.world.metrics().await.unwrap();
+//!     fleet.world.stop();
+//!     assert_eq!((m.robots, m.collisions, m.stuck_events), (2, 0, 0));
+//!     assert!(m.cycles_per_robot.iter().all(|&c| c >= 1), "{m:?}");
+//! });
+//! ```
 
 pub mod action;
 pub mod fleet;
+mod messages;
 pub mod metrics;
 pub mod queue;
 pub mod room;
@@ -27,7 +51,6 @@ use std::time::Duration;
 use kameo::actor::{Actor, ActorRef, Spawn, WeakActorRef};
 use kameo::error::Infallible;
 use kameo::mailbox::{self, MailboxReceiver, Signal};
-use kameo::message::{Context, Message};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rustc_hash::FxHashMap;
@@ -36,11 +59,11 @@ use tokio::time::Instant;
 
 pub use action::SimAction;
 pub use fleet::{Fleet, FleetError};
+use messages::{GetMetrics, Goto, Hold};
 pub use metrics::SimMetrics;
 pub use view::{MapView, RobotView, WorldView};
 
 use crate::io::plan::map::Map;
-use crate::net::TransitionId;
 use queue::Queues;
 use room::{Room, Vec2};
 
@@ -496,37 +519,6 @@ impl World {
     }
 }
 
-/// Drive `robot` to `location` (see [`action`]).
-#[derive(Debug)]
-pub(crate) struct Goto {
-    pub(crate) robot: Arc<str>,
-    pub(crate) agent: u64,
-    pub(crate) location: usize,
-    pub(crate) reply: oneshot::Sender<Result<(), GotoError>>,
-}
-
-/// Reply when `robot` is at the front of its location's queue.
-#[derive(Debug)]
-pub(crate) struct Turn {
-    pub(crate) robot: Arc<str>,
-    pub(crate) reply: oneshot::Sender<()>,
-}
-
-/// Draw a holding time and an outcome from `robot`'s stream.
-#[derive(Debug)]
-pub(crate) struct Hold {
-    pub(crate) robot: Arc<str>,
-    pub(crate) agent: u64,
-    pub(crate) seconds: Option<f64>,
-    /// The place's exponential outputs with their rates.
-    pub(crate) outputs: Vec<(TransitionId, f64)>,
-    pub(crate) reply: oneshot::Sender<(f64, Option<TransitionId>)>,
-}
-
-/// Ask for the metrics so far.
-#[derive(Debug)]
-pub(crate) struct GetMetrics;
-
 impl Actor for World {
     type Args = World;
     type Error = Infallible;
@@ -557,46 +549,5 @@ impl Actor for World {
                 }
             }
         }
-    }
-}
-
-impl Message<Goto> for World {
-    type Reply = ();
-
-    async fn handle(&mut self, m: Goto, _: &mut Context<Self, Self::Reply>) {
-        self.goto(m);
-    }
-}
-
-impl Message<Turn> for World {
-    type Reply = ();
-
-    async fn handle(&mut self, m: Turn, _: &mut Context<Self, Self::Reply>) {
-        let front = self
-            .names
-            .get(&m.robot)
-            .and_then(|&r| self.robots[r].location.map(|l| (r, l)));
-        match front {
-            Some((r, l)) if self.queues.front(l) != Some(r) => self.robots[r].turn = Some(m.reply),
-            _ => {
-                let _ = m.reply.send(());
-            }
-        }
-    }
-}
-
-impl Message<Hold> for World {
-    type Reply = ();
-
-    async fn handle(&mut self, m: Hold, _: &mut Context<Self, Self::Reply>) {
-        self.hold(m);
-    }
-}
-
-impl Message<GetMetrics> for World {
-    type Reply = SimMetrics;
-
-    async fn handle(&mut self, _: GetMetrics, _: &mut Context<Self, Self::Reply>) -> SimMetrics {
-        self.metrics()
     }
 }

@@ -17,7 +17,8 @@ use std::time::Duration;
 
 use tokio::sync::oneshot;
 
-use super::{Goto, Hold, Turn, WorldHandle};
+use super::WorldHandle;
+use super::messages::{Goto, Hold, Turn};
 use crate::io::plan::map::{Map, Step};
 use crate::net::Timing;
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};

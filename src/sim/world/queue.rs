@@ -69,11 +69,6 @@ impl Queues {
         self.queues[loc].front().map(|&(r, _)| r)
     }
 
-    /// Robots at `loc`, in join order.
-    pub fn members(&self, loc: usize) -> impl Iterator<Item = usize> + '_ {
-        self.queues[loc].iter().map(|&(r, _)| r)
-    }
-
     /// Every robot of `loc` with the point of its slot now.
     pub fn slots(&self, loc: usize) -> Vec<(usize, Vec2)> {
         let mut rows = vec![0u32; self.lanes as usize];
