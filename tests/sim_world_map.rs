@@ -169,8 +169,9 @@ async fn a_robot_that_cannot_get_through_is_reported_stuck_where_it_stands() {
     }
     assert_eq!(messages.len(), 1, "{messages:?}");
     let (time, msg) = &messages[0];
-    // Driving 3 m to the wall takes ~3.5 s, then 5 s without progress.
-    assert!(*time > 8.0 && *time < 10.0, "{time}");
+    // Driving ~3 m to the wall (slowing down as it nears it) takes ~5 s, then 5 s without
+    // progress.
+    assert!(*time > 8.0 && *time < 13.0, "{time}");
     let at = msg
         .split_once("stuck at (")
         .map(|(_, r)| r.trim_end_matches(')').to_string())

@@ -488,3 +488,68 @@ impl Map {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map() -> Map {
+        Map {
+            locations: ["A", "B"]
+                .iter()
+                .map(|n| Location {
+                    name: n.to_string(),
+                    x: 0.0,
+                    y: 0.0,
+                    queue_dir: [0.0, -1.0],
+                    places: vec![],
+                })
+                .collect(),
+            edges: vec![(0, 1)],
+            patrol: vec![],
+            walls: vec![],
+            obstacles: vec![],
+            robot: RobotSpec {
+                radius: 0.15,
+                max_speed: 1.0,
+                max_accel: 2.0,
+            },
+            queue: QueueSpec {
+                lanes: 1,
+                spacing: 0.5,
+            },
+            step_hz: 20.0,
+            stuck_after: 30.0,
+        }
+    }
+
+    #[test]
+    fn built_in_programs_are_read_step_by_step() {
+        let m = map();
+        assert_eq!(
+            m.program(" goto B ;measure 2.5; wait; decide"),
+            Ok(Some(vec![
+                Step::Goto(1),
+                Step::Measure(Some(2.5)),
+                Step::Wait(None),
+                Step::Decide
+            ]))
+        );
+        assert_eq!(m.program("check_temperature"), Ok(None));
+        assert_eq!(
+            m.program("goto C"),
+            Err("`goto C`: location `C` does not exist".into())
+        );
+        assert_eq!(
+            m.program("goto A B"),
+            Err("`goto A B`: expected `goto LOCATION`".into())
+        );
+        assert_eq!(
+            m.program("wait -1"),
+            Err("`wait -1`: `-1` is not a number of seconds ≥ 0".into())
+        );
+        assert!(m.program("goto A; beep").unwrap_err().contains("mixes"));
+        assert_eq!(m.neighbours(0).collect::<Vec<_>>(), [1]);
+        assert_eq!(m.location("B"), Some(1));
+    }
+}

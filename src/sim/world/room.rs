@@ -27,7 +27,7 @@ const MAX_NEIGHBOURS: usize = 10;
 /// acceleration can keep a robot from taking ORCA's velocity at once, and a margin absorbs it.
 const SAFETY: f32 = 0.05;
 /// Obstacles farther than this from a robot are left out of its ORCA (m).
-const OBSTACLE_DIST: f32 = 1.5;
+const OBSTACLE_DIST: f32 = 2.0;
 /// A waypoint counts as passed within this distance (m).
 const WAYPOINT_TOL: f32 = 0.6;
 
@@ -137,9 +137,10 @@ impl Room {
             obstacles,
             boxes,
             options: dodgy_2d::AvoidanceOptions {
-                obstacle_margin: 0.02,
+                // dodgy keeps this far from obstacles (it does not add the agent's radius).
+                obstacle_margin: radius + SAFETY,
                 time_horizon: 1.5,
-                obstacle_time_horizon: 0.5,
+                obstacle_time_horizon: 1.0,
             },
             grid: Grid::new(NEIGHBOUR_DIST),
             contacts: FxHashSet::default(),
@@ -404,5 +405,72 @@ impl Grid {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::plan::map::{QueueSpec, RobotSpec};
+
+    fn open_map(walls: Vec<[f64; 4]>) -> Map {
+        Map {
+            locations: vec![],
+            edges: vec![],
+            patrol: vec![],
+            walls,
+            obstacles: vec![],
+            robot: RobotSpec {
+                radius: 0.15,
+                max_speed: 1.0,
+                max_accel: 2.0,
+            },
+            queue: QueueSpec {
+                lanes: 1,
+                spacing: 0.5,
+            },
+            step_hz: 20.0,
+            stuck_after: 30.0,
+        }
+    }
+
+    #[test]
+    fn two_robots_swap_places_head_on_without_touching() {
+        let (a, b) = (Vec2::new(1.0, 0.0), Vec2::new(5.0, 0.0));
+        let mut room = Room::new(&open_map(vec![]), &[a, b]);
+        room.bodies[0].target = b;
+        room.bodies[1].target = a;
+        for _ in 0..200 {
+            room.step();
+        }
+        assert!(
+            room.bodies[0].pos.distance(b) < 0.05,
+            "{:?}",
+            room.bodies[0].pos
+        );
+        assert!(
+            room.bodies[1].pos.distance(a) < 0.05,
+            "{:?}",
+            room.bodies[1].pos
+        );
+        assert!(room.settled(0) && room.settled(1));
+        assert_eq!(room.collisions, 0);
+        let s = room.min_separation.unwrap();
+        assert!(s > 0.0 && s < 1.0, "{s}");
+        assert_eq!(room.steps, 200);
+    }
+
+    #[test]
+    fn a_wall_stops_a_robot() {
+        let mut room = Room::new(&open_map(vec![[3.0, -2.0, 3.0, 2.0]]), &[Vec2::ZERO]);
+        room.bodies[0].target = Vec2::new(6.0, 0.0);
+        for _ in 0..200 {
+            room.step();
+        }
+        let p = room.bodies[0].pos;
+        // Stops short of the wall by its radius and the avoidance margin, without touching.
+        assert!(p.x > 2.7 && p.x < 3.0 - 0.01 - 0.15 - 0.04, "{p:?}");
+        assert!(p.y.abs() < 0.05, "{p:?}");
+        assert!((room.remaining(0) - (6.0 - p.x)).abs() < 1e-4);
     }
 }
