@@ -7,7 +7,8 @@
 //!
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
 //! - [`io`]: readers and writers — PIPE XML, PNML, GreatSPN PNPRO, DOT, plan files.
-//! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded.
+//! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded; `sim::world`
+//!   (feature `sim`): simulated robots in a rapier2d room, driven by built-in actions.
 //! - [`analysis`]: the tangible reachability graph, properties (bounds, deadlocks, liveness,
 //!   invariants), the CTMC (steady state, limiting, transient) and measures.
 //! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.

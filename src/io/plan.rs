@@ -30,6 +30,8 @@
 //! become ids. Every mistake is a [`LoadError`] with the plan's line and column: unknown keys,
 //! a place or transition that does not exist, a bad probability, a bad predicate.
 
+pub mod map;
+
 use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -71,6 +73,8 @@ pub struct Plan {
     pub robots: Vec<String>,
     /// Things accepted but worth saying (from the net reader and from the plan).
     pub warnings: Vec<String>,
+    /// The room simulated robots drive in (`[map]`), when the plan has one.
+    pub map: Option<map::Map>,
 }
 
 /// What a place does when tokens enter it.
@@ -132,6 +136,7 @@ impl Plan {
             stop: StopConditions::default(),
             robots: Vec::new(),
             warnings: loaded.warnings,
+            map: None,
         }
     }
 
@@ -179,6 +184,10 @@ pub struct PlanFile {
     #[serde(default)]
     #[schemars(with = "Vec<String>")]
     pub robots: Vec<Spanned<String>>,
+    /// The room for simulated robots (feature `sim`): locations, the topological map, walls,
+    /// obstacles; see `docs/plans.md`.
+    #[schemars(with = "Option<map::MapFile>")]
+    pub map: Option<Spanned<map::MapFile>>,
 }
 
 /// The value of a net parameter: a number or an expression the net reader evaluates.
@@ -430,6 +439,24 @@ impl PlanFile {
             robots.push(name.clone());
         }
 
+        let map = match &self.map {
+            Some(m) => Some(m.get_ref().resolve(&net, m.span(), &at)?),
+            None => None,
+        };
+        if let Some(m) = &map {
+            // Built-in robot actions (`goto L2; measure`) name locations: check them now.
+            for (name, role) in &self.places {
+                if let Some(a) = &role.get_ref().action {
+                    m.program(a).map_err(|e| {
+                        at(
+                            role.span(),
+                            LoadErrorKind::Invalid(format!("place `{}`: {e}", name.get_ref())),
+                        )
+                    })?;
+                }
+            }
+        }
+
         Ok(Plan {
             path: path.to_path_buf(),
             net_path: self.net_path(path),
@@ -443,6 +470,7 @@ impl PlanFile {
             stop,
             robots,
             warnings,
+            map,
         })
     }
 }

@@ -9,6 +9,8 @@ mod convert;
 mod import_thesis;
 #[cfg(feature = "web")]
 mod replay;
+#[cfg(feature = "sim")]
+mod robots;
 mod run;
 #[cfg(feature = "web")]
 mod serve;

@@ -4,6 +4,11 @@
 //! code); a live one-line progress display on a terminal; a summary at the end (`--json`:
 //! `stopped, firings, time, agents_spawned, agents_ended, final_marking, mean_tokens,
 //! throughput, errors`). Ctrl-C stops the run cleanly (journal flushed) with exit code 130.
+//!
+//! A plan with a `[map]` runs on simulated robots (feature `sim`): `--robots N` scales the
+//! net's initial robot tokens to N; with time scale 0 the run uses tokio's paused clock, so the
+//! world runs faster than real time; `--json` adds the key `sim` (see
+//! `gspn::sim::world::SimMetrics`).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -12,7 +17,7 @@ use std::time::Duration;
 
 use anyhow::Context as _;
 use gspn::io::plan::{Plan, read_plan};
-use gspn::runtime::{Runtime, Summary};
+use gspn::runtime::{Runtime, RuntimeBuilder, Summary};
 
 use crate::common::{BadInput, NetArgs, load_net};
 
@@ -38,12 +43,17 @@ pub(crate) struct Args {
     journal: Option<PathBuf>,
     /// Print the summary as JSON.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
     /// Watch the run in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080]
     /// (feature `web`); after the run it stays up until Ctrl-C.
     #[cfg(feature = "web")]
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
     web: Option<std::net::SocketAddr>,
+    /// Run the plan's map with N simulated robots (the net's initial robot tokens scaled to
+    /// N; feature `sim`).
+    #[cfg(feature = "sim")]
+    #[arg(long, value_name = "N")]
+    pub(crate) robots: Option<usize>,
     #[command(flatten)]
     net: NetArgs,
 }
@@ -81,6 +91,14 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     for w in &plan.warnings {
         eprintln!("warning: {w}");
     }
+    #[cfg(feature = "sim")]
+    if plan.map.is_some() {
+        return crate::robots::main(plan, &args);
+    } else if args.robots.is_some() {
+        return Err(
+            BadInput("--robots needs a plan with a [map] (see docs/plans.md)".into()).into(),
+        );
+    }
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -92,11 +110,16 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
+    execute_with(Runtime::from_plan(plan), args).await
+}
+
+/// Runs a configured builder: journal, viewer, progress, Ctrl-C, summary.
+pub(crate) async fn execute_with(b: RuntimeBuilder, args: &Args) -> anyhow::Result<Summary> {
     #[cfg(feature = "web")]
     let watched = args.web.is_some();
     #[cfg(not(feature = "web"))]
     let watched = false;
-    let mut b = Runtime::from_plan(plan).subscribe_at_start(watched);
+    let mut b = b.subscribe_at_start(watched);
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
@@ -146,7 +169,7 @@ async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
     Ok(summary)
 }
 
-fn print_summary(s: &Summary, json: bool) -> anyhow::Result<()> {
+pub(crate) fn print_summary(s: &Summary, json: bool) -> anyhow::Result<()> {
     if json {
         println!("{}", serde_json::to_string_pretty(s)?);
         return Ok(());
