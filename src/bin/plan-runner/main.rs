@@ -9,6 +9,8 @@ mod convert;
 mod import_thesis;
 #[cfg(feature = "web")]
 mod replay;
+#[cfg(feature = "ros2")]
+mod ros2;
 mod run;
 #[cfg(feature = "web")]
 mod serve;
@@ -46,6 +48,10 @@ enum Command {
     /// Play a run's journal back: print its firings, or show them with --web (feature `web`).
     #[cfg(feature = "web")]
     Replay(replay::Args),
+    /// Serve a plan's `ros2` places as one robot: ExecPlace action servers at /<ID>/<server>
+    /// with net-timed local actions, a heartbeat, the firings (feature `ros2`).
+    #[cfg(feature = "ros2")]
+    Robot(ros2::RobotArgs),
 }
 
 fn main() -> ExitCode {
@@ -62,6 +68,8 @@ fn main() -> ExitCode {
         Command::Serve(a) => serve::main(a),
         #[cfg(feature = "web")]
         Command::Replay(a) => replay::main(a),
+        #[cfg(feature = "ros2")]
+        Command::Robot(a) => ros2::robot(a),
     };
     match result {
         Ok(code) => code,

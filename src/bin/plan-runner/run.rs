@@ -46,6 +46,10 @@ pub(crate) struct Args {
     web: Option<std::net::SocketAddr>,
     #[command(flatten)]
     net: NetArgs,
+    /// ROS 2 flags, used when the plan has `ros2` places (feature `ros2`).
+    #[cfg(feature = "ros2")]
+    #[command(flatten)]
+    ros2: crate::ros2::RunArgs,
 }
 
 fn load(args: &Args) -> anyhow::Result<Plan> {
@@ -96,11 +100,27 @@ async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
     let watched = args.web.is_some();
     #[cfg(not(feature = "web"))]
     let watched = false;
+    #[cfg(feature = "ros2")]
+    let mut ros2 = match crate::ros2::wanted(&plan) {
+        true => Some(crate::ros2::connect(&plan, &args.ros2).await?),
+        false => None,
+    };
+    #[cfg(feature = "ros2")]
+    let watched = watched || ros2.is_some();
     let mut b = Runtime::from_plan(plan).subscribe_at_start(watched);
+    #[cfg(feature = "ros2")]
+    if let Some(r) = &ros2 {
+        b = r.attach(b);
+    }
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
-    let handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
+    let mut handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    #[cfg(feature = "ros2")]
+    if let Some(r) = &mut ros2 {
+        r.publish(handle.events());
+    }
     #[cfg(feature = "web")]
     let (handle, viewer) = crate::serve::follow(handle, args.web).await?;
     for w in handle.warnings() {
@@ -141,6 +161,10 @@ async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
         bar.finish_and_clear();
     }
     eprintln!("seed {}", handle.seed());
+    #[cfg(feature = "ros2")]
+    if let Some(r) = ros2 {
+        crate::ros2::finish(r, &args.ros2).await;
+    }
     #[cfg(feature = "web")]
     crate::serve::linger(viewer, &summary).await;
     Ok(summary)

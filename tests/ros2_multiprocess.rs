@@ -1,0 +1,144 @@
+//! The ROS 2 backend as 1 + 3 processes on loopback (feature `ros2`): `plan-runner run` as
+//! the supervisor, three `plan-runner robot` processes serving ExecPlace, and a subscriber in
+//! this test. Every wait is bounded; each test has its own DDS domain.
+#![cfg(feature = "ros2")]
+
+#[path = "ros2/support.rs"]
+mod support;
+
+use std::collections::BTreeSet;
+use std::time::{Duration, Instant};
+
+use gspn::io::{ReadOptions, read_net};
+use support::{domain, finish, listen, repo, robot, supervisor, take};
+
+const ROBOTS: [&str; 3] = ["r1", "r2", "r3"];
+
+fn place_and_transition_names() -> (Vec<String>, BTreeSet<String>) {
+    let net = read_net(
+        &repo("plans/nets/temperature_patrol.xml"),
+        &ReadOptions::default(),
+    )
+    .expect("the patrol net")
+    .net;
+    (
+        net.places().iter().map(|p| p.name.clone()).collect(),
+        net.transitions().iter().map(|t| t.name.clone()).collect(),
+    )
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_firing_reaches_a_subscriber_exactly_once_in_order() {
+    const N: usize = 60;
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(1);
+    let (mut firings, mut markings) = listen(d);
+    let _robots: Vec<_> = ROBOTS.iter().map(|r| robot(dir.path(), r, d)).collect();
+    // 3 robots and this test subscribe to /gspn/firings: no firing before all 4 match.
+    let sup = supervisor(
+        dir.path(),
+        d,
+        &["--max-firings", &N.to_string(), "--ros2-wait-subscribers", "4"],
+    );
+    let got = take(&mut firings, N, Duration::from_secs(90)).await;
+    let log = sup.log();
+    let (code, out) = finish(sup, Duration::from_secs(30)).await;
+    assert_eq!(got.len(), N, "firings received; supervisor log:\n{log}");
+    assert_eq!(code, Some(0), "supervisor: {out}\n{log}");
+    // Nothing more arrives: each firing exactly once.
+    let extra = take(&mut firings, 1, Duration::from_millis(700)).await;
+    assert!(extra.is_empty(), "a firing arrived twice: {extra:?}");
+
+    let seqs: Vec<u64> = got.iter().map(|f| f.seq).collect();
+    assert_eq!(seqs, (1..=N as u64).collect::<Vec<_>>());
+    let (places, transitions) = place_and_transition_names();
+    for f in &got {
+        assert!(transitions.contains(&f.transition), "{}", f.transition);
+        assert_eq!(f.marking.len(), places.len());
+        // Three robots, each one token: every marking holds exactly 3.
+        assert_eq!(f.marking.iter().sum::<u32>(), 3, "{f:?}");
+        // Each firing of the patrol moves one robot.
+        assert_eq!(f.robots.len(), 1, "{f:?}");
+        assert!(ROBOTS.contains(&f.robots[0].as_str()), "{f:?}");
+        assert!(f.stamp.sec > 1_700_000_000);
+    }
+    let movers: BTreeSet<&str> = got.iter().map(|f| f.robots[0].as_str()).collect();
+    assert_eq!(movers.len(), 3, "all three robots move: {movers:?}");
+
+    // The supervisor's own summary agrees with what was published.
+    let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
+    assert_eq!(summary["stopped"], "max_firings");
+    assert_eq!(summary["firings"], N as u64);
+    let last = got.last().unwrap();
+    for (p, k) in places.iter().zip(&last.marking) {
+        assert_eq!(summary["final_marking"][p], *k, "place {p}");
+    }
+    // The marking topic ends on the last firing's marking.
+    let mut last_marking = None;
+    while let Ok(m) = markings.try_recv() {
+        last_marking = Some(m);
+    }
+    let m = last_marking.expect("markings were published");
+    assert_eq!(m.seq, N as u64);
+    assert_eq!(m.places, places);
+    assert_eq!(m.tokens, last.marking);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_killed_robot_is_detected_and_the_failure_policy_stops_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(2);
+    let (mut firings, _markings) = listen(d);
+    let mut robots: Vec<_> = ROBOTS.iter().map(|r| robot(dir.path(), r, d)).collect();
+    let sup = supervisor(
+        dir.path(),
+        d,
+        &["--max-firings", "1000000", "--ros2-wait-subscribers", "4"],
+    );
+    // Let the patrol run a little, then kill robot r2 (SIGKILL: no goodbye on DDS).
+    let before = take(&mut firings, 20, Duration::from_secs(90)).await;
+    assert_eq!(before.len(), 20, "supervisor log:\n{}", sup.log());
+    robots[1].child.start_kill().expect("kill r2");
+    let killed = Instant::now();
+    // Detection: the supervisor says so on stderr (polled; bounded).
+    let mut detected = None;
+    while killed.elapsed() < Duration::from_secs(20) {
+        if sup.log().contains("robot `r2` lost") {
+            detected = Some(killed.elapsed());
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    let (code, out) = finish(sup, Duration::from_secs(20)).await;
+    let ended = killed.elapsed();
+    let detected = detected.expect("the supervisor reports robot r2 lost");
+    println!("robot r2 killed → reported lost after {detected:?}, supervisor ended after {ended:?}");
+    // on_failure = "stop": the run ends as a failure, naming the lost robot.
+    assert_eq!(code, Some(1), "{out}");
+    let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
+    assert_eq!(summary["stopped"], "failure");
+    let errors = summary["errors"].as_array().expect("errors");
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.as_str().unwrap_or("").contains("robot `r2` lost")),
+        "{errors:?}"
+    );
+    assert!(
+        !errors
+            .iter()
+            .any(|e| e.as_str().unwrap_or("").contains("robot `r1` lost")
+                || e.as_str().unwrap_or("").contains("robot `r3` lost")),
+        "{errors:?}"
+    );
+    // The other robot processes carry on (they serve whoever asks next).
+    for r in [&mut robots[0], &mut robots[2]] {
+        assert!(r.child.try_wait().unwrap().is_none(), "{} ended", r.name);
+    }
+    // Every firing before the stop was published once, in order.
+    let mut all = before;
+    all.extend(take(&mut firings, usize::MAX, Duration::from_millis(700)).await);
+    let seqs: Vec<u64> = all.iter().map(|f| f.seq).collect();
+    assert_eq!(seqs, (1..=all.len() as u64).collect::<Vec<_>>());
+    assert_eq!(summary["firings"], all.len() as u64);
+}
