@@ -219,7 +219,9 @@ fn main() {
         "{} robots, {} firings per run, robots' time scale {} s, {} runs",
         o.robots, o.firings, o.scale, o.runs
     );
-    println!("| run | firings (all robots got) | p50 ms | p99 ms | max ms | supervisor CPU % | robot CPU % (median, max) | wall s |");
+    println!(
+        "| run | firings (all robots got) | p50 ms | p99 ms | max ms | supervisor CPU % | robot CPU % (median, max) | wall s |"
+    );
     println!("|---|---|---|---|---|---|---|---|");
     let mut results = Vec::new();
     for k in 0..o.runs {
@@ -246,6 +248,11 @@ fn main() {
         median(results.iter().map(|r| r.p50_ms).collect()),
         median(results.iter().map(|r| r.p99_ms).collect()),
         median(results.iter().map(|r| r.sup_cpu * 100.0).collect()),
-        median(results.iter().map(|r| median(r.robot_cpu.clone()) * 100.0).collect()),
+        median(
+            results
+                .iter()
+                .map(|r| median(r.robot_cpu.clone()) * 100.0)
+                .collect()
+        ),
     );
 }

@@ -159,6 +159,16 @@ pub enum RuntimeError {
         /// Tokens it adds (negative: removes) outside resource places.
         change: i64,
     },
+    /// The plan names a different number of robots than there are initial agents.
+    #[error(
+        "{robots} robot(s) named but the net starts with {agents} agent(s) in action places: name one robot per initial agent"
+    )]
+    RobotCount {
+        /// Robots named.
+        robots: usize,
+        /// Initial tokens in action places (places with a registered action).
+        agents: u64,
+    },
     /// The journal file could not be created.
     #[error("journal {path}: {reason}")]
     Journal {

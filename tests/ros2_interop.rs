@@ -130,7 +130,12 @@ async fn cyclone_dds_in_python_receives_every_firing_with_its_fields() {
     for (k, (py, rs)) in lines.iter().zip(&fired).enumerate() {
         assert_eq!(py["seq"], k as u64 + 1);
         let t = rs["transition"].as_u64().unwrap() as usize;
-        assert_eq!(py["transition"], net.transitions()[t].name, "firing {}", k + 1);
+        assert_eq!(
+            py["transition"],
+            net.transitions()[t].name,
+            "firing {}",
+            k + 1
+        );
         assert_eq!(py["marking"], rs["marking"], "firing {}", k + 1);
         assert_eq!(py["robots"], rs["robots"], "firing {}", k + 1);
         assert_eq!(py["robots"].as_array().unwrap().len(), 1);

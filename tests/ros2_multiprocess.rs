@@ -10,7 +10,9 @@ use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
 
 use gspn::io::{ReadOptions, read_net};
-use support::{domain, finish, listen, repo, robot, supervisor, take};
+use support::{
+    domain, finish, listen, repo, robot, robot_with, supervisor, supervisor_with, take, terminate,
+};
 
 const ROBOTS: [&str; 3] = ["r1", "r2", "r3"];
 
@@ -38,7 +40,12 @@ async fn every_firing_reaches_a_subscriber_exactly_once_in_order() {
     let sup = supervisor(
         dir.path(),
         d,
-        &["--max-firings", &N.to_string(), "--ros2-wait-subscribers", "4"],
+        &[
+            "--max-firings",
+            &N.to_string(),
+            "--ros2-wait-subscribers",
+            "4",
+        ],
     );
     let got = take(&mut firings, N, Duration::from_secs(90)).await;
     let log = sup.log();
@@ -112,7 +119,9 @@ async fn a_killed_robot_is_detected_and_the_failure_policy_stops_the_run() {
     let (code, out) = finish(sup, Duration::from_secs(20)).await;
     let ended = killed.elapsed();
     let detected = detected.expect("the supervisor reports robot r2 lost");
-    println!("robot r2 killed → reported lost after {detected:?}, supervisor ended after {ended:?}");
+    println!(
+        "robot r2 killed → reported lost after {detected:?}, supervisor ended after {ended:?}"
+    );
     // on_failure = "stop": the run ends as a failure, naming the lost robot.
     assert_eq!(code, Some(1), "{out}");
     let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
@@ -132,7 +141,8 @@ async fn a_killed_robot_is_detected_and_the_failure_policy_stops_the_run() {
         "{errors:?}"
     );
     // The other robot processes carry on (they serve whoever asks next).
-    for r in [&mut robots[0], &mut robots[2]] {
+    for k in [0, 2] {
+        let r = &mut robots[k];
         assert!(r.child.try_wait().unwrap().is_none(), "{} ended", r.name);
     }
     // Every firing before the stop was published once, in order.
@@ -141,4 +151,51 @@ async fn a_killed_robot_is_detected_and_the_failure_policy_stops_the_run() {
     let seqs: Vec<u64> = all.iter().map(|f| f.seq).collect();
     assert_eq!(seqs, (1..=all.len() as u64).collect::<Vec<_>>());
     assert_eq!(summary["firings"], all.len() as u64);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_place_timeout_fails_the_action_and_every_running_goal_is_cancelled_on_its_robot() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(3);
+    // The patrol plan with a 5-unit timeout (0.1 s at time_scale 0.02) on every place.
+    let text = std::fs::read_to_string(repo(support::PLAN))
+        .unwrap()
+        .replace("timeout = 500.0", "timeout = 5.0")
+        .replace(
+            "net = \"nets/temperature_patrol.xml\"",
+            &format!(
+                "net = {:?}",
+                repo("plans/nets/temperature_patrol.xml").to_string_lossy()
+            ),
+        );
+    let plan = dir.path().join("short_timeout.toml");
+    std::fs::write(&plan, text).unwrap();
+    // Robots 10,000 s per model unit: their goals outlast the timeout by far.
+    let robots: Vec<_> = ROBOTS
+        .iter()
+        .map(|r| robot_with(dir.path(), r, &plan, d, &["--time-scale", "10000"]))
+        .collect();
+    let sup = supervisor_with(dir.path(), &plan, d, &[]);
+    let (code, out) = finish(sup, Duration::from_secs(60)).await;
+    assert_eq!(code, Some(1), "{out}");
+    let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
+    assert_eq!(summary["stopped"], "failure");
+    assert_eq!(summary["firings"], 0);
+    let errors = summary["errors"].as_array().expect("errors");
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.as_str().unwrap_or("").contains("timed out")),
+        "{errors:?}"
+    );
+    // Each robot got its agent's goal and a cancel for it (the timed-out one through the
+    // action's drop guard, the others because the run stopped).
+    for r in robots {
+        let name = r.name.clone();
+        let log = terminate(r, Duration::from_secs(10)).await;
+        assert!(
+            log.contains(&format!("robot {name}: 1 goals, 1 cancelled")),
+            "{name}: {log}"
+        );
+    }
 }

@@ -66,6 +66,9 @@ pub struct Plan {
     pub rule_spans: Vec<Span>,
     /// When the run ends (besides "nothing can fire any more").
     pub stop: StopConditions,
+    /// Robots bound to the initial agents, in agent order (places in net order, then
+    /// tokens); empty when the plan names none.
+    pub robots: Vec<String>,
     /// Things accepted but worth saying (from the net reader and from the plan).
     pub warnings: Vec<String>,
     /// The ROS 2 backend's settings and the places it serves (feature `ros2`).
@@ -153,6 +156,7 @@ impl Plan {
             policy: Policy::empty(),
             rule_spans: Vec::new(),
             stop: StopConditions::default(),
+            robots: Vec::new(),
             warnings: loaded.warnings,
             ros2: Ros2Settings::default(),
         }
@@ -196,6 +200,12 @@ pub struct PlanFile {
     pub policy: Vec<Spanned<RuleFile>>,
     /// When the run ends.
     pub stop: Option<StopFile>,
+    /// Robot names bound to the initial agents, in agent order: places in net order, then
+    /// tokens. Each agent keeps its robot as it moves through the net; a net that can create
+    /// or destroy robot tokens (outside resource places) is refused when the run starts.
+    #[serde(default)]
+    #[schemars(with = "Vec<String>")]
+    pub robots: Vec<Spanned<String>>,
     /// ROS 2 backend settings (feature `ros2`; see `docs/ros2.md`).
     pub ros2: Option<Ros2File>,
 }
@@ -456,6 +466,26 @@ impl PlanFile {
             stop.max_firings = s.max_firings;
         }
 
+        let mut robots: Vec<String> = Vec::with_capacity(self.robots.len());
+        for r in &self.robots {
+            let name = r.get_ref();
+            if name.is_empty() || name.contains(char::is_whitespace) {
+                return Err(at(
+                    r.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "robot name `{name}` must be non-empty and without spaces"
+                    )),
+                ));
+            }
+            if robots.iter().any(|n| n == name) {
+                return Err(at(
+                    r.span(),
+                    LoadErrorKind::Invalid(format!("robot `{name}` is listed twice")),
+                ));
+            }
+            robots.push(name.clone());
+        }
+
         Ok(Plan {
             path: path.to_path_buf(),
             net_path: self.net_path(path),
@@ -467,6 +497,7 @@ impl PlanFile {
             policy,
             rule_spans,
             stop,
+            robots,
             warnings,
             ros2,
         })
@@ -1010,7 +1041,10 @@ max_firings = 500
     fn ros2_mistakes_are_refused_at_their_position() {
         let (l, c, m) = err_at("net = \"n.xml\"\n[places.P2]\naction = \"a\"\nserver = \"s\"\n");
         assert_eq!((l, c), (4, 10));
-        assert!(m.contains("`server` applies to places with action = \"ros2\""), "{m}");
+        assert!(
+            m.contains("`server` applies to places with action = \"ros2\""),
+            "{m}"
+        );
         let (l, c, m) =
             err_at("net = \"n.xml\"\n[places.P2]\naction = \"ros2\"\nserver = \"a b\"\n");
         assert_eq!((l, c), (4, 10));

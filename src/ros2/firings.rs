@@ -9,9 +9,7 @@ use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{Name, Node, Publisher, QosProfile, Subscription};
 
 use super::Ros2Error;
-use super::msgs::{
-    FIRINGS_TOPIC, Firing, MARKING_TOPIC, Marking, Time, firing_type, marking_type,
-};
+use super::msgs::{FIRINGS_TOPIC, Firing, MARKING_TOPIC, Marking, Time, firing_type, marking_type};
 use crate::net::Net;
 use crate::runtime::{EventKind, Events, Received};
 
@@ -76,8 +74,12 @@ impl FiringPublisher {
         let ft = topic(node, FIRINGS_TOPIC, firing_type(), &fq)?;
         let mt = topic(node, MARKING_TOPIC, marking_type(), &mq)?;
         Ok(FiringPublisher {
-            firings: node.create_publisher(&ft, Some(fq)).map_err(Ros2Error::dds)?,
-            marking: node.create_publisher(&mt, Some(mq)).map_err(Ros2Error::dds)?,
+            firings: node
+                .create_publisher(&ft, Some(fq))
+                .map_err(Ros2Error::dds)?,
+            marking: node
+                .create_publisher(&mt, Some(mq))
+                .map_err(Ros2Error::dds)?,
             net,
         })
     }
@@ -99,7 +101,12 @@ impl FiringPublisher {
     pub async fn run(self, mut events: Events) -> Published {
         let mut out = Published::default();
         let initial = self.net.initial_marking();
-        if self.marking.async_publish(self.marking_msg(0, &initial)).await.is_err() {
+        if self
+            .marking
+            .async_publish(self.marking_msg(0, &initial))
+            .await
+            .is_err()
+        {
             out.errors += 1;
         }
         while let Some(r) = events.recv().await {
@@ -164,8 +171,12 @@ impl FiringListener {
         let ft = topic(node, FIRINGS_TOPIC, firing_type(), &fq)?;
         let mt = topic(node, MARKING_TOPIC, marking_type(), &mq)?;
         Ok(FiringListener {
-            firings: node.create_subscription(&ft, Some(fq)).map_err(Ros2Error::dds)?,
-            marking: node.create_subscription(&mt, Some(mq)).map_err(Ros2Error::dds)?,
+            firings: node
+                .create_subscription(&ft, Some(fq))
+                .map_err(Ros2Error::dds)?,
+            marking: node
+                .create_subscription(&mt, Some(mq))
+                .map_err(Ros2Error::dds)?,
         })
     }
 

@@ -77,9 +77,8 @@ impl RobotWatch {
         lost_after: Duration,
     ) -> Result<RobotWatch, Ros2Error> {
         let t = topic(node)?;
-        let sub: Subscription<Heartbeat> = node
-            .create_subscription(&t, None)
-            .map_err(Ros2Error::dds)?;
+        let sub: Subscription<Heartbeat> =
+            node.create_subscription(&t, None).map_err(Ros2Error::dds)?;
         let mut senders = HashMap::new();
         let mut states = HashMap::new();
         for r in robots {

@@ -133,8 +133,14 @@ mod tests {
 
     #[test]
     fn dds_type_names_are_the_ones_ros2_generates() {
-        assert_eq!(firing_type().dds_msg_type(), "gspn_msgs::msg::dds_::Firing_");
-        assert_eq!(marking_type().dds_msg_type(), "gspn_msgs::msg::dds_::Marking_");
+        assert_eq!(
+            firing_type().dds_msg_type(),
+            "gspn_msgs::msg::dds_::Firing_"
+        );
+        assert_eq!(
+            marking_type().dds_msg_type(),
+            "gspn_msgs::msg::dds_::Marking_"
+        );
         assert_eq!(
             heartbeat_type().dds_msg_type(),
             "gspn_msgs::msg::dds_::Heartbeat_"
@@ -143,10 +149,7 @@ mod tests {
 
     #[test]
     fn time_counts_nanoseconds() {
-        let t = Time {
-            sec: 2,
-            nanosec: 5,
-        };
+        let t = Time { sec: 2, nanosec: 5 };
         assert_eq!(t.as_nanos(), 2_000_000_005);
         assert!(Time::now().sec > 1_700_000_000);
     }

@@ -193,7 +193,10 @@ pub async fn serve(
         t.abort();
     }
     spin.abort();
-    let stats = *shared.stats.lock().map_err(|_| Ros2Error::Other("poisoned".into()))?;
+    let stats = *shared
+        .stats
+        .lock()
+        .map_err(|_| Ros2Error::Other("poisoned".into()))?;
     Ok(stats)
 }
 
@@ -318,10 +321,8 @@ async fn run_decision(
     let start = tokio::time::Instant::now();
     let done = tokio::time::sleep(Duration::from_secs_f64(decision.delay.max(0.0)));
     tokio::pin!(done);
-    let mut feedback = tokio::time::interval_at(
-        start + Duration::from_secs(1),
-        Duration::from_secs(1),
-    );
+    let mut feedback =
+        tokio::time::interval_at(start + Duration::from_secs(1), Duration::from_secs(1));
     loop {
         tokio::select! {
             _ = &mut done => {

@@ -90,7 +90,7 @@ where
 pub struct ActionContext {
     /// The agent running the action.
     pub agent: AgentId,
-    /// The robot the place's agents are bound to, when there is one.
+    /// The robot of the agent (plan key `robots`), else the robot of the place, if any.
     pub robot: Option<Arc<str>>,
     /// The action place.
     pub place: PlaceId,

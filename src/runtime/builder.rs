@@ -37,6 +37,7 @@ pub struct RuntimeBuilder {
     event_capacity: usize,
     grace: Duration,
     subscribe: bool,
+    robots: Vec<Arc<str>>,
 }
 
 impl std::fmt::Debug for RuntimeBuilder {
@@ -67,6 +68,7 @@ impl RuntimeBuilder {
             event_capacity: 1 << 14,
             grace: Duration::from_secs(5),
             subscribe: true,
+            robots: Vec::new(),
         }
     }
 
@@ -77,6 +79,7 @@ impl RuntimeBuilder {
         b.stop = plan.stop;
         b.seed = plan.seed;
         b.time_scale = plan.time_scale.unwrap_or(0.0);
+        b.robots = plan.robots.iter().map(|r| Arc::from(r.as_str())).collect();
         b
     }
 
@@ -96,6 +99,17 @@ impl RuntimeBuilder {
     /// timeout, failure stops the run). Unknown place names fail at [`RuntimeBuilder::spawn`].
     pub fn bind(mut self, place: impl Into<String>, action: impl Into<String>) -> Self {
         self.binds.push((place.into(), action.into()));
+        self
+    }
+
+    /// Binds the initial agents to robots, in agent order (action places in net order, then
+    /// their tokens): agent 0 gets the first name, and so on. An agent keeps its robot as it
+    /// moves through the net ([`ActionContext::robot`](super::ActionContext::robot), the
+    /// `robots` of [`Fired`](super::EventKind::Fired)). [`RuntimeBuilder::spawn`] refuses a
+    /// count that differs from the initial agents, and a net that can create or destroy robot
+    /// tokens outside resource places.
+    pub fn robots<S: AsRef<str>>(mut self, names: impl IntoIterator<Item = S>) -> Self {
+        self.robots = names.into_iter().map(|s| Arc::from(s.as_ref())).collect();
         self
     }
 
@@ -188,10 +202,11 @@ impl RuntimeBuilder {
                 robot: None,
             });
         }
-        if self
-            .roles
-            .iter()
-            .any(|r| matches!(r, Some(Role::Action { robot: Some(_), .. })))
+        if !self.robots.is_empty()
+            || self
+                .roles
+                .iter()
+                .any(|r| matches!(r, Some(Role::Action { robot: Some(_), .. })))
         {
             conservation::check_robot_tokens(&net, &self.roles)?;
         }
@@ -217,6 +232,32 @@ impl RuntimeBuilder {
                         "place `{}`: action `{name}` is not registered; the place is net-timed",
                         net.place(p).name
                     )),
+                }
+            }
+        }
+        if !self.robots.is_empty() {
+            let agents: u64 = setups
+                .iter()
+                .map(|s| u64::from(net.place(s.place).initial))
+                .sum();
+            if agents != self.robots.len() as u64 {
+                return Err(RuntimeError::RobotCount {
+                    robots: self.robots.len(),
+                    agents,
+                });
+            }
+            for p in net.place_ids() {
+                let handled = setups.iter().any(|s| s.place == p);
+                let resource = matches!(self.roles[p.index()], Some(Role::Resource));
+                let used = net.transition_ids().any(|t| {
+                    net.inputs(t).iter().any(|&(q, _)| q == p)
+                        || net.outputs(t).iter().any(|&(q, _)| q == p)
+                });
+                if !handled && !resource && used {
+                    warnings.push(format!(
+                        "place `{}` has no registered action: a robot entering it leaves its agent, and the robot's identity is lost",
+                        net.place(p).name
+                    ));
                 }
             }
         }
@@ -262,6 +303,7 @@ impl RuntimeBuilder {
             progress: Arc::clone(&progress),
             grace: self.grace,
             agent_mode: self.agent_mode,
+            robots: self.robots,
         });
         Ok(RuntimeHandle {
             sup,

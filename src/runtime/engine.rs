@@ -28,6 +28,8 @@ pub(crate) struct AgentRec {
     /// Which start of the action the supervisor waits for (stale reports are ignored).
     pub(crate) ticket: u64,
     pub(crate) attempt: u32,
+    /// The robot bound to the agent, kept through firings.
+    pub(crate) robot: Option<Arc<str>>,
 }
 
 /// Per action place: who is ready for what, in arrival order.
@@ -58,6 +60,8 @@ pub(crate) struct Firing {
     pub(crate) produced: Vec<AgentId>,
     pub(crate) spawned: Vec<AgentId>,
     pub(crate) ended: Vec<AgentId>,
+    /// Robots of the consumed agents, in consumption order (empty without robots).
+    pub(crate) robots: Vec<Arc<str>>,
 }
 
 #[derive(Debug)]
@@ -91,6 +95,8 @@ pub(crate) struct Engine {
     last_change: Vec<f64>,
     pub(crate) agents_spawned: u64,
     pub(crate) agents_ended: u64,
+    /// Some agent is bound to a robot (firings then report the robots they moved).
+    pub(crate) has_robots: bool,
 }
 
 impl Engine {
@@ -146,6 +152,7 @@ impl Engine {
             last_change: vec![0.0; np],
             agents_spawned: 0,
             agents_ended: 0,
+            has_robots: false,
             net,
         };
         for t in e.net.transition_ids() {
@@ -166,6 +173,7 @@ impl Engine {
                 state: AgentState::Free,
                 ticket: 0,
                 attempt: 0,
+                robot: None,
             },
         );
         id
@@ -364,6 +372,7 @@ impl Engine {
         out.produced.clear();
         out.spawned.clear();
         out.ended.clear();
+        out.robots.clear();
         let net = Arc::clone(&self.net);
         for &(p, w) in net.inputs(t) {
             if let Some(a) = self.action_of[p.index()] {
@@ -381,6 +390,13 @@ impl Engine {
                 }
                 if decided {
                     self.update_consumers(a as usize);
+                }
+            }
+        }
+        if self.has_robots {
+            for id in &out.consumed {
+                if let Some(r) = self.agents.get(id).and_then(|r| r.robot.clone()) {
+                    out.robots.push(r);
                 }
             }
         }

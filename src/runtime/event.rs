@@ -3,6 +3,8 @@
 //! A slow subscriber never slows the supervisor: the bus keeps the last `capacity` events and
 //! a subscriber that falls behind is told how many it missed ([`Received::Lagged`]).
 
+use std::sync::Arc;
+
 use serde::Serialize;
 use tokio::sync::broadcast;
 
@@ -38,6 +40,9 @@ pub enum EventKind {
         produced: Vec<AgentId>,
         /// The marking after the firing.
         marking: Marking,
+        /// Robots of the consumed agents, in the same order (empty when no robot is bound).
+        #[serde(skip_serializing_if = "Vec::is_empty")]
+        robots: Vec<Arc<str>>,
     },
     /// A new agent exists (initial token or fork).
     AgentSpawned {
@@ -45,6 +50,9 @@ pub enum EventKind {
         agent: AgentId,
         /// Its place.
         place: PlaceId,
+        /// The robot it is bound to, when there is one.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        robot: Option<Arc<str>>,
     },
     /// An agent's action started.
     ActionStarted {

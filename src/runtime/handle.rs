@@ -39,7 +39,7 @@ impl Progress {
 }
 
 /// One live agent.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct AgentInfo {
     /// Its id.
     pub id: AgentId,
@@ -47,6 +47,8 @@ pub struct AgentInfo {
     pub place: PlaceId,
     /// Its state.
     pub state: AgentState,
+    /// The robot it is bound to, when there is one.
+    pub robot: Option<Arc<str>>,
 }
 
 /// How a run ended, with its statistics. The JSON form (`plan-runner run --json`) has exactly

@@ -80,6 +80,7 @@ pub struct Supervisor {
     snapshot: Option<(u64, Arc<Marking>)>,
     reports_tx: mpsc::UnboundedSender<ActionDone>,
     reports_rx: Option<mpsc::UnboundedReceiver<ActionDone>>,
+    robots: Vec<Arc<str>>,
 }
 
 impl std::fmt::Debug for Supervisor {
@@ -104,6 +105,8 @@ pub(crate) struct SupervisorArgs {
     pub(crate) progress: Arc<Progress>,
     pub(crate) grace: Duration,
     pub(crate) agent_mode: AgentMode,
+    /// Robots for the initial agents, in agent order (empty: none).
+    pub(crate) robots: Vec<Arc<str>>,
 }
 
 impl Supervisor {
@@ -143,6 +146,7 @@ impl Supervisor {
             snapshot: None,
             reports_tx,
             reports_rx: Some(reports_rx),
+            robots: args.robots,
         };
         Supervisor::spawn_with_mailbox(sup, mailbox::unbounded())
     }
@@ -238,9 +242,10 @@ impl Supervisor {
         }
         let a = self.ap(place);
         let ticket = self.eng.start(id, attempt);
+        let robot = self.eng.agents.get(&id).and_then(|r| r.robot.clone());
         let ctx = ActionContext {
             agent: id,
-            robot: self.setups[a].robot.clone(),
+            robot: robot.or_else(|| self.setups[a].robot.clone()),
             place,
             marking: self.snapshot(),
             attempt,
@@ -274,13 +279,18 @@ impl Supervisor {
                 consumed: buf.consumed.clone(),
                 produced: buf.produced.clone(),
                 marking: self.eng.m.clone(),
+                robots: buf.robots.clone(),
             });
         }
         for &id in &buf.spawned {
             let place = self.eng.agents[&id].place;
             self.spawn_agent_actor(id, place);
             if observed {
-                self.emit(EventKind::AgentSpawned { agent: id, place });
+                self.emit(EventKind::AgentSpawned {
+                    agent: id,
+                    place,
+                    robot: None,
+                });
             }
         }
         for &id in &buf.ended {
@@ -512,13 +522,23 @@ impl Actor for Supervisor {
                 initial.push((id, p));
             }
         }
+        // The builder checked that there is one robot per initial agent.
+        let robots = std::mem::take(&mut sup.robots);
+        sup.eng.has_robots = !robots.is_empty();
+        for (&(id, _), robot) in initial.iter().zip(robots) {
+            if let Some(rec) = sup.eng.agents.get_mut(&id) {
+                rec.robot = Some(robot);
+            }
+        }
         let observed = sup.observed();
         for &(id, p) in &initial {
             sup.spawn_agent_actor(id, p);
             if observed {
+                let robot = sup.eng.agents.get(&id).and_then(|r| r.robot.clone());
                 sup.emit(EventKind::AgentSpawned {
                     agent: id,
                     place: p,
+                    robot,
                 });
             }
         }

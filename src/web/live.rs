@@ -188,7 +188,9 @@ fn describe(net: &Net, kind: &EventKind) -> String {
         EventKind::Fired { transition, .. } => {
             format!("{} fired", net.transition(*transition).name)
         }
-        EventKind::AgentSpawned { agent, place: p } => {
+        EventKind::AgentSpawned {
+            agent, place: p, ..
+        } => {
             format!("{agent:?} spawned in {}", place(*p))
         }
         EventKind::ActionStarted {

@@ -64,29 +64,52 @@ fn command(dir: &Path, name: &str, args: &[String], stdout: bool) -> Proc {
 
 /// `plan-runner robot --id ID --plan PLAN --ros2-domain D`.
 pub fn robot(dir: &Path, id: &str, domain: u16) -> Proc {
-    let args: Vec<String> = [
-        "robot",
-        "--id",
-        id,
-        "--plan",
-        PLAN,
-        "--ros2-domain",
-        &domain.to_string(),
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    robot_with(dir, id, Path::new(PLAN), domain, &[])
+}
+
+/// `plan-runner robot --id ID --plan PLAN --ros2-domain D EXTRA…`.
+pub fn robot_with(dir: &Path, id: &str, plan: &Path, domain: u16, extra: &[&str]) -> Proc {
+    let mut args: Vec<String> = vec![
+        "robot".into(),
+        "--id".into(),
+        id.into(),
+        "--plan".into(),
+        plan.to_string_lossy().into_owned(),
+        "--ros2-domain".into(),
+        domain.to_string(),
+    ];
+    args.extend(extra.iter().map(|s| s.to_string()));
     command(dir, id, &args, false)
 }
 
 /// `plan-runner run PLAN --ros2-domain D --json EXTRA…` (stdout piped: the JSON summary).
 pub fn supervisor(dir: &Path, domain: u16, extra: &[&str]) -> Proc {
-    let mut args: Vec<String> = ["run", PLAN, "--json", "--ros2-domain", &domain.to_string()]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+    supervisor_with(dir, Path::new(PLAN), domain, extra)
+}
+
+/// `plan-runner run PLAN --ros2-domain D --json EXTRA…` for another plan.
+pub fn supervisor_with(dir: &Path, plan: &Path, domain: u16, extra: &[&str]) -> Proc {
+    let mut args: Vec<String> = vec![
+        "run".into(),
+        plan.to_string_lossy().into_owned(),
+        "--json".into(),
+        "--ros2-domain".into(),
+        domain.to_string(),
+    ];
     args.extend(extra.iter().map(|s| s.to_string()));
     command(dir, "supervisor", &args, true)
+}
+
+/// Asks a process to end (SIGTERM) and waits (at most `limit`) for it; its log.
+pub async fn terminate(mut p: Proc, limit: Duration) -> String {
+    if let Some(pid) = p.child.id() {
+        // SAFETY: plain kill(2) on our own child's pid.
+        unsafe {
+            libc::kill(pid as libc::pid_t, libc::SIGTERM);
+        }
+    }
+    let _ = tokio::time::timeout(limit, p.child.wait()).await;
+    p.log()
 }
 
 /// An in-process subscriber of /gspn/firings and /gspn/marking on `domain`: what arrives
@@ -122,7 +145,11 @@ pub fn listen(
 }
 
 /// Receives until `n` firings arrived or `limit` passed.
-pub async fn take(rx: &mut mpsc::UnboundedReceiver<Firing>, n: usize, limit: Duration) -> Vec<Firing> {
+pub async fn take(
+    rx: &mut mpsc::UnboundedReceiver<Firing>,
+    n: usize,
+    limit: Duration,
+) -> Vec<Firing> {
     let mut got = Vec::new();
     let end = tokio::time::Instant::now() + limit;
     while got.len() < n {

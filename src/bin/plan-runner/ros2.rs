@@ -77,13 +77,15 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2B
         cfg.domain_id,
         plan.robots.join(", ")
     );
-    let backend = Ros2Backend::connect(plan, &plan.robots, &cfg, args.ros2_wait_subscribers).await?;
+    let backend =
+        Ros2Backend::connect(plan, &plan.robots, &cfg, args.ros2_wait_subscribers).await?;
     eprintln!("ros2: robots ready");
     // Say when a robot is lost or back (the runs' errors say which action it failed).
     for r in &plan.robots {
         if let Some(mut live) = backend.watch().liveness(r) {
             let r = r.clone();
             let after = cfg.lost_after;
+            live.borrow_and_update();
             tokio::spawn(async move {
                 while live.changed().await.is_ok() {
                     match *live.borrow() {
@@ -152,7 +154,10 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
             plan.robots.join(", ")
         );
     }
-    let scale = args.time_scale.or(plan.time_scale.filter(|&x| x > 0.0)).unwrap_or(1.0);
+    let scale = args
+        .time_scale
+        .or(plan.time_scale.filter(|&x| x > 0.0))
+        .unwrap_or(1.0);
     if !(scale.is_finite() && scale >= 0.0) {
         return Err(BadInput(format!("--time-scale {scale}: must be ≥ 0")).into());
     }

@@ -236,6 +236,7 @@ impl Message<GetAgents> for Supervisor {
                 id,
                 place: r.place,
                 state: r.state,
+                robot: r.robot.clone(),
             })
             .collect();
         v.sort_by_key(|a| a.id);
