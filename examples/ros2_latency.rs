@@ -115,6 +115,7 @@ struct RunResult {
     p99_ms: f64,
     max_ms: f64,
     firings: usize,
+    rate: f64,
     complete: bool,
     sup_cpu: f64,
     robot_cpu: Vec<f64>,
@@ -125,6 +126,20 @@ fn run_once(o: &Opts, bin: &Path, k: usize) -> RunResult {
     let dir = tempfile::tempdir().expect("temp dir");
     let plan = write_plan(dir.path(), o);
     let domain = (o.domain + k as u16).to_string();
+    let start = Instant::now();
+    let mut sup = Command::new(bin)
+        .args(["run"])
+        .arg(&plan)
+        .args(["--json", "--ros2-domain", &domain])
+        .args(["--ros2-wait-subscribers", &o.robots.to_string()])
+        .args(["--ros2-linger", "1.0"])
+        .stdout(Stdio::null())
+        .stderr(std::fs::File::create(dir.path().join("supervisor.log")).expect("log"))
+        .spawn()
+        .expect("supervisor starts");
+    // The supervisor first: it takes DDS participant index 0, which every robot announces
+    // itself to (RustDDS sends loopback SPDP to indices 0-11 only; see docs/ros2.md).
+    std::thread::sleep(Duration::from_millis(500));
     let mut robots: Vec<(Child, Instant)> = (1..=o.robots)
         .map(|r| {
             let child = Command::new(bin)
@@ -139,17 +154,6 @@ fn run_once(o: &Opts, bin: &Path, k: usize) -> RunResult {
             (child, Instant::now())
         })
         .collect();
-    let start = Instant::now();
-    let mut sup = Command::new(bin)
-        .args(["run"])
-        .arg(&plan)
-        .args(["--json", "--ros2-domain", &domain])
-        .args(["--ros2-wait-subscribers", &o.robots.to_string()])
-        .args(["--ros2-linger", "1.0"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("supervisor starts");
     let mut cpu: HashMap<u32, f64> = HashMap::new();
     let deadline = start + Duration::from_secs(300);
     loop {
@@ -195,7 +199,16 @@ fn run_once(o: &Opts, bin: &Path, k: usize) -> RunResult {
         .map(|e| (e.1 - e.0) as f64 / 1e6)
         .collect();
     lat.sort_by(f64::total_cmp);
+    assert!(
+        !lat.is_empty(),
+        "no firing reached every robot; supervisor log:\n{}",
+        std::fs::read_to_string(dir.path().join("supervisor.log")).unwrap_or_default()
+    );
+    let first = seen.values().map(|e| e.0).min().unwrap_or(0);
+    let last = seen.values().map(|e| e.0).max().unwrap_or(0);
+    let rate = seen.len() as f64 / ((last - first) as f64 / 1e9).max(1e-9);
     RunResult {
+        rate,
         p50_ms: percentile(&lat, 0.5),
         p99_ms: percentile(&lat, 0.99),
         max_ms: *lat.last().unwrap_or(&0.0),
@@ -220,19 +233,20 @@ fn main() {
         o.robots, o.firings, o.scale, o.runs
     );
     println!(
-        "| run | firings (all robots got) | p50 ms | p99 ms | max ms | supervisor CPU % | robot CPU % (median, max) | wall s |"
+        "| run | firings (all robots got) | firings/s | p50 ms | p99 ms | max ms | supervisor CPU % | robot CPU % (median, max) | wall s |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|");
     let mut results = Vec::new();
     for k in 0..o.runs {
         let r = run_once(&o, &bin, k);
         let rc_med = median(r.robot_cpu.clone()) * 100.0;
         let rc_max = r.robot_cpu.iter().copied().fold(0.0, f64::max) * 100.0;
         println!(
-            "| {} | {}{} | {:.2} | {:.2} | {:.2} | {:.1} | {:.1}, {:.1} | {:.1} |",
+            "| {} | {}{} | {:.0} | {:.2} | {:.2} | {:.2} | {:.1} | {:.1}, {:.1} | {:.1} |",
             k + 1,
             r.firings,
             if r.complete { "" } else { " (incomplete)" },
+            r.rate,
             r.p50_ms,
             r.p99_ms,
             r.max_ms,
