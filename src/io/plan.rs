@@ -39,9 +39,14 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::{LoadError, LoadErrorKind, Loaded, ReadOptions, Span, read_net};
+
+mod ros2;
+
 use crate::net::predicate::Predicate;
 use crate::net::{Net, PlaceId, Timing, TransitionId};
 use crate::policy::{Pattern, Policy, PolicyError, Rule};
+use ros2::resolve_ros2;
+pub use ros2::{DEFAULT_SERVER, ROS2_ACTION, Ros2File, Ros2Settings};
 
 /// A plan ready to run: the net, what each place does, the policy and when to stop.
 #[derive(Clone, Debug)]
@@ -73,30 +78,6 @@ pub struct Plan {
     pub warnings: Vec<String>,
     /// The ROS 2 backend's settings and the places it serves (feature `ros2`).
     pub ros2: Ros2Settings,
-}
-
-/// The action name that makes a place a ROS 2 place: its agents' actions are ExecPlace goals
-/// sent to their robots (feature `ros2`, `docs/ros2.md`).
-pub const ROS2_ACTION: &str = "ros2";
-
-/// The ExecPlace action server a `ros2` place uses when the plan names none.
-pub const DEFAULT_SERVER: &str = "exec_place";
-
-/// The plan's `[ros2]` table and its `ros2` places, resolved.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Ros2Settings {
-    /// The DDS domain id.
-    pub domain_id: Option<u16>,
-    /// The local addresses DDS may use (empty = the backend's default, loopback).
-    pub networks: Vec<std::net::IpAddr>,
-    /// Seconds between a robot's heartbeats.
-    pub heartbeat: Option<f64>,
-    /// Seconds without a heartbeat after which a robot is lost.
-    pub lost_after: Option<f64>,
-    /// Seconds the supervisor waits for its robots before it gives up.
-    pub startup: Option<f64>,
-    /// Places whose action is `ros2`, with their ExecPlace server name, in net order.
-    pub servers: Vec<(PlaceId, String)>,
 }
 
 /// What a place does when tokens enter it.
@@ -208,27 +189,6 @@ pub struct PlanFile {
     pub robots: Vec<Spanned<String>>,
     /// ROS 2 backend settings (feature `ros2`; see `docs/ros2.md`).
     pub ros2: Option<Ros2File>,
-}
-
-/// The `[ros2]` table: how the ROS 2 backend joins DDS and watches robots.
-#[derive(Debug, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct Ros2File {
-    /// The DDS domain id (0–232; default 0).
-    #[schemars(with = "Option<u16>", range(max = 232))]
-    pub domain_id: Option<Spanned<u16>>,
-    /// Local IP addresses DDS may use (default `["127.0.0.1"]`: loopback only).
-    #[schemars(with = "Option<Vec<String>>")]
-    pub networks: Option<Vec<Spanned<String>>>,
-    /// Seconds between a robot's heartbeats (default 0.1).
-    #[schemars(with = "Option<f64>", range(min = 0.0))]
-    pub heartbeat: Option<Spanned<f64>>,
-    /// Seconds without a heartbeat after which a robot is lost (default 1.0).
-    #[schemars(with = "Option<f64>", range(min = 0.0))]
-    pub lost_after: Option<Spanned<f64>>,
-    /// Seconds the supervisor waits for every robot before it gives up (default 30).
-    #[schemars(with = "Option<f64>", range(min = 0.0))]
-    pub startup: Option<Spanned<f64>>,
 }
 
 /// The value of a net parameter: a number or an expression the net reader evaluates.
@@ -502,97 +462,6 @@ impl PlanFile {
             ros2,
         })
     }
-}
-
-/// The `[ros2]` table and the `server` keys of the places.
-fn resolve_ros2(
-    net: &Net,
-    file: Option<&Ros2File>,
-    places: &BTreeMap<Spanned<String>, Spanned<PlaceFile>>,
-    at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
-) -> Result<Ros2Settings, LoadError> {
-    let mut s = Ros2Settings::default();
-    if let Some(f) = file {
-        if let Some(d) = &f.domain_id {
-            if *d.get_ref() > 232 {
-                return Err(at(
-                    d.span(),
-                    out_of_range(
-                        "domain_id",
-                        "ros2",
-                        f64::from(*d.get_ref()),
-                        "must be in 0..=232",
-                    ),
-                ));
-            }
-            s.domain_id = Some(*d.get_ref());
-        }
-        for n in f.networks.iter().flatten() {
-            let ip = n.get_ref().trim().parse().map_err(|_| {
-                at(
-                    n.span(),
-                    LoadErrorKind::Invalid(format!(
-                        "ros2.networks: `{}` is not an IP address",
-                        n.get_ref()
-                    )),
-                )
-            })?;
-            s.networks.push(ip);
-        }
-        for (key, v, slot) in [
-            ("heartbeat", &f.heartbeat, &mut s.heartbeat),
-            ("lost_after", &f.lost_after, &mut s.lost_after),
-            ("startup", &f.startup, &mut s.startup),
-        ] {
-            if let Some(v) = v {
-                let x = *v.get_ref();
-                if !(x.is_finite() && x > 0.0) {
-                    return Err(at(
-                        v.span(),
-                        out_of_range(key, "ros2", x, "must be a finite number > 0"),
-                    ));
-                }
-                *slot = Some(x);
-            }
-        }
-    }
-    for (name, role) in places {
-        let f = role.get_ref();
-        let is_ros2 = f.action.as_deref() == Some(ROS2_ACTION);
-        let server = match &f.server {
-            Some(srv) if !is_ros2 => {
-                return Err(at(
-                    srv.span(),
-                    LoadErrorKind::Invalid(format!(
-                        "place `{}`: `server` applies to places with action = \"{ROS2_ACTION}\" only",
-                        name.get_ref()
-                    )),
-                ));
-            }
-            Some(srv) => {
-                let v = srv.get_ref();
-                let ok = v.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
-                    && v.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-                    && !v.contains("__");
-                if !ok {
-                    return Err(at(
-                        srv.span(),
-                        LoadErrorKind::Invalid(format!(
-                            "place `{}`: server `{v}` is not a ROS 2 name (letters, digits and single underscores, starting with a letter)",
-                            name.get_ref()
-                        )),
-                    ));
-                }
-                v.clone()
-            }
-            None => DEFAULT_SERVER.to_string(),
-        };
-        if is_ros2 && let Some(p) = net.place_by_name(name.get_ref()) {
-            s.servers.push((p, server));
-        }
-    }
-    s.servers.sort_by_key(|&(p, _)| p);
-    Ok(s)
 }
 
 /// Bytes between the start of a TOML string value and its content (its opening quotes).
