@@ -9,7 +9,8 @@ mod support;
 use std::collections::BTreeSet;
 use std::time::{Duration, Instant};
 
-use gspn::io::{ReadOptions, read_net};
+use gspn::io::{Format, ReadOptions, read_net, write_net};
+use gspn::net::{NetBuilder, Servers};
 use support::{
     domain, finish, listen, repo, robot, robot_with, supervisor, supervisor_with, take, terminate,
 };
@@ -198,4 +199,92 @@ async fn a_place_timeout_fails_the_action_and_every_running_goal_is_cancelled_on
             "{name}: {log}"
         );
     }
+}
+
+/// Robots alternate between `Work` and `Move`; a failure in either sends the robot's agent to
+/// `Broken` (no outputs) through `fail_w` / `fail_m`, whose rates are so small that robots
+/// never pick them themselves.
+fn write_work_move_plan(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut b = NetBuilder::new("work_move_broken");
+    let work = b.place("Work", 3);
+    let mv = b.place("Move", 0);
+    let broken = b.place("Broken", 0);
+    for (name, from, to, rate) in [
+        ("done", work, mv, 1.0),
+        ("arrive", mv, work, 1.0),
+        ("fail_w", work, broken, 1e-12),
+        ("fail_m", mv, broken, 1e-12),
+    ] {
+        let t = b.exponential(name, rate, Servers::Infinite);
+        b.input(from, t, 1);
+        b.output(t, to, 1);
+    }
+    write_net(&b.build().unwrap(), &dir.join("wm.pnml"), Format::Pnml).unwrap();
+    let plan = dir.join("wm.toml");
+    std::fs::write(
+        &plan,
+        "net = \"wm.pnml\"\nseed = 3\ntime_scale = 0.02\nrobots = [\"r1\", \"r2\", \"r3\"]\n\n\
+         [places.Work]\naction = \"ros2\"\non_failure = \"fire fail_w\"\n\n\
+         [places.Move]\naction = \"ros2\"\non_failure = \"fire fail_m\"\n",
+    )
+    .unwrap();
+    plan
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn with_a_fire_policy_the_other_robots_carry_on_without_the_killed_one() {
+    const N: usize = 150;
+    let dir = tempfile::tempdir().unwrap();
+    let plan = write_work_move_plan(dir.path());
+    let d = domain(4);
+    let (mut firings, _markings) = listen(d);
+    let mut robots: Vec<_> = ROBOTS
+        .iter()
+        .map(|r| robot_with(dir.path(), r, &plan, d, &[]))
+        .collect();
+    let sup = supervisor_with(
+        dir.path(),
+        &plan,
+        d,
+        &[
+            "--max-firings",
+            &N.to_string(),
+            "--ros2-wait-subscribers",
+            "4",
+        ],
+    );
+    let before = take(&mut firings, 20, Duration::from_secs(90)).await;
+    assert_eq!(before.len(), 20, "supervisor log:\n{}", sup.log());
+    robots[1].child.start_kill().expect("kill r2");
+    let after = take(&mut firings, N - 20, Duration::from_secs(90)).await;
+    let log = sup.log();
+    let (code, out) = finish(sup, Duration::from_secs(30)).await;
+    assert_eq!(code, Some(0), "{out}\n{log}");
+    assert!(log.contains("robot `r2` lost"), "{log}");
+    let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
+    assert_eq!(summary["stopped"], "max_firings");
+    assert_eq!(summary["firings"], N as u64);
+    assert_eq!(summary["final_marking"]["Broken"], 1);
+
+    let all: Vec<_> = before.into_iter().chain(after).collect();
+    let seqs: Vec<u64> = all.iter().map(|f| f.seq).collect();
+    assert_eq!(seqs, (1..=N as u64).collect::<Vec<_>>());
+    // Exactly one firing takes r2's agent to Broken; r2 never moves again; r1 and r3 do.
+    let broke: Vec<usize> = (0..N)
+        .filter(|&k| all[k].transition.starts_with("fail_"))
+        .collect();
+    assert_eq!(
+        broke.len(),
+        1,
+        "{:?}",
+        all.iter().map(|f| &f.transition).collect::<Vec<_>>()
+    );
+    let k = broke[0];
+    assert_eq!(all[k].robots, vec!["r2".to_string()]);
+    assert!(k >= 20, "r2 broke before it was killed");
+    let later: BTreeSet<&str> = all[k + 1..]
+        .iter()
+        .flat_map(|f| f.robots.iter().map(String::as_str))
+        .collect();
+    assert_eq!(later, BTreeSet::from(["r1", "r3"]));
 }
