@@ -288,3 +288,52 @@ async fn with_a_fire_policy_the_other_robots_carry_on_without_the_killed_one() {
         .collect();
     assert_eq!(later, BTreeSet::from(["r1", "r3"]));
 }
+
+#[test]
+fn bad_ros2_input_is_refused_with_exit_code_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let net = repo("plans/nets/temperature_patrol.xml");
+    let plan = |name: &str, body: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, format!("net = {:?}\n{body}", net.to_string_lossy())).unwrap();
+        p
+    };
+    let run = |args: &[&std::ffi::OsStr]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_plan-runner"))
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let bad_server = plan(
+        "bad_server.toml",
+        "[places.\"p2:Alarm_L1\"]\naction = \"ros2\"\nserver = \"bad name\"\n",
+    );
+    let (code, err) = run(&["run".as_ref(), bad_server.as_os_str()]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("bad_server.toml:4:10"), "{err}");
+    assert!(
+        err.contains("server `bad name` is not a ROS 2 name"),
+        "{err}"
+    );
+    let no_robots = plan(
+        "no_robots.toml",
+        "[places.\"p2:Alarm_L1\"]\naction = \"ros2\"\n",
+    );
+    let (code, err) = run(&["run".as_ref(), no_robots.as_os_str()]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("no `robots = [...]`"), "{err}");
+    let no_ros2 = repo("plans/temperature_patrol.toml");
+    let (code, err) = run(&[
+        "robot".as_ref(),
+        "--id".as_ref(),
+        "r1".as_ref(),
+        "--plan".as_ref(),
+        no_ros2.as_os_str(),
+    ]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("no place has action = \"ros2\""), "{err}");
+}
