@@ -35,18 +35,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let m = solver.measures(&steady.pi);
     let total = start.elapsed().as_secs_f64();
     println!(
-        "{} tangible states, {} CTMC entries, ergodic: {}",
+        "{} tangible states, {} moves, ergodic: {}",
         ss.tangible_count(),
-        solver.chain().nnz(),
+        ss.tangible_edge_count(),
         steady.ergodic
     );
     for (p, e) in net.places().iter().zip(&m.mean_tokens) {
         println!("  E[{}] = {e:.9}", p.name);
     }
-    println!(
-        "residual ‖πQ‖∞ = {:.2e}",
-        solver.chain().residual(&steady.pi)
-    );
+    println!("residual ‖πQ‖∞ = {:.2e}", solver.residual(&steady.pi));
     println!(
         "state space {built:.3} s (peak RSS {rss_built} MB, state space {} MB), solve {:.3} s, \
          total {total:.3} s, peak RSS {} MB",

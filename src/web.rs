@@ -2,9 +2,10 @@
 //! token game, and shows its analysis.
 //!
 //! Every asset (HTML, JavaScript, CSS — plain, hand-written, no framework) is compiled into
-//! the binary ([`ASSETS`]), and every response forbids the page to load anything from another
-//! origin (`Content-Security-Policy: default-src 'self'`), so the viewer works with the
-//! network off.
+//! the binary ([`ASSETS`]). The page draws a net in SVG, or past 1,500 nodes on a canvas (the
+//! test hooks then sit on hidden elements), and a live run's simulated world as a 2D map.
+//! Every response forbids the page to load anything from another origin
+//! (`Content-Security-Policy: default-src 'self'`), so the viewer works with the network off.
 //!
 //! # API
 //!
@@ -15,13 +16,17 @@
 //! | `POST /api/sim/reset {seed}` | back to the initial marking, with that seed |
 //! | `POST /api/sim/step {n}` | fire `n` transitions drawn by the token game: after a reset with seed S, `n` steps are exactly `plan-runner simulate --seed S --steps n` |
 //! | `POST /api/sim/fire {transition}` | fire one firable transition by hand (409 if it may not fire) |
-//! | `GET /api/analysis` | properties, steady-state mean tokens and throughputs, dead markings with a firing sequence to each; `{error, kind}` (422) for an unbounded net |
+//! | `GET /api/analysis` | properties, steady-state mean tokens and throughputs, dead markings with a firing sequence to each; `{error, kind}` (422) for an unbounded net; starts the analysis if needed and waits for it (409 `kind: "cancelled"` if it is cancelled meanwhile) |
+//! | `POST /api/analysis/start` | starts the analysis on a blocking thread (unless it is running or done); the progress |
+//! | `GET /api/analysis/progress` | `{state: idle\|running\|cancelling\|cancelled\|done, phase: "state space"\|"properties"\|"steady state", markings, seconds}`: markings found so far by the state-space search |
+//! | `POST /api/analysis/cancel` | stops a running analysis (the search within one block of ~1,000 markings, later phases before they start); the progress |
 //! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`replay`]), or the token game |
 //! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
 //! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal |
-//! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log` |
+//! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log`, and `world` with a world feed |
+//! | `GET /api/live/world` | the latest value of the run's simulated world ([`LiveRun::with_world`]: map and robots, metres, y up); 404 without a feed |
 //! | `POST /api/live/stop` | asks the live run to stop |
-//! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "state", ...}` snapshots (log entries since the previous one), at most one per [`FRAME`] |
+//! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "state", ...}` snapshots (log entries since the previous one, `world` with a world feed), at most one per [`FRAME`]; a new event or world value wakes the next one |
 //!
 //! ```no_run
 //! # async fn demo(net: gspn::net::Net) -> std::io::Result<()> {
@@ -31,6 +36,7 @@
 //! # }
 //! ```
 
+mod analysis_job;
 mod api;
 pub mod layout;
 mod live;
@@ -46,7 +52,6 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use serde_json::{Value, json};
 use tokio::net::TcpListener;
-use tokio::sync::OnceCell;
 
 use crate::net::Net;
 use crate::policy::Policy;
@@ -85,6 +90,26 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/app.js"),
     },
     Asset {
+        path: "/canvas.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/canvas.js"),
+    },
+    Asset {
+        path: "/map.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/map.js"),
+    },
+    Asset {
+        path: "/analysis.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/analysis.js"),
+    },
+    Asset {
+        path: "/live.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/live.js"),
+    },
+    Asset {
         path: "/style.css",
         mime: "text/css; charset=utf-8",
         body: include_str!("web/assets/style.css"),
@@ -102,8 +127,7 @@ struct Inner {
     net: Arc<Net>,
     seed: u64,
     session: Mutex<Session>,
-    analysis: Arc<OnceCell<Value>>,
-    max_states: usize,
+    analysis: Arc<analysis_job::AnalysisJob>,
     live: OnceLock<LiveRun>,
     replay: OnceLock<Arc<Vec<replay::Frame>>>,
 }
@@ -124,13 +148,13 @@ impl WebState {
     ) -> WebState {
         let net = Arc::new(net);
         let session = Session::new(net.clone(), policy.map(Arc::new), seed);
+        let analysis = Arc::new(analysis_job::AnalysisJob::new(net.clone(), max_states));
         WebState {
             inner: Arc::new(Inner {
                 net,
                 seed,
                 session: Mutex::new(session),
-                analysis: Arc::new(OnceCell::new()),
-                max_states,
+                analysis,
                 live: OnceLock::new(),
                 replay: OnceLock::new(),
             }),
@@ -218,10 +242,14 @@ pub fn router(state: WebState) -> Router {
         .route("/api/sim/step", post(api::sim_step))
         .route("/api/sim/fire", post(api::sim_fire))
         .route("/api/analysis", get(api::analysis))
+        .route("/api/analysis/start", post(api::analysis_start))
+        .route("/api/analysis/progress", get(api::analysis_progress))
+        .route("/api/analysis/cancel", post(api::analysis_cancel))
         .route("/api/mode", get(mode))
         .route("/api/layout", post(api::save_layout))
         .route("/api/replay", get(replay_frames))
         .route("/api/live/state", get(live::state))
+        .route("/api/live/world", get(live::world))
         .route("/api/live/stop", post(live::stop))
         .route("/api/live/ws", get(live::ws))
         .fallback(|| async { api::error(StatusCode::NOT_FOUND, "no such route") })

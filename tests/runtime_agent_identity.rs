@@ -3,7 +3,32 @@
 //! the predecessor's crash on many→many synchronisation.
 
 use gspn::net::{Net, NetBuilder, Servers};
-use gspn::runtime::{AgentId, AgentState, EventKind, Outcome, Runtime, StopReason, action_fn};
+use gspn::runtime::{
+    AgentId, AgentMode, AgentState, EventKind, Outcome, Runtime, StopReason, action_fn,
+};
+
+/// Runs a scenario `async fn NAME(mode: AgentMode)` as two tests, `NAME::light` and
+/// `NAME::actor`: every behaviour holds with light agents and with one kameo actor per agent.
+macro_rules! in_both_agent_modes {
+    ($($name:ident),* $(,)?) => {$(
+        mod $name {
+            #[tokio::test(start_paused = true)]
+            async fn light() {
+                super::$name(gspn::runtime::AgentMode::Light).await
+            }
+            #[tokio::test(start_paused = true)]
+            async fn actor() {
+                super::$name(gspn::runtime::AgentMode::Actor).await
+            }
+        }
+    )*};
+}
+
+in_both_agent_modes!(
+    many_to_many_fires_once_keeps_two_agents_and_spawns_a_third,
+    a_join_ends_the_surplus_agent,
+    an_agent_in_a_place_without_outputs_is_inactive
+);
 
 /// {p1, p2} → t1 → outputs, every place an action place.
 fn sync_net(outputs: &[&str]) -> Net {
@@ -20,11 +45,11 @@ fn sync_net(outputs: &[&str]) -> Net {
     b.build().unwrap()
 }
 
-#[tokio::test(start_paused = true)]
-async fn many_to_many_fires_once_keeps_two_agents_and_spawns_a_third() {
+async fn many_to_many_fires_once_keeps_two_agents_and_spawns_a_third(mode: AgentMode) {
     let net = sync_net(&["p3", "p4", "p5"]);
     let t1 = net.transition_by_name("t1").unwrap();
     let mut b = Runtime::builder(net)
+        .agent_mode(mode)
         .action("sync", action_fn(move |_| async move { Outcome::Fire(t1) }))
         .seed(1);
     for p in ["p1", "p2", "p3", "p4", "p5"] {
@@ -58,11 +83,11 @@ async fn many_to_many_fires_once_keeps_two_agents_and_spawns_a_third() {
     assert_eq!(s.final_marking["p5"], 1);
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_join_ends_the_surplus_agent() {
+async fn a_join_ends_the_surplus_agent(mode: AgentMode) {
     let net = sync_net(&["p3"]);
     let t1 = net.transition_by_name("t1").unwrap();
     let mut h = Runtime::builder(net)
+        .agent_mode(mode)
         .action("sync", action_fn(move |_| async move { Outcome::Fire(t1) }))
         .bind("p1", "sync")
         .bind("p2", "sync")
@@ -88,8 +113,7 @@ async fn a_join_ends_the_surplus_agent() {
     );
 }
 
-#[tokio::test(start_paused = true)]
-async fn an_agent_in_a_place_without_outputs_is_inactive() {
+async fn an_agent_in_a_place_without_outputs_is_inactive(mode: AgentMode) {
     // The sync net plus an independent net-timed loop that keeps the run alive.
     let mut b = NetBuilder::new("sync+loop");
     let p1 = b.place("p1", 1);
@@ -105,6 +129,7 @@ async fn an_agent_in_a_place_without_outputs_is_inactive() {
     b.output(tick, q, 1);
     let net = b.build().unwrap();
     let h = Runtime::builder(net)
+        .agent_mode(mode)
         .action(
             "slow",
             action_fn(move |_| async move {

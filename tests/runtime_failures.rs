@@ -7,7 +7,33 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use gspn::io::plan::{FailurePolicy, Role};
 use gspn::net::{Net, NetBuilder, Servers};
-use gspn::runtime::{EventKind, Outcome, Runtime, StopReason, action_fn};
+use gspn::runtime::{AgentMode, EventKind, Outcome, Runtime, StopReason, action_fn};
+
+/// Runs a scenario `async fn NAME(mode: AgentMode)` as two tests, `NAME::light` and
+/// `NAME::actor`: every behaviour holds with light agents and with one kameo actor per agent.
+macro_rules! in_both_agent_modes {
+    ($($name:ident),* $(,)?) => {$(
+        mod $name {
+            #[tokio::test(start_paused = true)]
+            async fn light() {
+                super::$name(gspn::runtime::AgentMode::Light).await
+            }
+            #[tokio::test(start_paused = true)]
+            async fn actor() {
+                super::$name(gspn::runtime::AgentMode::Actor).await
+            }
+        }
+    )*};
+}
+
+in_both_agent_modes!(
+    a_panicking_action_does_not_take_the_plan_down,
+    failure_policy_stop_ends_the_run_with_exit_code_1,
+    failure_policy_fire_takes_the_named_transition,
+    a_transition_that_is_not_an_output_is_an_error_naming_it,
+    a_transition_that_never_becomes_enabled_is_an_error_not_a_hang,
+    an_action_past_its_place_timeout_fails_and_is_retried
+);
 
 /// Two independent loops a → A → a and b → B → b, one agent each, plus a dead end `x`.
 fn two_loops() -> Net {
@@ -37,8 +63,7 @@ fn role(on_failure: FailurePolicy, name: &str) -> Role {
     }
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_panicking_action_does_not_take_the_plan_down() {
+async fn a_panicking_action_does_not_take_the_plan_down(mode: AgentMode) {
     let net = two_loops();
     let (pa, pb) = (
         net.place_by_name("a").unwrap(),
@@ -48,6 +73,7 @@ async fn a_panicking_action_does_not_take_the_plan_down() {
     let calls = Arc::new(AtomicU32::new(0));
     let c = Arc::clone(&calls);
     let h = Runtime::builder(net)
+        .agent_mode(mode)
         .action("ok", action_fn(move |_| async move { Outcome::Fire(ta) }))
         .action(
             "boom",
@@ -79,11 +105,11 @@ async fn a_panicking_action_does_not_take_the_plan_down() {
     );
 }
 
-#[tokio::test(start_paused = true)]
-async fn failure_policy_stop_ends_the_run_with_exit_code_1() {
+async fn failure_policy_stop_ends_the_run_with_exit_code_1(mode: AgentMode) {
     let net = two_loops();
     let pa = net.place_by_name("a").unwrap();
     let h = Runtime::builder(net)
+        .agent_mode(mode)
         .action(
             "fail",
             action_fn(|_| async { Outcome::Failed("battery low".into()) }),
@@ -101,12 +127,12 @@ async fn failure_policy_stop_ends_the_run_with_exit_code_1() {
     );
 }
 
-#[tokio::test(start_paused = true)]
-async fn failure_policy_fire_takes_the_named_transition() {
+async fn failure_policy_fire_takes_the_named_transition(mode: AgentMode) {
     let net = two_loops();
     let pa = net.place_by_name("a").unwrap();
     let ta = net.transition_by_name("A").unwrap();
     let h = Runtime::builder(net)
+        .agent_mode(mode)
         .action(
             "fail",
             action_fn(|_| async { Outcome::Failed("no".into()) }),
@@ -124,12 +150,12 @@ async fn failure_policy_fire_takes_the_named_transition() {
     assert_eq!(s.time, 0.0);
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_transition_that_is_not_an_output_is_an_error_naming_it() {
+async fn a_transition_that_is_not_an_output_is_an_error_naming_it(mode: AgentMode) {
     let net = two_loops();
     let pa = net.place_by_name("a").unwrap();
     let tb = net.transition_by_name("B").unwrap();
     let mut h = Runtime::builder(net)
+        .agent_mode(mode)
         .action(
             "wrong",
             action_fn(move |_| async move { Outcome::Fire(tb) }),
@@ -156,8 +182,7 @@ async fn a_transition_that_is_not_an_output_is_an_error_naming_it() {
     );
 }
 
-#[tokio::test(start_paused = true)]
-async fn a_transition_that_never_becomes_enabled_is_an_error_not_a_hang() {
+async fn a_transition_that_never_becomes_enabled_is_an_error_not_a_hang(mode: AgentMode) {
     // b → X needs a token in x as well: there never is one, and nothing else can happen.
     let mut nb = NetBuilder::new("stuck");
     let pb = nb.place("b", 1);
@@ -170,6 +195,7 @@ async fn a_transition_that_never_becomes_enabled_is_an_error_not_a_hang() {
     nb.input(px, tx, 1);
     let net = nb.build().unwrap();
     let h = Runtime::builder(net)
+        .agent_mode(mode)
         .action("x", action_fn(move |_| async move { Outcome::Fire(tx) }))
         .role(pb, role(FailurePolicy::Stop, "x"))
         .seed(3)
@@ -184,11 +210,11 @@ async fn a_transition_that_never_becomes_enabled_is_an_error_not_a_hang() {
     );
 }
 
-#[tokio::test(start_paused = true)]
-async fn an_action_past_its_place_timeout_fails_and_is_retried() {
+async fn an_action_past_its_place_timeout_fails_and_is_retried(mode: AgentMode) {
     let net = two_loops();
     let pa = net.place_by_name("a").unwrap();
     let h = Runtime::builder(net)
+        .agent_mode(mode)
         .action(
             "slow",
             action_fn(|_| async {

@@ -4,11 +4,32 @@
 use std::time::Duration;
 
 use gspn::net::{NetBuilder, Servers};
-use gspn::runtime::{Outcome, Runtime, StopReason, action_fn};
+use gspn::runtime::{AgentMode, Outcome, Runtime, StopReason, action_fn};
 use serde_json::Value;
 
-#[tokio::test(start_paused = true)]
-async fn stop_cancels_actions_and_leaves_a_complete_journal() {
+/// Runs a scenario `async fn NAME(mode: AgentMode)` as two tests, `NAME::light` and
+/// `NAME::actor`: every behaviour holds with light agents and with one kameo actor per agent.
+macro_rules! in_both_agent_modes {
+    ($($name:ident),* $(,)?) => {$(
+        mod $name {
+            #[tokio::test(start_paused = true)]
+            async fn light() {
+                super::$name(gspn::runtime::AgentMode::Light).await
+            }
+            #[tokio::test(start_paused = true)]
+            async fn actor() {
+                super::$name(gspn::runtime::AgentMode::Actor).await
+            }
+        }
+    )*};
+}
+
+in_both_agent_modes!(
+    stop_cancels_actions_and_leaves_a_complete_journal,
+    actions_that_ignore_the_cancel_are_waited_for_a_bounded_time
+);
+
+async fn stop_cancels_actions_and_leaves_a_complete_journal(mode: AgentMode) {
     let mut b = NetBuilder::new("patrol");
     let p = b.place("patrol", 3);
     let q = b.place("counter", 1);
@@ -22,6 +43,7 @@ async fn stop_cancels_actions_and_leaves_a_complete_journal() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("run.jsonl");
     let h = Runtime::builder(net)
+        .agent_mode(mode)
         .action(
             "patrol",
             action_fn(|ctx| async move {
@@ -69,14 +91,14 @@ async fn stop_cancels_actions_and_leaves_a_complete_journal() {
     assert_eq!(last["reason"], "requested");
 }
 
-#[tokio::test(start_paused = true)]
-async fn actions_that_ignore_the_cancel_are_waited_for_a_bounded_time() {
+async fn actions_that_ignore_the_cancel_are_waited_for_a_bounded_time(mode: AgentMode) {
     let mut b = NetBuilder::new("stubborn");
     let p = b.place("p", 1);
     let t = b.exponential("t", 1.0, Servers::Single);
     b.input(p, t, 1);
     b.output(t, p, 1);
     let h = Runtime::builder(b.build().unwrap())
+        .agent_mode(mode)
         .action(
             "deaf",
             action_fn(|_| async {

@@ -335,14 +335,25 @@ async fn the_page_is_served_from_the_binary_and_loads_nothing_from_elsewhere() {
         assert!(html.contains(&format!("id=\"{id}\"")), "#{id} missing");
     }
     assert!(html.contains("src=\"/app.js\""));
-    let js = ASSETS.iter().find(|a| a.path == "/app.js").unwrap().body;
+    let js: String = ASSETS
+        .iter()
+        .filter(|a| a.path.ends_with(".js"))
+        .map(|a| a.body)
+        .collect();
+    for script in ASSETS.iter().filter(|a| a.path.ends_with(".js")) {
+        assert!(
+            html.contains(&format!("src=\"{}\"", script.path)),
+            "the page never loads {}",
+            script.path
+        );
+    }
     for hook in [
         "'data-place'",
         "'data-tokens'",
         "'data-transition'",
         "'data-enabled'",
     ] {
-        assert!(js.contains(hook), "{hook} missing from app.js");
+        assert!(js.contains(hook), "{hook} missing from the scripts");
     }
     for api in [
         "/api/net",
@@ -351,8 +362,14 @@ async fn the_page_is_served_from_the_binary_and_loads_nothing_from_elsewhere() {
         "/api/sim/reset",
         "/api/sim/fire",
         "/api/analysis",
+        "/api/analysis/start",
+        "/api/analysis/progress",
+        "/api/analysis/cancel",
+        "/api/live/ws",
+        "/api/live/stop",
+        "/api/replay",
     ] {
-        assert!(js.contains(api), "app.js never calls {api}");
+        assert!(js.contains(api), "the page never calls {api}");
     }
 }
 
@@ -412,4 +429,71 @@ fn serve_refuses_bad_input_with_exit_code_2() {
         assert_eq!(out.status.code(), Some(2), "{file}");
         assert!(String::from_utf8_lossy(&out.stderr).contains("error"));
     }
+}
+
+/// Polls `GET /api/analysis/progress` until `done(progress)` holds (at most ~60 s).
+async fn progress_until(state: &WebState, done: impl Fn(&Value) -> bool) -> Value {
+    for _ in 0..12_000 {
+        let (status, p) = call(state, "GET", "/api/analysis/progress", None).await;
+        assert_eq!(status, StatusCode::OK);
+        if done(&p) {
+            return p;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(5)).await;
+    }
+    panic!("the analysis progress never reached the expected state");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_long_analysis_shows_progress_and_can_be_cancelled() {
+    // Kanban N = 4: 454,475 tangible markings, seconds of work.
+    let state = state_for(&common::fixture("kanban/kanban_gspn_N4.pnml"), 0);
+    let (_, p) = call(&state, "GET", "/api/analysis/progress", None).await;
+    assert_eq!(p["state"], "idle");
+
+    let (status, p) = call(&state, "POST", "/api/analysis/start", None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert_eq!(p["state"], "running", "{p}");
+    // The search reports the markings it has found while it runs.
+    let seen = progress_until(&state, |p| p["markings"].as_u64().unwrap_or(0) > 0).await;
+    assert_eq!(seen["state"], "running", "{seen}");
+    let phases = ["state space", "properties", "steady state"];
+    assert!(phases.contains(&seen["phase"].as_str().unwrap()), "{seen}");
+
+    let (status, p) = call(&state, "POST", "/api/analysis/cancel", None).await;
+    assert_eq!(status, StatusCode::OK);
+    assert!(
+        p["state"] == "cancelling" || p["state"] == "cancelled",
+        "{p}"
+    );
+    let end = progress_until(&state, |p| p["state"] != "cancelling").await;
+    assert_eq!(end["state"], "cancelled", "{end}");
+    assert!(end["markings"].as_u64().unwrap() >= seen["markings"].as_u64().unwrap());
+
+    // Started again and cancelled at once: the search stops before its first markings'
+    // successors are all stored, far from the 454,475 of the whole graph.
+    let (_, p) = call(&state, "POST", "/api/analysis/start", None).await;
+    assert_eq!(p["state"], "running", "{p}");
+    call(&state, "POST", "/api/analysis/cancel", None).await;
+    let end = progress_until(&state, |p| p["state"] != "cancelling").await;
+    assert_eq!(end["state"], "cancelled", "{end}");
+    assert_eq!(end["phase"], "state space", "{end}");
+    assert!(end["markings"].as_u64().unwrap() < 454_475, "{end}");
+}
+
+#[tokio::test]
+async fn a_finished_analysis_is_reported_done_and_kept() {
+    let state = state_for(&common::fixture(PATROL), 0);
+    let (status, a) = call(&state, "GET", "/api/analysis", None).await;
+    assert_eq!(status, StatusCode::OK, "{a}");
+    let (_, p) = call(&state, "GET", "/api/analysis/progress", None).await;
+    assert_eq!(p["state"], "done", "{p}");
+    assert_eq!(p["markings"], a["reachable"]);
+    // Starting or cancelling a finished analysis changes nothing.
+    let (_, p) = call(&state, "POST", "/api/analysis/cancel", None).await;
+    assert_eq!(p["state"], "done");
+    let (_, p) = call(&state, "POST", "/api/analysis/start", None).await;
+    assert_eq!(p["state"], "done");
+    let (_, again) = call(&state, "GET", "/api/analysis", None).await;
+    assert_eq!(again, a);
 }

@@ -132,3 +132,99 @@ async fn a_journal_plays_back_as_the_markings_of_the_run() {
     assert_eq!(v["frames"][0]["transition"], Value::Null);
     server.abort();
 }
+
+#[tokio::test]
+async fn a_world_feed_is_served_and_sent_in_the_state_frames() {
+    let mut handle = Runtime::builder(cyc3())
+        .seed(3)
+        .max_firings(10)
+        .subscribe_at_start(true)
+        .spawn()
+        .unwrap();
+    let events = handle.events();
+    let handle = Arc::new(handle);
+    let world = |x: f64| {
+        serde_json::json!({
+            "time": x,
+            "map": {
+                "locations": [{"name": "L1", "x": 0.0, "y": 0.0}, {"name": "L2", "x": 8.0, "y": 0.0}],
+                "edges": [["L1", "L2"]],
+                "walls": [[-1.0, -1.0, 9.0, -1.0]],
+                "obstacles": [{"x": 3.0, "y": 1.0, "w": 1.0, "h": 0.5}],
+            },
+            "robots": [{"id": "r1", "agent": 0, "x": x, "y": 0.0, "radius": 0.3}],
+        })
+    };
+    let (tx, rx) = tokio::sync::watch::channel(world(0.5));
+    let live = LiveRun::start(handle.clone(), events).with_world(rx);
+    handle.wait().await;
+
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let server = tokio::spawn(serve(listener, WebState::for_live(live)));
+    assert_eq!(http_get(addr, "/api/live/world").await, world(0.5));
+    assert_eq!(http_get(addr, "/api/live/state").await["world"], world(0.5));
+
+    let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/api/live/ws"))
+        .await
+        .unwrap();
+    let mut next = async || -> Value {
+        match ws.next().await.unwrap().unwrap() {
+            Message::Text(t) => serde_json::from_str(t.as_str()).unwrap(),
+            other => panic!("expected text, got {other:?}"),
+        }
+    };
+    assert_eq!(next().await["type"], "net");
+    // The run may still be folding its last events: skip to a frame with the first world.
+    let first = next().await;
+    assert_eq!(first["world"]["robots"][0]["x"], 0.5, "{first}");
+    // A new world value alone (the run is over, no event comes) wakes a frame.
+    tx.send(world(2.0)).unwrap();
+    let mut moved = next().await;
+    for _ in 0..20 {
+        if moved["world"]["robots"][0]["x"] == 2.0 {
+            break;
+        }
+        moved = next().await;
+    }
+    assert_eq!(moved["type"], "state");
+    assert_eq!(moved["world"], world(2.0));
+    assert_eq!(
+        http_get(addr, "/api/live/world").await["robots"][0]["x"],
+        2.0
+    );
+    // The feed ends: the last value stays.
+    drop(tx);
+    assert_eq!(http_get(addr, "/api/live/world").await, world(2.0));
+    server.abort();
+}
+
+#[tokio::test]
+async fn a_run_without_a_world_feed_has_no_world() {
+    let mut handle = Runtime::builder(cyc3())
+        .seed(1)
+        .max_firings(3)
+        .subscribe_at_start(true)
+        .spawn()
+        .unwrap();
+    let events = handle.events();
+    let handle = Arc::new(handle);
+    let live = LiveRun::start(handle.clone(), events);
+    handle.wait().await;
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let server = tokio::spawn(serve(listener, WebState::for_live(live)));
+    let mut stream = tokio::net::TcpStream::connect(addr).await.unwrap();
+    let req = format!("GET /api/live/world HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n");
+    stream.write_all(req.as_bytes()).await.unwrap();
+    let mut res = String::new();
+    stream.read_to_string(&mut res).await.unwrap();
+    assert!(res.starts_with("HTTP/1.1 404"), "{res}");
+    assert!(
+        http_get(addr, "/api/live/state")
+            .await
+            .get("world")
+            .is_none()
+    );
+    server.abort();
+}

@@ -18,11 +18,13 @@
 //! assert!((pt[0][0] - (2.0 / 3.0 + (-1.5f64).exp() / 3.0)).abs() < 1e-11);
 //! ```
 
+mod columns;
 mod limiting;
 mod lu;
 mod steady;
 mod transient;
 
+pub(crate) use columns::Columns;
 pub use limiting::Limiting;
 pub use steady::{Method, SolveError, SteadyOptions};
 pub use transient::poisson_weights;

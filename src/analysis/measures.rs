@@ -30,7 +30,9 @@
 //! assert_eq!(at[0][0], 1.0);
 //! ```
 
-use crate::analysis::ctmc::{Ctmc, Limiting, SolveError, SteadyOptions};
+use std::sync::OnceLock;
+
+use crate::analysis::ctmc::{Columns, Ctmc, Limiting, Method, SolveError, SteadyOptions};
 use crate::analysis::state_space::StateSpace;
 use crate::net::Net;
 use crate::net::predicate::Predicate;
@@ -43,7 +45,8 @@ pub type SolverOptions = SteadyOptions;
 pub struct Solver<'a> {
     net: &'a Net,
     space: &'a StateSpace,
-    chain: Ctmc,
+    /// The row form, built on first use.
+    chain: OnceLock<Ctmc>,
 }
 
 /// The measures of one distribution over tangible states. Vectors are indexed by
@@ -65,64 +68,151 @@ pub struct Measures {
 }
 
 impl<'a> Solver<'a> {
-    /// The generator: `Q[s][to] += rate·prob` for every move (self-loops dropped), built row
-    /// by row straight from the moves (no triplet list: the peak memory stays low).
+    /// A solver over the tangible states of `space`. Nothing is built yet: the row form of
+    /// the generator ([`Solver::chain`]) is made on first use, and a large ergodic chain is
+    /// solved from its columns alone (see [`Solver::steady_state`]).
     pub fn new(net: &'a Net, space: &'a StateSpace) -> Self {
-        let n = space.tangible_count();
-        let mut row_ptr = Vec::with_capacity(n + 1);
-        row_ptr.push(0);
-        let mut cols = Vec::new();
-        let mut rates = Vec::new();
-        let mut row: Vec<(u32, f64)> = Vec::new();
-        for s in 0..n {
-            row.clear();
-            row.extend(
-                space
-                    .moves(s)
-                    .iter()
-                    .filter(|m| m.to as usize != s && m.rate * m.prob > 0.0)
-                    .map(|m| (m.to, m.rate * m.prob)),
-            );
-            row.sort_unstable_by_key(|e| e.0);
-            let start = cols.len();
-            for &(to, q) in &row {
-                if cols.len() > start && cols.last() == Some(&to) {
-                    *rates.last_mut().expect("an entry was pushed") += q;
-                } else {
-                    cols.push(to);
-                    rates.push(q);
-                }
-            }
-            row_ptr.push(cols.len());
-        }
-        cols.shrink_to_fit();
-        rates.shrink_to_fit();
         Solver {
             net,
             space,
-            chain: Ctmc {
+            chain: OnceLock::new(),
+        }
+    }
+
+    /// The generator in rows: `Q[s][to] += rate·prob` for every move (self-loops dropped),
+    /// built row by row straight from the moves (no triplet list), on first use.
+    pub fn chain(&self) -> &Ctmc {
+        self.chain.get_or_init(|| {
+            let space = self.space;
+            let n = space.tangible_count();
+            let mut row_ptr = Vec::with_capacity(n + 1);
+            row_ptr.push(0);
+            let mut cols = Vec::new();
+            let mut rates = Vec::new();
+            let mut row: Vec<(u32, f64)> = Vec::new();
+            for s in 0..n {
+                row.clear();
+                self.row(s, &mut row);
+                row.sort_unstable_by_key(|e| e.0);
+                let start = cols.len();
+                for &(to, q) in &row {
+                    if cols.len() > start && cols.last() == Some(&to) {
+                        *rates.last_mut().expect("an entry was pushed") += q;
+                    } else {
+                        cols.push(to);
+                        rates.push(q);
+                    }
+                }
+                row_ptr.push(cols.len());
+            }
+            cols.shrink_to_fit();
+            rates.shrink_to_fit();
+            Ctmc {
                 n,
                 row_ptr,
                 cols,
                 rates,
-            },
-        }
+            }
+        })
     }
 
-    /// The chain over tangible states.
-    pub fn chain(&self) -> &Ctmc {
-        &self.chain
+    /// Appends the off-diagonal entries `(to, rate·prob)` of state `s` (unmerged).
+    fn row(&self, s: usize, out: &mut Vec<(u32, f64)>) {
+        out.extend(
+            self.space
+                .moves(s)
+                .iter()
+                .filter(|m| m.to as usize != s && m.rate * m.prob > 0.0)
+                .map(|m| (m.to, m.rate * m.prob)),
+        );
     }
 
     /// The limiting distribution from the initial marking: the steady state when the chain
     /// is ergodic, else absorption into each bottom component times its steady state.
+    ///
+    /// A chain above `opts.direct_limit` states (under [`Method::Auto`] or
+    /// [`Method::GaussSeidel`]) is checked for irreducibility on the moves and, when
+    /// irreducible, solved by Gauss–Seidel on its columns only — the row form is never built,
+    /// which keeps the peak memory near the state space's own size.
     pub fn steady_state(&self, opts: &SolverOptions) -> Result<Limiting, SolveError> {
-        self.chain.limiting(self.space.initial(), opts)
+        let n = self.space.tangible_count();
+        let iterative = match opts.method {
+            Method::Auto => n > opts.direct_limit,
+            Method::GaussSeidel => n > 1,
+            Method::Direct | Method::Power => false,
+        };
+        if iterative && self.chain.get().is_none() && self.all_reachable_from_0() {
+            let columns = Columns::from_rows(n, |s, out| self.row(s, out));
+            if !columns.all_reach(0) {
+                drop(columns);
+                return self.chain().limiting(self.space.initial(), opts);
+            }
+            let scale = columns.exit.iter().fold(1.0f64, |m, &x| m.max(x));
+            let solved = columns.gauss_seidel(
+                opts.tolerance * scale,
+                opts.max_iterations,
+                opts.method == Method::Auto,
+            );
+            drop(columns);
+            match solved {
+                Ok(pi) => {
+                    return Ok(Limiting {
+                        pi,
+                        ergodic: true,
+                        bottom: vec![(0..n as u32).collect()],
+                        absorption: vec![1.0],
+                    });
+                }
+                Err(e) if opts.method != Method::Auto => return Err(e),
+                // Auto goes on to the other solvers on the row form.
+                Err(_) => {}
+            }
+        }
+        self.chain().limiting(self.space.initial(), opts)
+    }
+
+    /// Every tangible state is reachable from state 0 through the moves (half of
+    /// irreducibility; [`Columns::all_reach`] is the other half). A breadth-first search: a
+    /// queue and a flag per state, where Tarjan's depth-first stack would grow with the
+    /// longest path.
+    fn all_reachable_from_0(&self) -> bool {
+        let n = self.space.tangible_count();
+        let mut seen = vec![false; n];
+        let mut queue: Vec<u32> = Vec::with_capacity(n);
+        seen[0] = true;
+        queue.push(0);
+        let mut head = 0;
+        while head < queue.len() {
+            let s = queue[head] as usize;
+            head += 1;
+            for m in self.space.moves(s) {
+                if m.rate * m.prob > 0.0 && !seen[m.to as usize] {
+                    seen[m.to as usize] = true;
+                    queue.push(m.to);
+                }
+            }
+        }
+        queue.len() == n
+    }
+
+    /// `‖πQ‖∞` from the moves (no generator is built): how far `pi` is from stationary.
+    pub fn residual(&self, pi: &[f64]) -> f64 {
+        let mut r = vec![0.0; pi.len()];
+        let mut row = Vec::new();
+        for (s, &p) in pi.iter().enumerate() {
+            row.clear();
+            self.row(s, &mut row);
+            for &(to, q) in &row {
+                r[to as usize] += p * q;
+                r[s] -= p * q;
+            }
+        }
+        r.iter().fold(0.0f64, |m, x| m.max(x.abs()))
     }
 
     /// π(t) at each time, from the initial marking (uniformization, error ≤ `eps` each).
     pub fn transient(&self, times: &[f64], eps: f64) -> Vec<Vec<f64>> {
-        self.chain.transient(self.space.initial(), times, eps)
+        self.chain().transient(self.space.initial(), times, eps)
     }
 
     /// Every measure of distribution `pi` over tangible states.

@@ -32,6 +32,8 @@ pub(crate) mod explore;
 mod packing;
 pub(crate) mod table;
 
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
 use thiserror::Error;
 
 use crate::analysis::coverability::{Coverability, karp_miller};
@@ -92,6 +94,64 @@ pub enum AnalysisError {
         /// Markings in the loop.
         markings: usize,
     },
+    /// [`Monitor::cancel`] was called while the search ran.
+    #[error("cancelled after {markings} markings")]
+    Cancelled {
+        /// Markings found when the search stopped.
+        markings: usize,
+    },
+}
+
+/// Watches a [`StateSpace::build_monitored`] from another thread: how many markings the
+/// search has found so far, and a flag that makes it give up ([`AnalysisError::Cancelled`]).
+///
+/// The search reads the flag and publishes its count once per block of about a thousand
+/// markings, so a cancel takes effect within milliseconds and costs nothing measurable.
+///
+/// ```
+/// use gspn::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
+/// use gspn::net::{NetBuilder, Servers};
+/// let mut b = NetBuilder::new("loop");
+/// let (p, q) = (b.place("p", 1), b.place("q", 0));
+/// let t = b.exponential("t", 1.0, Servers::Single);
+/// let u = b.exponential("u", 1.0, Servers::Single);
+/// b.input(p, t, 1); b.output(t, q, 1); b.input(q, u, 1); b.output(u, p, 1);
+/// let net = b.build().unwrap();
+/// let monitor = Monitor::new();
+/// monitor.cancel();
+/// let r = StateSpace::build_monitored(&net, &Options::default(), &monitor);
+/// assert!(matches!(r, Err(AnalysisError::Cancelled { .. })));
+/// ```
+#[derive(Debug, Default)]
+pub struct Monitor {
+    markings: AtomicUsize,
+    cancelled: AtomicBool,
+}
+
+impl Monitor {
+    /// A monitor that has seen nothing and is not cancelled.
+    pub fn new() -> Monitor {
+        Monitor::default()
+    }
+
+    /// Asks the search to stop as soon as it next looks.
+    pub fn cancel(&self) {
+        self.cancelled.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether [`Monitor::cancel`] was called.
+    pub fn is_cancelled(&self) -> bool {
+        self.cancelled.load(Ordering::Relaxed)
+    }
+
+    /// Markings (tangible and vanishing) the search has stored so far.
+    pub fn markings(&self) -> usize {
+        self.markings.load(Ordering::Relaxed)
+    }
+
+    fn set_markings(&self, n: usize) {
+        self.markings.store(n, Ordering::Relaxed);
+    }
 }
 
 /// One way out of a tangible state: exponential `transition` fires at `rate`, and the
@@ -151,6 +211,19 @@ fn km_limit(places: usize) -> usize {
 impl StateSpace {
     /// Builds the state space of `net`.
     pub fn build(net: &Net, opts: &Options) -> Result<StateSpace, AnalysisError> {
+        StateSpace::build_monitored(net, opts, &Monitor::new())
+    }
+
+    /// Like [`StateSpace::build`], reporting progress to `monitor` and giving up with
+    /// [`AnalysisError::Cancelled`] once it is cancelled. Same result as `build` otherwise.
+    pub fn build_monitored(
+        net: &Net,
+        opts: &Options,
+        monitor: &Monitor,
+    ) -> Result<StateSpace, AnalysisError> {
+        if monitor.is_cancelled() {
+            return Err(AnalysisError::Cancelled { markings: 0 });
+        }
         let mut bounds = structural_bounds(net);
         if bounds.iter().any(Option::is_none) {
             match karp_miller(net, km_limit(net.place_count()).min(opts.max_states)) {
@@ -174,7 +247,14 @@ impl StateSpace {
             0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
             n => n,
         };
-        let raw = explore::explore(net, layout, opts.max_states, threads, opts.progress)?;
+        let raw = explore::explore(
+            net,
+            layout,
+            opts.max_states,
+            threads,
+            opts.progress,
+            monitor,
+        )?;
         Self::from_raw(net, raw)
     }
 

@@ -1,15 +1,23 @@
 //! Agents: one per token in an action place, with a stable id and a state.
 //!
 //! The supervisor keeps every agent's record (its place, state, outcome); with
-//! [`AgentMode::Actor`] each agent is also a kameo actor that owns its state and lives exactly
-//! as long as its token. [`AgentMode::Light`] keeps only the record — the actions still run
-//! concurrently, one tokio task each, hosted by the place (see `docs/benchmarks.md` for what
-//! each mode costs).
+//! [`AgentMode::Actor`] each agent is also a kameo actor that lives exactly as long as its
+//! token and runs its own actions: the supervisor tells it [`Run`], it awaits the place's
+//! action in its own task and reports the outcome. [`AgentMode::Light`] keeps only the
+//! record — the actions still run concurrently, one tokio task each, spawned by the place
+//! actor (see `docs/benchmarks.md` for what each mode costs).
+
+use std::sync::Arc;
+use std::time::Duration;
 
 use kameo::Actor;
 use kameo::message::{Context, Message};
 use serde::{Deserialize, Serialize};
+use tokio::sync::mpsc::UnboundedSender;
 
+use super::action::{Action, ActionContext};
+use super::place::run_action;
+use super::supervisor::ActionDone;
 use crate::net::PlaceId;
 
 /// A stable agent id: assigned once, kept while the agent moves through the net.
@@ -41,13 +49,15 @@ pub enum AgentMode {
     /// A record in the supervisor; actions are tasks hosted by the place actors.
     #[default]
     Light,
-    /// A record plus a kameo actor per agent, spawned and killed with its token.
+    /// A record plus a kameo actor per agent, spawned and killed with its token, running
+    /// the agent's actions in its own task.
     Actor,
 }
 
-/// The actor of one agent ([`AgentMode::Actor`]): it owns the agent's current place and
-/// state, which the supervisor tells it about.
-#[derive(Actor, Debug)]
+/// The actor of one agent ([`AgentMode::Actor`]): it runs the agent's actions and owns its
+/// current place and state (it sets Occupied and Done itself; the supervisor tells it the
+/// rest).
+#[derive(Actor)]
 pub struct Agent {
     /// The agent's id.
     pub id: AgentId,
@@ -55,6 +65,43 @@ pub struct Agent {
     pub place: PlaceId,
     /// Its state.
     pub state: AgentState,
+    /// Where outcomes go (the supervisor drains it in batches).
+    pub(crate) reports: UnboundedSender<ActionDone>,
+}
+
+impl std::fmt::Debug for Agent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Agent")
+            .field("id", &self.id)
+            .field("place", &self.place)
+            .field("state", &self.state)
+            .finish()
+    }
+}
+
+/// Run the place's action for this agent, then report the outcome.
+pub(crate) struct Run {
+    pub(crate) ctx: ActionContext,
+    pub(crate) ticket: u64,
+    pub(crate) action: Arc<dyn Action>,
+    /// Already scaled to tokio time.
+    pub(crate) timeout: Option<Duration>,
+}
+
+impl Message<Run> for Agent {
+    type Reply = ();
+
+    async fn handle(&mut self, msg: Run, _: &mut Context<Self, Self::Reply>) {
+        self.place = msg.ctx.place;
+        self.state = AgentState::Occupied;
+        let outcome = run_action(&msg.action, msg.ctx, msg.timeout).await;
+        self.state = AgentState::Done;
+        let _ = self.reports.send(ActionDone {
+            agent: self.id,
+            ticket: msg.ticket,
+            outcome,
+        });
+    }
 }
 
 /// The agent moved or changed state.

@@ -22,7 +22,7 @@ use tokio::time::Instant;
 
 use super::StopReason;
 use super::action::{ActionContext, CancelSource, CancelToken};
-use super::agent::{Agent, AgentId, AgentMode, AgentState, Update};
+use super::agent::{Agent, AgentId, AgentMode, AgentState, Run, Update};
 use super::engine::{Engine, Firing, Ready};
 use super::event::{Event, EventKind};
 use super::handle::{Progress, Summary};
@@ -35,6 +35,9 @@ mod messages;
 
 pub(crate) use messages::{ActionDone, GetAgents, GetMarking, StopRequest};
 use messages::{Continue, StopDeadline, Timer};
+
+/// Initial agents from which actor spawning is split over two threads.
+const PARALLEL_SPAWN: usize = 20_000;
 
 /// Firings played per message in the virtual-time fast path (then the mailbox gets a turn).
 const BATCH: usize = 4096;
@@ -211,23 +214,58 @@ impl Supervisor {
             }
             None => return,
         };
-        if let Some(a) = self.agent_actors.get(&id) {
+        // An agent actor sets Occupied and Done itself (it runs the action).
+        if !matches!(state, AgentState::Occupied | AgentState::Done)
+            && let Some(a) = self.agent_actors.get(&id)
+        {
             let _ = a.tell(Update { place, state }).try_send();
         }
     }
 
     fn spawn_agent_actor(&mut self, id: AgentId, place: PlaceId) {
-        if self.agent_mode == AgentMode::Actor {
-            let a = Agent::spawn_with_mailbox(
-                Agent {
-                    id,
-                    place,
-                    state: AgentState::Free,
-                },
-                mailbox::unbounded(),
-            );
-            self.agent_actors.insert(id, a);
+        self.spawn_agent_actors(&[(id, place)]);
+    }
+
+    /// Spawns the actors of these agents ([`AgentMode::Actor`]). Many at once (the initial
+    /// agents) are spawned from two threads on a multi-threaded runtime: a kameo spawn costs
+    /// microseconds, and 100k of them are most of a large plan's start-up.
+    fn spawn_agent_actors(&mut self, agents: &[(AgentId, PlaceId)]) {
+        if self.agent_mode != AgentMode::Actor {
+            return;
         }
+        let reports = &self.reports_tx;
+        let spawn = |&(id, place): &(AgentId, PlaceId)| {
+            let agent = Agent {
+                id,
+                place,
+                state: AgentState::Free,
+                reports: reports.clone(),
+            };
+            (id, Agent::spawn_with_mailbox(agent, mailbox::unbounded()))
+        };
+        let runtime = tokio::runtime::Handle::current();
+        let parallel = agents.len() >= PARALLEL_SPAWN
+            && runtime.runtime_flavor() == tokio::runtime::RuntimeFlavor::MultiThread;
+        self.agent_actors.reserve(agents.len());
+        if !parallel {
+            self.agent_actors.extend(agents.iter().map(spawn));
+            return;
+        }
+        let (first, second) = agents.split_at(agents.len() / 2);
+        let spawned = std::thread::scope(|s| {
+            let other = s.spawn(|| {
+                let _inside = runtime.enter();
+                second.iter().map(spawn).collect::<Vec<_>>()
+            });
+            let mut mine: Vec<_> = first.iter().map(spawn).collect();
+            match other.join() {
+                Ok(theirs) => mine.extend(theirs),
+                // Not expected (spawning does not run user code); never lose an agent.
+                Err(_) => mine.extend(second.iter().map(spawn)),
+            }
+            mine
+        });
+        self.agent_actors.extend(spawned);
     }
 
     /// Starts (or restarts) the action of an agent in its place; Inactive when the place has
@@ -252,7 +290,24 @@ impl Supervisor {
             cancel: self.cancel_token.clone(),
             net: Arc::clone(&self.eng.net),
         };
-        let _ = self.places[a].tell(Start { ctx, ticket }).try_send();
+        match self.agent_actors.get(&id) {
+            Some(agent) => {
+                let setup = &self.setups[a];
+                let _ = agent
+                    .tell(Run {
+                        ctx,
+                        ticket,
+                        action: Arc::clone(&setup.action),
+                        timeout: setup
+                            .timeout
+                            .map(|t| Duration::from_secs_f64(t * self.scale)),
+                    })
+                    .try_send();
+            }
+            None => {
+                let _ = self.places[a].tell(Start { ctx, ticket }).try_send();
+            }
+        }
         self.set_state(id, AgentState::Occupied);
         if self.observed() {
             self.emit(EventKind::ActionStarted {
@@ -531,8 +586,8 @@ impl Actor for Supervisor {
             }
         }
         let observed = sup.observed();
+        sup.spawn_agent_actors(&initial);
         for &(id, p) in &initial {
-            sup.spawn_agent_actor(id, p);
             if observed {
                 let robot = sup.eng.agents.get(&id).and_then(|r| r.robot.clone());
                 sup.emit(EventKind::AgentSpawned {

@@ -9,6 +9,7 @@ use serde_json::{Map, Value, json};
 
 use crate::net::{ArcKind, Net, Servers, Timing};
 use crate::web::WebState;
+use crate::web::analysis_job::Outcome;
 use crate::web::layout::layout;
 use crate::web::session::SessionError;
 
@@ -201,24 +202,43 @@ pub(crate) fn by_transition<T: serde::Serialize>(net: &Net, values: &[T]) -> Val
     )
 }
 
-/// `GET /api/analysis`: computed once (on a blocking thread), then cached.
+/// `GET /api/analysis`: starts the analysis if needed (on a blocking thread) and waits for
+/// it; the result is kept. 409 `{error, kind: "cancelled", progress}` if it is cancelled
+/// meanwhile.
 pub(crate) async fn analysis(State(state): State<WebState>) -> Response {
-    let cell = state.inner.analysis.clone();
-    let net = state.inner.net.clone();
-    let max_states = state.inner.max_states;
-    let value = cell
-        .get_or_init(|| async move {
-            tokio::task::spawn_blocking(move || crate::web::report::analyse(&net, max_states))
-                .await
-                .unwrap_or_else(|e| json!({ "error": format!("analysis task failed: {e}") }))
-        })
-        .await;
-    let status = if value.get("error").is_some() {
-        StatusCode::UNPROCESSABLE_ENTITY
-    } else {
-        StatusCode::OK
-    };
-    (status, Json(value.clone())).into_response()
+    match state.inner.analysis.result().await {
+        Outcome::Done(value) => {
+            let status = if value.get("error").is_some() {
+                StatusCode::UNPROCESSABLE_ENTITY
+            } else {
+                StatusCode::OK
+            };
+            (status, Json(Value::clone(&value))).into_response()
+        }
+        Outcome::Cancelled(progress) => (
+            StatusCode::CONFLICT,
+            Json(
+                json!({ "error": "the analysis was cancelled", "kind": "cancelled",
+                         "progress": progress }),
+            ),
+        )
+            .into_response(),
+    }
+}
+
+/// `POST /api/analysis/start`: starts the analysis (unless running or done); the progress.
+pub(crate) async fn analysis_start(State(state): State<WebState>) -> Json<Value> {
+    Json(state.inner.analysis.start())
+}
+
+/// `GET /api/analysis/progress`: `{state, phase, markings, seconds}`.
+pub(crate) async fn analysis_progress(State(state): State<WebState>) -> Json<Value> {
+    Json(state.inner.analysis.progress())
+}
+
+/// `POST /api/analysis/cancel`: stops a running analysis; the progress.
+pub(crate) async fn analysis_cancel(State(state): State<WebState>) -> Json<Value> {
+    Json(state.inner.analysis.cancel())
 }
 
 /// Body of `POST /api/layout`.

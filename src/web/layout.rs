@@ -13,8 +13,10 @@ use serde::Serialize;
 
 use crate::net::{ArcKind, Net, NetBuilder, NetError, Place, Position, Transition};
 
-/// Horizontal distance between layers.
+/// Horizontal distance between layers (at least; more for long names, see [`layer_gap`]).
 const DX: f64 = 90.0;
+/// Width of one character of a label on the page (11 px sans-serif), for [`layer_gap`].
+const CHAR_WIDTH: f64 = 6.2;
 /// Vertical distance between nodes of one layer.
 const DY: f64 = 70.0;
 
@@ -149,16 +151,19 @@ fn layered(net: &Net) -> Layout {
     for (v, &l) in layer.iter().enumerate() {
         members[l as usize].push(v);
     }
-    // Wrap the layers into bands of `per_band` columns, about as wide as the net is tall.
+    // Wrap the layers into bands of `per_band` columns, about as wide as the net is tall
+    // (and at least about 1,100 units wide).
+    let dx = layer_gap(net);
     let tallest = members.iter().map(Vec::len).max().unwrap_or(1).max(1);
-    let per_band = ((n as f64 / tallest as f64).sqrt().ceil() as usize).max(12);
+    let per_band = ((n as f64 / tallest as f64 * DY / dx).sqrt().ceil() as usize)
+        .max((1080.0 / dx).ceil() as usize);
     let band_height = tallest as f64 * DY + DY;
     let mut pos = vec![Position { x: 0.0, y: 0.0 }; n];
     for (l, nodes) in members.iter().enumerate() {
         let (band, col) = (l / per_band, l % per_band);
         for (row, &v) in nodes.iter().enumerate() {
             pos[v] = Position {
-                x: 40.0 + col as f64 * DX,
+                x: 40.0 + col as f64 * dx,
                 y: 40.0 + band as f64 * band_height + row as f64 * DY,
             };
         }
@@ -169,6 +174,23 @@ fn layered(net: &Net) -> Layout {
         transitions,
         source: LayoutSource::Layered,
     }
+}
+
+/// The distance between layers: [`DX`], or more when most names (nine in ten) would not fit
+/// between neighbouring nodes (GreatSPN-style names like `p1:Check_Temperature_L1`).
+fn layer_gap(net: &Net) -> f64 {
+    let mut lengths: Vec<usize> = net
+        .places()
+        .iter()
+        .map(|p| p.name.chars().count())
+        .chain(net.transitions().iter().map(|t| t.name.chars().count()))
+        .collect();
+    if lengths.is_empty() {
+        return DX;
+    }
+    lengths.sort_unstable();
+    let typical = lengths[(lengths.len() - 1) * 9 / 10];
+    (typical as f64 * CHAR_WIDTH + 16.0).clamp(DX, 3.0 * DX)
 }
 
 #[cfg(test)]
@@ -201,5 +223,20 @@ mod tests {
         all.dedup();
         assert_eq!(all.len(), 2 * n);
         assert!(width < 4000 && height < 8000, "{width} x {height}");
+    }
+
+    #[test]
+    fn long_names_spread_the_layers() {
+        let mut b = NetBuilder::new("names");
+        let p = b.place("p1:Check_Temperature_L1", 1);
+        let q = b.place("p2:Alarm_L1_with_a_long_name", 0);
+        let t = b.exponential("t1:Temperature_High_L1", 1.0, Servers::Single);
+        b.input(p, t, 1);
+        b.output(t, q, 1);
+        let l = layout(&b.build().unwrap());
+        // Lengths 22, 23, 28: the nine-in-ten one is the second, 23 characters.
+        let gap = 23.0 * CHAR_WIDTH + 16.0;
+        assert!((l.transitions[0].x - l.places[0].x - gap).abs() < 1e-9);
+        assert!((l.places[1].x - l.transitions[0].x - gap).abs() < 1e-9);
     }
 }

@@ -7,7 +7,7 @@
 //! browser only ever skips to the latest state (the fold never waits for it).
 
 use std::collections::VecDeque;
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 use std::time::Duration;
 
 use axum::extract::State;
@@ -38,6 +38,8 @@ struct LiveInner {
     handle: Arc<RuntimeHandle>,
     snapshot: Mutex<Snapshot>,
     version: watch::Sender<u64>,
+    /// The simulated world (map and robots), when a backend feeds one.
+    world: OnceLock<watch::Receiver<Value>>,
 }
 
 #[derive(Debug)]
@@ -70,10 +72,37 @@ impl LiveRun {
                     log: VecDeque::new(),
                 }),
                 version,
+                world: OnceLock::new(),
             }),
         };
         tokio::spawn(live.clone().fold(events));
         live
+    }
+
+    /// Adds a feed of the simulated world, drawn as a 2D map beside the net: the latest
+    /// value of `rx` is served at `GET /api/live/world` and sent as `"world"` in every state
+    /// frame (a new value wakes the frames like an event does). Plain JSON, so the viewer
+    /// does not depend on any simulator; metres, y up:
+    ///
+    /// ```json
+    /// {"time": 1.5,
+    ///  "map": {"locations": [{"name": "L1", "x": 0.0, "y": 0.0}],
+    ///          "edges": [["L1", "L2"]],
+    ///          "walls": [[0.0, 0.0, 10.0, 0.0]],
+    ///          "obstacles": [{"x": 4.0, "y": 2.0, "w": 1.0, "h": 0.5}]},
+    ///  "robots": [{"id": "r1", "agent": 3, "x": 1.0, "y": 2.0, "radius": 0.3}]}
+    /// ```
+    ///
+    /// `x, y` of an obstacle is its lower-left corner. A second feed is ignored (the first
+    /// one stays).
+    pub fn with_world(self, rx: watch::Receiver<Value>) -> LiveRun {
+        let _ = self.inner.world.set(rx);
+        self
+    }
+
+    /// The latest world value, if there is a feed.
+    fn world(&self) -> Option<Value> {
+        self.inner.world.get().map(|rx| rx.borrow().clone())
     }
 
     /// The run's handle (to stop it, or wait for it).
@@ -165,7 +194,7 @@ impl LiveRun {
             .into_iter()
             .map(|t| net.transition(t).name.as_str())
             .collect();
-        json!({
+        let mut v = json!({
             "type": "state",
             "firable": firable,
             "tokens": s.tokens,
@@ -177,7 +206,12 @@ impl LiveRun {
             "lagged": s.lagged,
             "agents": agents_by_place,
             "log": log,
-        })
+        });
+        drop(s);
+        if let Some(world) = self.world() {
+            v["world"] = world;
+        }
+        v
     }
 }
 
@@ -212,6 +246,19 @@ pub(crate) async fn state(State(state): State<WebState>) -> Response {
     use axum::response::IntoResponse;
     match state.live() {
         Some(live) => axum::Json(live.state_json(None).await).into_response(),
+        None => no_live(),
+    }
+}
+
+/// `GET /api/live/world`: the latest world value (404 without a live run or a world feed).
+pub(crate) async fn world(State(state): State<WebState>) -> Response {
+    use axum::response::IntoResponse;
+    match state.live().map(|l| l.world()) {
+        Some(Some(w)) => axum::Json(w).into_response(),
+        Some(None) => crate::web::api::error(
+            axum::http::StatusCode::NOT_FOUND,
+            "this run has no simulated world",
+        ),
         None => no_live(),
     }
 }
@@ -254,9 +301,13 @@ async fn follow(mut socket: WebSocket, live: LiveRun) {
         return;
     }
     let mut version = live.inner.version.subscribe();
+    let mut world = live.inner.world.get().cloned();
     let mut last_seq: Option<u64> = None;
     loop {
         version.borrow_and_update();
+        if let Some(w) = &mut world {
+            w.borrow_and_update();
+        }
         let msg = live.state_json(last_seq).await;
         if let Some(seq) = msg["log"]
             .as_array()
@@ -273,8 +324,18 @@ async fn follow(mut socket: WebSocket, live: LiveRun) {
             return;
         }
         tokio::time::sleep(FRAME).await;
+        let world_changed = async {
+            match &mut world {
+                Some(w) => w.changed().await.is_ok(),
+                None => std::future::pending().await,
+            }
+        };
         tokio::select! {
             changed = version.changed() => if changed.is_err() { return },
+            fed = world_changed => if !fed {
+                // The feed ended: keep its last value, stop waiting on it.
+                world = None;
+            },
             incoming = socket.recv() => match incoming {
                 Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
                 Some(Ok(_)) => {}

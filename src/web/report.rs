@@ -7,17 +7,24 @@ use crate::analysis::measures::{Solver, SolverOptions};
 use crate::analysis::properties::Properties;
 use crate::analysis::state_space::{AnalysisError, Options, StateSpace};
 use crate::net::Net;
+use crate::web::analysis_job::{Phase, Progress};
 use crate::web::api::{by_place, by_transition};
 
 /// Everything the panel shows, as JSON; `{"error", "kind"}` when the state space cannot be
-/// built (unbounded net, too many states, timeless trap).
-pub(crate) fn analyse(net: &Net, max_states: usize) -> Value {
+/// built (unbounded net, too many states, timeless trap) or the job was cancelled (`kind`
+/// `cancelled`: the search stops within a block of markings, the later phases before they
+/// start).
+pub(crate) fn analyse(net: &Net, max_states: usize, progress: &Progress) -> Value {
     let opts = Options {
         max_states,
         progress: false,
         threads: 0,
     };
-    let ss = match StateSpace::build(net, &opts) {
+    let cancelled = || json!({ "error": "cancelled", "kind": "cancelled" });
+    if !progress.enter(Phase::StateSpace) {
+        return cancelled();
+    }
+    let ss = match StateSpace::build_monitored(net, &opts, &progress.monitor) {
         Ok(ss) => ss,
         Err(e) => {
             let kind = match &e {
@@ -25,6 +32,7 @@ pub(crate) fn analyse(net: &Net, max_states: usize) -> Value {
                 AnalysisError::TooManyStates { .. } => "too_many_states",
                 AnalysisError::TimelessTrap { .. } => "timeless_trap",
                 AnalysisError::VanishingLoopTooLarge { .. } => "vanishing_loop_too_large",
+                AnalysisError::Cancelled { .. } => "cancelled",
             };
             let mut v = json!({ "error": e.to_string(), "kind": kind });
             if let AnalysisError::Unbounded { places } = &e {
@@ -33,6 +41,9 @@ pub(crate) fn analyse(net: &Net, max_states: usize) -> Value {
             return v;
         }
     };
+    if !progress.enter(Phase::Properties) {
+        return cancelled();
+    }
     let props = Properties::compute(net, &ss);
     let dead: Vec<Value> = props
         .dead_markings
@@ -66,6 +77,9 @@ pub(crate) fn analyse(net: &Net, max_states: usize) -> Value {
     if ss.tangible_count() == 0 {
         v["steady_error"] = json!("no tangible marking: time never passes");
         return v;
+    }
+    if !progress.enter(Phase::SteadyState) {
+        return cancelled();
     }
     let solver = Solver::new(net, &ss);
     match solver.steady_state(&SolverOptions::default()) {

@@ -1,7 +1,7 @@
 //! Steady state of an irreducible chain: sparse LU for small chains, Gauss–Seidel (with
 //! fallbacks) for large ones, always ending with a residual check `‖πQ‖∞ ≤ tolerance`.
 
-use super::{Ctmc, lu};
+use super::{Columns, Ctmc, lu};
 
 /// How [`Ctmc::steady_state`] solves πQ = 0.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -63,6 +63,11 @@ pub enum SolveError {
 }
 
 impl Ctmc {
+    /// The incoming entries of every state, for Gauss–Seidel.
+    pub(crate) fn columns(&self) -> Columns {
+        Columns::from_rows(self.n, |i, out| out.extend(self.row(i)))
+    }
+
     /// The stationary distribution of an **irreducible** chain (use [`Ctmc::limiting`] for
     /// any chain). Checked: the answer has `‖πQ‖∞ ≤ tolerance·max(1, max exit rate)`.
     pub fn steady_state(&self, opts: &SteadyOptions) -> Result<Vec<f64>, SolveError> {
@@ -96,18 +101,11 @@ impl Ctmc {
             }
             let attempt = match m {
                 Method::Direct => self.direct(tol, opts),
-                Method::GaussSeidel => {
-                    let mut pi = vec![1.0 / self.n as f64; self.n];
-                    self.sor(&mut pi, 1.0, tol, opts.max_iterations)
-                        .or_else(|e| {
-                            if opts.method != Method::Auto {
-                                return Err(e);
-                            }
-                            pi.fill(1.0 / self.n as f64);
-                            self.sor(&mut pi, 0.7, tol, opts.max_iterations)
-                        })
-                        .map(|_| pi)
-                }
+                Method::GaussSeidel => self.columns().gauss_seidel(
+                    tol,
+                    opts.max_iterations,
+                    opts.method == Method::Auto,
+                ),
                 Method::Power | Method::Auto => self.power(tol, opts.max_iterations * 20),
             };
             match attempt {
@@ -158,74 +156,9 @@ impl Ctmc {
         if self.residual(&pi) <= tol {
             return Ok(pi);
         }
-        self.sor(&mut pi, 1.0, tol, opts.max_iterations.min(1_000))?;
+        self.columns()
+            .sor(&mut pi, 1.0, tol, opts.max_iterations.min(1_000))?;
         Ok(pi)
-    }
-
-    /// SOR sweeps over `π_j q_j = Σ_i π_i Q_ij` in state order, normalising after each
-    /// sweep; checks the residual when a sweep changes little (and every 50 sweeps). Returns
-    /// the number of sweeps.
-    pub(crate) fn sor(
-        &self,
-        pi: &mut [f64],
-        omega: f64,
-        tol: f64,
-        max_iterations: usize,
-    ) -> Result<usize, SolveError> {
-        let (ptr, rows, rates) = self.incoming();
-        let exit = self.exit_rates();
-        let n = self.n;
-        let mut residual = f64::INFINITY;
-        let mut threshold = tol;
-        let mut sweeps = 0;
-        while sweeps < max_iterations {
-            // The largest change `q_j·|Δπ_j|` of a sweep estimates the residual; the real one is
-            // computed only once the estimate is small (it costs a sweep).
-            let mut change = 0.0f64;
-            for j in 0..n {
-                let mut s = 0.0;
-                for k in ptr[j]..ptr[j + 1] {
-                    s += pi[rows[k] as usize] * rates[k];
-                }
-                let new = if exit[j] > 0.0 { s / exit[j] } else { pi[j] };
-                let next = (1.0 - omega) * pi[j] + omega * new;
-                change = change.max(exit[j] * (next - pi[j]).abs());
-                pi[j] = next;
-            }
-            sweeps += 1;
-            let sum: f64 = pi.iter().sum();
-            if !(sum.is_finite() && sum > 0.0) {
-                break;
-            }
-            let inv = 1.0 / sum;
-            pi.iter_mut().for_each(|v| *v *= inv);
-            if change <= threshold || sweeps % 50 == 0 || sweeps == max_iterations {
-                residual = 0.0f64;
-                for j in 0..n {
-                    let mut s = -pi[j] * exit[j];
-                    for k in ptr[j]..ptr[j + 1] {
-                        s += pi[rows[k] as usize] * rates[k];
-                    }
-                    residual = residual.max(s.abs());
-                }
-                if residual <= tol {
-                    return Ok(sweeps);
-                }
-                if !residual.is_finite() {
-                    break;
-                }
-                if change <= threshold {
-                    threshold *= 0.5;
-                }
-            }
-        }
-        if residual <= tol {
-            return Ok(sweeps);
-        }
-        Err(SolveError::NotConverged {
-            iterations: sweeps,
-            residual,
-        })
     }
 
     /// Power iteration on `P = I + Q/Λ`, `Λ = 1.05·max exit rate` (aperiodic by the self-loops).

@@ -13,7 +13,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::packing::{Layout, MarkingStore};
 use super::table::MoveTable;
-use super::{AnalysisError, Move};
+use super::{AnalysisError, Monitor, Move};
 use crate::net::{Net, Timing, TransitionId};
 
 /// States per block handed between threads.
@@ -152,14 +152,15 @@ fn firable(net: &Net, rules: &Rules, m: &[u32], out: &mut Vec<(TransitionId, f64
 }
 
 /// The search's mutable state, owned by the inserting thread.
-struct Search {
+struct Search<'m> {
     raw: Raw,
+    monitor: &'m Monitor,
     max_states: usize,
     group: Vec<Move>,
     bar: Option<ProgressBar>,
 }
 
-impl Search {
+impl Search<'_> {
     /// Inserts a block's targets; `Some(overflow)` when the block stopped early.
     fn insert(&mut self, b: &Block) -> Result<Option<(usize, usize, u32)>, AnalysisError> {
         let w = self.raw.store.layout.words();
@@ -195,6 +196,12 @@ impl Search {
         if let Some(bar) = &self.bar {
             bar.set_position(self.raw.store.len() as u64);
         }
+        self.monitor.set_markings(self.raw.store.len());
+        if self.monitor.is_cancelled() {
+            return Err(AnalysisError::Cancelled {
+                markings: self.raw.store.len(),
+            });
+        }
         Ok(b.overflow)
     }
 }
@@ -206,6 +213,7 @@ pub(crate) fn explore(
     max_states: usize,
     threads: usize,
     progress: bool,
+    monitor: &Monitor,
 ) -> Result<Raw, AnalysisError> {
     let rules = Rules::new(net);
     let mut store = MarkingStore::new(layout, net.place_count());
@@ -233,6 +241,7 @@ pub(crate) fn explore(
             moves: MoveTable::default(),
             parent: vec![(u32::MAX, u32::MAX)],
         },
+        monitor,
         max_states: max_states.max(1),
         group: Vec::new(),
         bar,
@@ -290,7 +299,7 @@ fn expand_parallel(
     frontier: &[u64],
     first: usize,
     threads: usize,
-    s: &mut Search,
+    s: &mut Search<'_>,
 ) -> Result<Option<(usize, usize, u32)>, AnalysisError> {
     let w = layout.words();
     let chunks: Vec<&[u64]> = frontier.chunks(BLOCK * w).collect();
@@ -356,8 +365,9 @@ mod tests {
         let exact = Layout::new(&[Some(60); 4], &[60, 0, 60, 0]);
         let narrow = Layout::new(&[Some(60), Some(1), Some(60), Some(1)], &[60, 0, 60, 0]);
         for threads in [1, 2] {
-            let a = explore(&net, exact.clone(), 1 << 20, threads, false).unwrap();
-            let b = explore(&net, narrow.clone(), 1 << 20, threads, false).unwrap();
+            let m = Monitor::new();
+            let a = explore(&net, exact.clone(), 1 << 20, threads, false, &m).unwrap();
+            let b = explore(&net, narrow.clone(), 1 << 20, threads, false, &m).unwrap();
             assert_eq!(a.store.len(), 61 * 61);
             assert_eq!(b.store.len(), a.store.len());
             assert_eq!(b.moves.total(), a.moves.total());
@@ -368,6 +378,22 @@ mod tests {
                 assert_eq!(x, y);
                 assert_eq!(a.parent[id], b.parent[id]);
             }
+        }
+    }
+
+    #[test]
+    fn the_monitor_counts_markings_and_a_cancel_stops_the_search() {
+        let net = cycles(60);
+        let exact = Layout::new(&[Some(60); 4], &[60, 0, 60, 0]);
+        let m = Monitor::new();
+        explore(&net, exact.clone(), 1 << 20, 1, false, &m).unwrap();
+        assert_eq!(m.markings(), 61 * 61);
+        let c = Monitor::new();
+        c.cancel();
+        // The first block (the initial marking) is expanded, then the flag is seen.
+        match explore(&net, exact, 1 << 20, 1, false, &c) {
+            Err(AnalysisError::Cancelled { markings }) => assert_eq!(markings, 3),
+            other => panic!("expected a cancel, got {:?}", other.map(|r| r.store.len())),
         }
     }
 }

@@ -22,8 +22,35 @@ const transEls = [];
 const arcEls = [];
 const arcsOfPlace = [];
 const arcsOfTransition = [];
+// What is drawn, per place / transition (both renderers read these).
+const placeTokens = [];
+const transEnabled = [];
+const placeAgents = [];
+let firedIndex = -1;
 
 const $ = (id) => document.getElementById(id);
+
+// Timings for the benchmark and the browser tests (examples/viewer_bench.rs): when the first
+// drawing reached the screen (ms since navigation start), and per live frame the time from
+// the message to the paint after it, and the script's share of it (the last 1000 of each).
+const gspnPerf = { drawn: null, frames: [], handler: [] };
+window.gspnPerf = gspnPerf;
+
+// Runs `fn` after the next paint: a frame callback runs just before it, a task after that.
+function afterPaint(fn) {
+  requestAnimationFrame(() => setTimeout(fn, 0));
+}
+
+function markDrawn() {
+  afterPaint(() => {
+    if (gspnPerf.drawn === null) gspnPerf.drawn = performance.now();
+  });
+}
+
+function pushCapped(list, v) {
+  list.push(v);
+  if (list.length > 1000) list.shift();
+}
 
 function el(tag, attrs, parent) {
   const e = document.createElementNS(SVG_NS, tag);
@@ -46,6 +73,14 @@ async function api(method, path, body) {
   const data = await res.json();
   if (!res.ok) throw new Error(data.error || res.statusText);
   return data;
+}
+
+// At most `n` characters of a marking `p=k,...`, then how many places were left out.
+function shorten(text, n) {
+  if (text.length <= n) return text;
+  const cut = text.lastIndexOf(',', n);
+  const rest = text.slice(cut + 1).split(',').length;
+  return text.slice(0, cut) + ' … (' + rest + ' more)';
 }
 
 function fmt(x) {
@@ -97,8 +132,32 @@ function drawNet() {
   const nodes = $('nodes');
   arcs.textContent = '';
   nodes.textContent = '';
+  $('hooks').textContent = '';
   placeEls.length = transEls.length = arcEls.length = 0;
   arcsOfPlace.length = arcsOfTransition.length = 0;
+  placeTokens.length = transEnabled.length = placeAgents.length = 0;
+  firedIndex = -1;
+  for (const _ of net.places) {
+    placeTokens.push(-1);
+    placeAgents.push('');
+    arcsOfPlace.push([]);
+  }
+  for (const _ of net.transitions) {
+    transEnabled.push(false);
+    arcsOfTransition.push([]);
+  }
+  net.arcs.forEach((a, i) => {
+    arcsOfPlace[a.place].push(i);
+    arcsOfTransition[a.transition].push(i);
+  });
+  if (canvasInit()) {
+    const hooks = canvasHooks();
+    placeEls.push(...hooks.places);
+    transEls.push(...hooks.transitions);
+    net.places.forEach((p, i) => setTokens(i, p.tokens));
+    canvasDirty();
+    return;
+  }
   net.places.forEach((p, i) => {
     const g = el('g', { class: 'node place', 'data-place': p.name, 'data-tokens': '' }, nodes);
     g.dataset.index = i;
@@ -113,7 +172,6 @@ function drawNet() {
     const title = el('title', {}, g);
     title.textContent = p.name;
     placeEls.push(g);
-    arcsOfPlace.push([]);
     setTokens(i, p.tokens);
     move(g, p);
   });
@@ -133,7 +191,6 @@ function drawNet() {
     const title = el('title', {}, g);
     title.textContent = t.name + ' (' + t.kind + ', ' + paramText(t) + ')';
     transEls.push(g);
-    arcsOfTransition.push([]);
     move(g, t);
   });
   net.arcs.forEach((a, i) => {
@@ -147,8 +204,6 @@ function drawNet() {
       weight.textContent = String(a.weight);
     }
     arcEls.push({ path, weight });
-    arcsOfPlace[a.place].push(i);
-    arcsOfTransition[a.transition].push(i);
     drawArc(i);
   });
 }
@@ -173,7 +228,8 @@ function clipCircle(c, o, r) {
   return [c[0] + (dx / d) * r, c[1] + (dy / d) * r];
 }
 
-function drawArc(i) {
+// An arc's polyline, from its source's border to its target's border.
+function arcPoints(i) {
   const a = net.arcs[i];
   const p = net.places[a.place];
   const t = net.transitions[a.transition];
@@ -181,12 +237,31 @@ function drawArc(i) {
   const tc = [t.x, t.y];
   const fromPlace = a.kind !== 'output';
   const bends = a.points.map((q) => [q[0], q[1]]);
+  const [from, to] = fromPlace ? [pc, tc] : [tc, pc];
+  if (net.layout === 'layered' && !bends.length && from[0] > to[0] + 1 &&
+      Math.abs(from[1] - to[1]) < 1) {
+    // A layered layout's arc back to an earlier layer of the same row would run over the
+    // arcs between them: route it under the row, leaving and entering on a slant so that it
+    // misses the names under the nodes.
+    const below = from[1] + 38;
+    bends.push([from[0] + 40, below], [to[0] - 40, below]);
+  }
   const pts = fromPlace ? [pc, ...bends, tc] : [tc, ...bends, pc];
   const n = pts.length;
   const clipT = (c, o) => clipBox(c, o, transitionWidth(t) / 2 + 1, TH / 2 + 1);
   const clipP = (c, o) => clipCircle(c, o, R + 1);
   pts[0] = fromPlace ? clipP(pts[0], pts[1]) : clipT(pts[0], pts[1]);
   pts[n - 1] = fromPlace ? clipT(pts[n - 1], pts[n - 2]) : clipP(pts[n - 1], pts[n - 2]);
+  return pts;
+}
+
+function drawArc(i) {
+  if (cvs.on) {
+    canvasArcMoved(i);
+    return;
+  }
+  const pts = arcPoints(i);
+  const n = pts.length;
   const { path, weight } = arcEls[i];
   path.setAttribute('d', 'M' + pts.map((q) => q[0].toFixed(1) + ' ' + q[1].toFixed(1)).join(' L'));
   if (weight) {
@@ -196,20 +271,29 @@ function drawArc(i) {
   }
 }
 
-// Dots up to 5 tokens, the number beyond; the number is always in a badge too.
+// Token dots inside a place, by count (up to 5).
+const DOTS = {
+  1: [[0, 0]],
+  2: [[-5, 0], [5, 0]],
+  3: [[-6, 4], [6, 4], [0, -6]],
+  4: [[-5, -5], [5, -5], [-5, 5], [5, 5]],
+  5: [[-6, -6], [6, -6], [0, 0], [-6, 6], [6, 6]],
+};
+
+// Dots up to 5 tokens, the number beyond; the number is always in a badge too. Only what
+// changed is touched.
 function setTokens(i, k) {
+  if (placeTokens[i] === k) return;
+  placeTokens[i] = k;
   const g = placeEls[i];
-  if (g.getAttribute('data-tokens') === String(k)) return;
   g.setAttribute('data-tokens', String(k));
+  if (cvs.on) {
+    canvasDirty();
+    return;
+  }
   const t = g.tokens;
   t.textContent = '';
-  const dots = {
-    1: [[0, 0]],
-    2: [[-5, 0], [5, 0]],
-    3: [[-6, 4], [6, 4], [0, -6]],
-    4: [[-5, -5], [5, -5], [-5, 5], [5, 5]],
-    5: [[-6, -6], [6, -6], [0, 0], [-6, 6], [6, 6]],
-  }[k];
+  const dots = DOTS[k];
   if (dots) {
     for (const [x, y] of dots) el('circle', { class: 'dot', cx: x, cy: y, r: 3.5 }, t);
   } else if (k > 5) {
@@ -220,30 +304,71 @@ function setTokens(i, k) {
   }
 }
 
+// Marks transition i as firable now (or not).
+function setEnabled(i, on) {
+  if (transEnabled[i] === on) return;
+  transEnabled[i] = on;
+  transEls[i].setAttribute('data-enabled', on ? 'true' : 'false');
+  canvasDirty();
+}
+
+function setAllEnabled(names) {
+  const firable = new Set(names);
+  net.transitions.forEach((t, i) => setEnabled(i, firable.has(t.name)));
+}
+
+// Highlights the transition that fired last (-1: none).
+function setFired(i) {
+  if (i === firedIndex) return;
+  if (firedIndex >= 0) transEls[firedIndex].classList.remove('fired');
+  firedIndex = i;
+  if (i >= 0) transEls[i].classList.add('fired');
+  canvasDirty();
+}
+
+function transitionIndex(name) {
+  if (!net.byName) {
+    net.byName = new Map(net.transitions.map((t, i) => [t.name, i]));
+  }
+  const i = net.byName.get(name);
+  return i === undefined ? -1 : i;
+}
+
+// Agents per place, as a label under it.
+function setAgents(i, text) {
+  if (placeAgents[i] === text) return;
+  placeAgents[i] = text;
+  if (cvs.on) {
+    canvasDirty();
+    return;
+  }
+  const g = placeEls[i];
+  if (!text) {
+    if (g.agents) g.agents.remove();
+    g.agents = null;
+    return;
+  }
+  if (!g.agents) g.agents = el('text', { class: 'agents', y: R + 25 }, g);
+  g.agents.textContent = text;
+}
+
 function applyState(s) {
   state = s;
   s.tokens.forEach((k, i) => setTokens(i, k));
-  const firable = new Set(s.firable);
-  net.transitions.forEach((t, i) => {
-    transEls[i].setAttribute('data-enabled', firable.has(t.name) ? 'true' : 'false');
-    transEls[i].classList.remove('fired');
-  });
+  setAllEnabled(s.firable);
   const last = s.trace.length ? s.trace[s.trace.length - 1] : null;
-  if (last) {
-    const i = net.transitions.findIndex((t) => t.name === last.transition);
-    if (i >= 0) transEls[i].classList.add('fired');
-  }
+  setFired(last ? transitionIndex(last.transition) : -1);
   if (document.activeElement !== $('seed')) $('seed').value = s.seed;
   $('clock').textContent =
     'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
     (s.dead ? ' — dead marking' : s.vanishing ? ' — vanishing' : '');
-  $('marking-text').textContent = s.text;
+  $('marking-text').textContent = shorten(s.text, 2000);
   const ol = $('trace');
   ol.textContent = '';
   for (const e of s.trace) {
     const li = document.createElement('li');
     li.value = e.step;
-    li.textContent = fmt(e.time) + '  ' + e.transition + '  → ' + e.marking;
+    li.textContent = fmt(e.time) + '  ' + e.transition + '  → ' + shorten(e.marking, 160);
     if (e.manual) li.className = 'manual';
     ol.appendChild(li);
   }
@@ -255,29 +380,46 @@ function applyState(s) {
 
 function applyView() {
   $('viewport').setAttribute('transform', 'translate(' + view.x + ',' + view.y + ') scale(' + view.k + ')');
+  canvasDirty();
 }
 
 function fit() {
-  const svg = $('net');
+  const box = $('canvas');
   const all = net.places.concat(net.transitions);
   if (!all.length) return;
-  const xs = all.map((n) => n.x);
-  const ys = all.map((n) => n.y);
-  const x0 = Math.min(...xs) - 50;
-  const y0 = Math.min(...ys) - 50;
-  const w = Math.max(...xs) + 50 - x0;
-  const h = Math.max(...ys) + 50 - y0;
-  const k = Math.min(svg.clientWidth / w, svg.clientHeight / h, 2);
-  view = { k, x: -x0 * k + (svg.clientWidth - w * k) / 2, y: -y0 * k + (svg.clientHeight - h * k) / 2 };
+  let [xa, ya, xb, yb] = [Infinity, Infinity, -Infinity, -Infinity];
+  for (const n of all) {
+    xa = Math.min(xa, n.x);
+    ya = Math.min(ya, n.y);
+    xb = Math.max(xb, n.x);
+    yb = Math.max(yb, n.y);
+  }
+  // Room for the labels, which are wider than the nodes.
+  const x0 = xa - 90;
+  const y0 = ya - 50;
+  const w = xb + 90 - x0;
+  const h = yb + 60 - y0;
+  const k = Math.min(box.clientWidth / w, box.clientHeight / h, 2);
+  view = { k, x: -x0 * k + (box.clientWidth - w * k) / 2, y: -y0 * k + (box.clientHeight - h * k) / 2 };
   applyView();
 }
 
+// The node under a mouse event: {isPlace, i} or null.
+function eventNode(ev) {
+  if (cvs.on) {
+    const rect = cvs.el.getBoundingClientRect();
+    return nodeAt(ev.clientX - rect.left, ev.clientY - rect.top);
+  }
+  const g = ev.target.closest('.node');
+  return g ? { isPlace: g.classList.contains('place'), i: Number(g.dataset.index) } : null;
+}
+
 function setupInteraction() {
-  const svg = $('net');
+  const box = $('canvas');
   let drag = null;
-  svg.addEventListener('wheel', (ev) => {
+  box.addEventListener('wheel', (ev) => {
     ev.preventDefault();
-    const rect = svg.getBoundingClientRect();
+    const rect = box.getBoundingClientRect();
     const mx = ev.clientX - rect.left;
     const my = ev.clientY - rect.top;
     const f = Math.exp(-ev.deltaY * 0.001);
@@ -286,10 +428,11 @@ function setupInteraction() {
     view.k *= f;
     applyView();
   }, { passive: false });
-  svg.addEventListener('mousedown', (ev) => {
-    const g = ev.target.closest('.node');
-    drag = { g, sx: ev.clientX, sy: ev.clientY, moved: false };
-    if (!g) svg.classList.add('panning');
+  box.addEventListener('mousedown', (ev) => {
+    if (!net) return;
+    const node = eventNode(ev);
+    drag = { node, sx: ev.clientX, sy: ev.clientY, moved: false };
+    if (!node) box.classList.add('panning');
   });
   window.addEventListener('mousemove', (ev) => {
     if (!drag) return;
@@ -298,30 +441,30 @@ function setupInteraction() {
     if (Math.abs(dx) + Math.abs(dy) > 2) drag.moved = true;
     drag.sx = ev.clientX;
     drag.sy = ev.clientY;
-    if (!drag.g) {
+    if (!drag.node) {
       view.x += dx;
       view.y += dy;
       applyView();
       return;
     }
-    const i = Number(drag.g.dataset.index);
-    const isPlace = drag.g.classList.contains('place');
+    const { isPlace, i } = drag.node;
     const node = isPlace ? net.places[i] : net.transitions[i];
     node.x += dx / view.k;
     node.y += dy / view.k;
-    move(drag.g, node);
+    if (!cvs.on) move((isPlace ? placeEls : transEls)[i], node);
     for (const a of (isPlace ? arcsOfPlace : arcsOfTransition)[i]) drawArc(a);
+    canvasViewChanged();
   });
   window.addEventListener('mouseup', () => {
     const d = drag;
     drag = null;
-    svg.classList.remove('panning');
-    if (d && d.g && !d.moved && d.g.classList.contains('transition') &&
-        d.g.getAttribute('data-enabled') === 'true') {
-      fire(d.g.getAttribute('data-transition'));
+    box.classList.remove('panning');
+    if (d && d.node && !d.moved && !d.node.isPlace && transEnabled[d.node.i] && state) {
+      fire(net.transitions[d.node.i].name);
     }
   });
 }
+
 
 // Positions back in the file's units, as a GreatSPN project the browser downloads.
 async function saveLayout() {
@@ -395,199 +538,8 @@ function setupControls() {
   $('fit').addEventListener('click', fit);
   $('save-layout').addEventListener('click', saveLayout);
   $('analyze').addEventListener('click', analyse);
-}
-
-// ---- analysis --------------------------------------------------------------------------
-
-// Bars in the net's order (`names`), not the JSON object's.
-function bars(title, values, cls, names) {
-  const entries = names.filter((n) => n in values).map((n) => [n, values[n]]);
-  const max = Math.max(1e-300, ...entries.map(([, v]) => v));
-  let html = '<h4>' + title + '</h4><table>';
-  for (const [name, v] of entries) {
-    html += '<tr><td>' + escapeHtml(name) + '</td><td class="mono">' + fmt(v) +
-      '</td><td class="barcell"><div class="bar ' + cls + '" data-width="' +
-      (100 * v / max).toFixed(1) + '"></div></td></tr>';
-  }
-  return html + '</table>';
-}
-
-function escapeHtml(s) {
-  return String(s).replace(/[&<>"']/g, (c) => '&#' + c.charCodeAt(0) + ';');
-}
-
-async function analyse() {
-  const out = $('analysis');
-  out.textContent = 'analysing…';
-  let a;
-  try {
-    const res = await fetch('/api/analysis');
-    a = await res.json();
-  } catch (e) {
-    out.innerHTML = '<p class="error">' + escapeHtml(e.message) + '</p>';
-    return;
-  }
-  if (a.error) {
-    out.innerHTML = '<p class="error">' + escapeHtml(a.error) + '</p>';
-    return;
-  }
-  let html = '<p>' + a.reachable + ' reachable markings (' + a.tangible + ' tangible, ' +
-    a.vanishing + ' vanishing); safe: ' + a.safe + '; reversible: ' + a.reversible +
-    '; deadlock-free: ' + a.deadlock_free + '</p>';
-  if (a.steady) {
-    html += bars('mean tokens' + (a.steady.ergodic ? '' : ' (limiting)'), a.steady.mean_tokens, 'tok',
-      net.places.map((p) => p.name));
-    html += bars('throughput', a.steady.throughput, 'thr', net.transitions.map((t) => t.name));
-  } else if (a.steady_error) {
-    html += '<p class="error">' + escapeHtml(a.steady_error) + '</p>';
-  }
-  html += '<h4>dead markings (' + a.dead_markings.length + ')</h4><ol>';
-  a.dead_markings.forEach((d, i) => {
-    html += '<li class="dead mono" data-dead="' + i + '" title="click to replay">' +
-      escapeHtml(d.text || '(empty)') + ' ← ' + escapeHtml(d.path.join(' ')) + '</li>';
-  });
-  out.innerHTML = html + '</ol>';
-  // Widths through the CSSOM: the page's policy forbids inline style attributes.
-  for (const b of out.querySelectorAll('.bar')) b.style.width = b.dataset.width + '%';
-  for (const li of out.querySelectorAll('[data-dead]')) {
-    li.addEventListener('click', () => replay(a.dead_markings[Number(li.dataset.dead)].path));
-  }
-}
-
-// Replays a firing sequence from the initial marking, one firing at a time.
-async function replay(path) {
-  stopRun();
-  await act('POST', '/api/sim/reset', {});
-  for (const name of path) {
-    await new Promise((r) => setTimeout(r, 250));
-    await fire(name);
-  }
-}
-
-// ---- live run --------------------------------------------------------------------------
-
-// Follows a running plan: the server sends the net, then snapshots; on a lost connection
-// the page reconnects and the server starts again with the net and the current snapshot.
-function startLive() {
-  for (const id of ['step', 'step-n', 'run', 'reset', 'n', 'seed', 'trace-panel']) {
-    const e = $(id);
-    (e.closest('label') || e).classList.add('hidden');
-  }
-  $('speed').closest('label').classList.add('hidden');
-  $('stop').classList.remove('hidden');
-  $('log-panel').classList.remove('hidden');
-  $('stop').addEventListener('click', () =>
-    api('POST', '/api/live/stop').catch((e) => status(e.message)));
-  connectLive();
-}
-
-function connectLive() {
-  const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
-  const socket = new WebSocket(scheme + '//' + location.host + '/api/live/ws');
-  socket.onmessage = (ev) => {
-    const msg = JSON.parse(ev.data);
-    if (msg.type === 'net') {
-      const first = net === null;
-      net = msg;
-      scaleCoordinates();
-      drawNet();
-      if (first) fit();
-      $('log').textContent = '';
-    } else if (msg.type === 'state') {
-      applyLive(msg);
-    }
-  };
-  socket.onopen = () => status('');
-  socket.onclose = () => {
-    status('connection lost, reconnecting…');
-    setTimeout(connectLive, 1000);
-  };
-}
-
-function applyLive(s) {
-  s.tokens.forEach((k, i) => setTokens(i, k));
-  const firable = new Set(s.firable);
-  net.transitions.forEach((t, i) =>
-    transEls[i].setAttribute('data-enabled', firable.has(t.name) ? 'true' : 'false'));
-  net.places.forEach((p, i) => {
-    const g = placeEls[i];
-    const agents = s.agents[p.name];
-    let label = g.querySelector('text.agents');
-    if (!agents) {
-      if (label) label.remove();
-      return;
-    }
-    if (!label) label = el('text', { class: 'agents', y: R + 25 }, g);
-    label.textContent = Object.entries(agents).map(([k, n]) => k + ' ' + n).join(', ');
-  });
-  $('clock').textContent = 'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
-    (s.stopped ? ' — stopped: ' + s.stopped : '') +
-    (s.lagged ? ' (' + s.lagged + ' events skipped)' : '');
-  $('marking-text').textContent = s.text;
-  const ol = $('log');
-  for (const e of s.log) {
-    const li = document.createElement('li');
-    li.value = e.seq;
-    li.textContent = fmt(e.time) + '  ' + e.text;
-    ol.appendChild(li);
-  }
-  while (ol.childElementCount > 500) ol.firstElementChild.remove();
-  ol.scrollTop = ol.scrollHeight;
-  if (s.stopped) $('stop').disabled = true;
-}
-
-// ---- replay ----------------------------------------------------------------------------
-
-// Plays a journal back: the slider picks a frame (the marking after each firing); `run`
-// plays the frames at the chosen speed.
-async function startReplay() {
-  for (const id of ['step', 'step-n', 'reset', 'n', 'seed']) {
-    const e = $(id);
-    (e.closest('label') || e).classList.add('hidden');
-  }
-  const { frames } = await api('GET', '/api/replay');
-  const slider = $('slider');
-  slider.max = String(frames.length - 1);
-  $('slider-label').classList.remove('hidden');
-  const show = (i) => {
-    const f = frames[i];
-    slider.value = String(i);
-    f.tokens.forEach((k, p) => setTokens(p, k));
-    net.transitions.forEach((t, j) => transEls[j].classList.toggle('fired', t.name === f.transition));
-    $('frame').textContent = i + '/' + (frames.length - 1);
-    $('clock').textContent = 'time ' + fmt(f.time) + ', ' + i + ' firings' +
-      (f.transition ? ' — ' + f.transition + ' fired' : '');
-  };
-  slider.addEventListener('input', () => show(Number(slider.value)));
-  const ol = $('trace');
-  ol.textContent = '';
-  frames.slice(1).forEach((f, i) => {
-    const li = document.createElement('li');
-    li.textContent = fmt(f.time) + '  ' + f.transition;
-    li.addEventListener('click', () => show(i + 1));
-    ol.appendChild(li);
-  });
-  let timer = null;
-  $('run').addEventListener('click', () => {
-    if (timer !== null) {
-      clearInterval(timer);
-      timer = null;
-      $('run').textContent = 'run';
-      return;
-    }
-    $('run').textContent = 'pause';
-    timer = setInterval(() => {
-      const i = Number(slider.value) + 1;
-      if (i >= frames.length) {
-        clearInterval(timer);
-        timer = null;
-        $('run').textContent = 'run';
-        return;
-      }
-      show(i);
-    }, 1000 / (Number($('speed').value) || 1));
-  });
-  show(0);
+  $('analysis-cancel').addEventListener('click', () =>
+    api('POST', '/api/analysis/cancel').then(showProgress).catch((e) => status(e.message)));
 }
 
 // ---- start -----------------------------------------------------------------------------
@@ -609,9 +561,11 @@ async function main() {
     fit();
     if (mode.replay) {
       await startReplay();
+      markDrawn();
       return;
     }
     applyState(await api('GET', '/api/sim/state'));
+    markDrawn();
   } catch (e) {
     status(e.message);
   }

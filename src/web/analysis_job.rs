@@ -1,0 +1,220 @@
+//! The analysis panel's job: one analysis at a time on a blocking thread, with its progress
+//! (phase, markings found, seconds) and a cancel that stops the state-space search within
+//! one block of markings ([`Monitor`]).
+//!
+//! States: `idle` → `running` → `done` (the result is kept) or, after a cancel,
+//! `cancelling` → `cancelled` (start it again to retry). A result that is an error of the net
+//! (unbounded, too many states) is `done` too: the panel shows it.
+
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Instant;
+
+use serde_json::{Value, json};
+use tokio::sync::watch;
+
+use crate::analysis::state_space::Monitor;
+use crate::net::Net;
+
+/// What the analysis is doing, for the progress line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub(crate) enum Phase {
+    /// Bounds, then the breadth-first search of the reachable markings.
+    StateSpace = 0,
+    /// Safeness, reversibility, liveness, dead markings.
+    Properties = 1,
+    /// The CTMC's steady state and the measures.
+    SteadyState = 2,
+}
+
+impl Phase {
+    fn name(self) -> &'static str {
+        match self {
+            Phase::StateSpace => "state space",
+            Phase::Properties => "properties",
+            Phase::SteadyState => "steady state",
+        }
+    }
+
+    fn from_u8(v: u8) -> Phase {
+        match v {
+            0 => Phase::StateSpace,
+            1 => Phase::Properties,
+            _ => Phase::SteadyState,
+        }
+    }
+}
+
+/// Shared between the job's thread and the requests asking about it.
+#[derive(Debug, Default)]
+pub(crate) struct Progress {
+    /// The search's count and cancel flag.
+    pub(crate) monitor: Monitor,
+    phase: AtomicU8,
+}
+
+impl Progress {
+    /// Enters `phase`; `false` when the job was cancelled (stop now).
+    pub(crate) fn enter(&self, phase: Phase) -> bool {
+        self.phase.store(phase as u8, Ordering::Relaxed);
+        !self.monitor.is_cancelled()
+    }
+
+    fn phase(&self) -> Phase {
+        Phase::from_u8(self.phase.load(Ordering::Relaxed))
+    }
+}
+
+#[derive(Debug)]
+enum State {
+    Idle,
+    Running {
+        progress: Arc<Progress>,
+        started: Instant,
+    },
+    Done {
+        value: Arc<Value>,
+        seconds: f64,
+    },
+    Cancelled {
+        markings: usize,
+        phase: Phase,
+        seconds: f64,
+    },
+}
+
+/// The analysis of one net, run at most once at a time.
+#[derive(Debug)]
+pub(crate) struct AnalysisJob {
+    net: Arc<Net>,
+    max_states: usize,
+    state: Mutex<State>,
+    /// Bumped whenever the job ends (done or cancelled).
+    ended: watch::Sender<u64>,
+}
+
+/// How a wait for the result ended.
+pub(crate) enum Outcome {
+    /// The analysis (or the net's error, as `{error, kind}`).
+    Done(Arc<Value>),
+    /// Cancelled before it finished: the progress as it stopped.
+    Cancelled(Value),
+}
+
+impl AnalysisJob {
+    pub(crate) fn new(net: Arc<Net>, max_states: usize) -> AnalysisJob {
+        AnalysisJob {
+            net,
+            max_states,
+            state: Mutex::new(State::Idle),
+            ended: watch::channel(0).0,
+        }
+    }
+
+    fn lock(&self) -> MutexGuard<'_, State> {
+        self.state
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Starts the analysis unless it is running or done; returns the progress. Call inside a
+    /// tokio runtime.
+    pub(crate) fn start(self: &Arc<Self>) -> Value {
+        let mut s = self.lock();
+        if matches!(*s, State::Idle | State::Cancelled { .. }) {
+            let progress = Arc::new(Progress::default());
+            *s = State::Running {
+                progress: progress.clone(),
+                started: Instant::now(),
+            };
+            let job = self.clone();
+            tokio::task::spawn_blocking(move || job.run(progress));
+        }
+        progress_json(&s)
+    }
+
+    fn run(&self, progress: Arc<Progress>) {
+        let started = Instant::now();
+        let value = crate::web::report::analyse(&self.net, self.max_states, &progress);
+        let seconds = started.elapsed().as_secs_f64();
+        {
+            let mut s = self.lock();
+            *s = if progress.monitor.is_cancelled() {
+                State::Cancelled {
+                    markings: progress.monitor.markings(),
+                    phase: progress.phase(),
+                    seconds,
+                }
+            } else {
+                State::Done {
+                    value: Arc::new(value),
+                    seconds,
+                }
+            };
+        }
+        self.ended.send_modify(|n| *n += 1);
+    }
+
+    /// Asks a running analysis to stop; returns the progress (`cancelling` until its thread
+    /// has stopped, then `cancelled`).
+    pub(crate) fn cancel(&self) -> Value {
+        let s = self.lock();
+        if let State::Running { progress, .. } = &*s {
+            progress.monitor.cancel();
+        }
+        progress_json(&s)
+    }
+
+    /// The progress as JSON: `state`, and `phase`, `markings`, `seconds` where they apply.
+    pub(crate) fn progress(&self) -> Value {
+        progress_json(&self.lock())
+    }
+
+    /// Starts the analysis if needed and waits for it to end.
+    pub(crate) async fn result(self: &Arc<Self>) -> Outcome {
+        let mut ended = self.ended.subscribe();
+        self.start();
+        loop {
+            {
+                let s = self.lock();
+                match &*s {
+                    State::Done { value, .. } => return Outcome::Done(value.clone()),
+                    State::Cancelled { .. } => return Outcome::Cancelled(progress_json(&s)),
+                    State::Idle | State::Running { .. } => {}
+                }
+            }
+            if ended.changed().await.is_err() {
+                return Outcome::Cancelled(self.progress());
+            }
+        }
+    }
+}
+
+fn progress_json(s: &State) -> Value {
+    match s {
+        State::Idle => json!({ "state": "idle" }),
+        State::Running { progress, started } => json!({
+            "state": if progress.monitor.is_cancelled() { "cancelling" } else { "running" },
+            "phase": progress.phase().name(),
+            "markings": progress.monitor.markings(),
+            "seconds": started.elapsed().as_secs_f64(),
+        }),
+        State::Done { value, seconds } => json!({
+            "state": "done",
+            "markings": value.get("reachable").cloned().unwrap_or(Value::Null),
+            "seconds": seconds,
+            "error": value.get("error").cloned().unwrap_or(Value::Null),
+        }),
+        State::Cancelled {
+            markings,
+            phase,
+            seconds,
+        } => json!({
+            "state": "cancelled",
+            "phase": phase.name(),
+            "markings": markings,
+            "seconds": seconds,
+        }),
+    }
+}

@@ -1,0 +1,130 @@
+// gspn viewer, runs that are not the page's own token game: a running plan followed over a
+// WebSocket (with its simulated world, map.js), and a journal played back on a time slider.
+'use strict';
+
+// ---- live run --------------------------------------------------------------------------
+
+// Follows a running plan: the server sends the net, then snapshots; on a lost connection
+// the page reconnects and the server starts again with the net and the current snapshot.
+function startLive() {
+  for (const id of ['step', 'step-n', 'run', 'reset', 'n', 'seed', 'trace-panel']) {
+    const e = $(id);
+    (e.closest('label') || e).classList.add('hidden');
+  }
+  $('speed').closest('label').classList.add('hidden');
+  $('stop').classList.remove('hidden');
+  $('log-panel').classList.remove('hidden');
+  $('stop').addEventListener('click', () =>
+    api('POST', '/api/live/stop').catch((e) => status(e.message)));
+  connectLive();
+}
+
+function connectLive() {
+  const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  const socket = new WebSocket(scheme + '//' + location.host + '/api/live/ws');
+  socket.onmessage = (ev) => {
+    const msg = JSON.parse(ev.data);
+    if (msg.type === 'net') {
+      const first = net === null;
+      net = msg;
+      $('title').textContent = net.name + ' — live';
+      document.title = net.name + ' — gspn (live)';
+      scaleCoordinates();
+      drawNet();
+      if (first) fit();
+      $('log').textContent = '';
+    } else if (msg.type === 'state') {
+      const t0 = performance.now();
+      applyLive(msg);
+      pushCapped(gspnPerf.handler, performance.now() - t0);
+      afterPaint(() => pushCapped(gspnPerf.frames, performance.now() - t0));
+      markDrawn();
+    }
+  };
+  socket.onopen = () => status('');
+  socket.onclose = () => {
+    status('connection lost, reconnecting…');
+    setTimeout(connectLive, 1000);
+  };
+}
+
+function applyLive(s) {
+  s.tokens.forEach((k, i) => setTokens(i, k));
+  setAllEnabled(s.firable);
+  net.places.forEach((p, i) => {
+    const agents = s.agents[p.name];
+    setAgents(i, agents ? Object.entries(agents).map(([k, n]) => k + ' ' + n).join(', ') : '');
+  });
+  if (s.world) drawWorld(s.world);
+  $('clock').textContent = 'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
+    (s.stopped ? ' — stopped: ' + s.stopped : '') +
+    (s.lagged ? ' (' + s.lagged + ' events skipped)' : '');
+  $('marking-text').textContent = shorten(s.text, 2000);
+  const ol = $('log');
+  for (const e of s.log) {
+    const li = document.createElement('li');
+    li.value = e.seq;
+    li.textContent = fmt(e.time) + '  ' + e.text;
+    ol.appendChild(li);
+  }
+  while (ol.childElementCount > 500) ol.firstElementChild.remove();
+  ol.scrollTop = ol.scrollHeight;
+  if (s.stopped) $('stop').disabled = true;
+}
+
+// ---- replay ----------------------------------------------------------------------------
+
+// Plays a journal back: the slider picks a frame (the marking after each firing); `run`
+// plays the frames at the chosen speed.
+async function startReplay() {
+  for (const id of ['step', 'step-n', 'reset', 'n', 'seed']) {
+    const e = $(id);
+    (e.closest('label') || e).classList.add('hidden');
+  }
+  const { frames } = await api('GET', '/api/replay');
+  const slider = $('slider');
+  slider.max = String(frames.length - 1);
+  $('slider-label').classList.remove('hidden');
+  const show = (i) => {
+    const f = frames[i];
+    slider.value = String(i);
+    f.tokens.forEach((k, p) => setTokens(p, k));
+    setFired(f.transition ? transitionIndex(f.transition) : -1);
+    const items = $('trace').children;
+    for (const li of $('trace').querySelectorAll('li.current')) li.classList.remove('current');
+    if (i > 0 && items[i - 1]) items[i - 1].classList.add('current');
+    $('frame').textContent = i + '/' + (frames.length - 1);
+    $('clock').textContent = 'time ' + fmt(f.time) + ', ' + i + ' firings' +
+      (f.transition ? ' — ' + f.transition + ' fired' : '');
+  };
+  slider.addEventListener('input', () => show(Number(slider.value)));
+  const ol = $('trace');
+  ol.textContent = '';
+  frames.slice(1).forEach((f, i) => {
+    const li = document.createElement('li');
+    li.textContent = fmt(f.time) + '  ' + f.transition;
+    li.addEventListener('click', () => show(i + 1));
+    ol.appendChild(li);
+  });
+  let timer = null;
+  $('run').addEventListener('click', () => {
+    if (timer !== null) {
+      clearInterval(timer);
+      timer = null;
+      $('run').textContent = 'run';
+      return;
+    }
+    $('run').textContent = 'pause';
+    timer = setInterval(() => {
+      const i = Number(slider.value) + 1;
+      if (i >= frames.length) {
+        clearInterval(timer);
+        timer = null;
+        $('run').textContent = 'run';
+        return;
+      }
+      show(i);
+    }, 1000 / (Number($('speed').value) || 1));
+  });
+  show(0);
+}
