@@ -18,6 +18,8 @@
 //!   `Runtime::builder(net)…spawn()` embeds a running plan in a tokio service.
 //! - `web` (feature `web`): the viewer — an axum server with embedded assets that draws a
 //!   net, plays its token game and shows its analysis (`plan-runner serve`).
+//! - `ros2` (feature `ros2`): the ROS 2 backend — robots as ExecPlace action servers,
+//!   firings and the marking on topics, over DDS (`plan-runner robot`, `docs/ros2.md`).
 //!
 //! The everyday types are in [`prelude`].
 
@@ -29,6 +31,8 @@ pub mod check;
 pub mod io;
 pub mod net;
 pub mod policy;
+#[cfg(feature = "ros2")]
+pub mod ros2;
 pub mod runtime;
 pub mod sim;
 #[cfg(feature = "web")]

@@ -41,9 +41,14 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::{LoadError, LoadErrorKind, Loaded, ReadOptions, Span, read_net};
+
+mod ros2;
+
 use crate::net::predicate::Predicate;
 use crate::net::{Net, PlaceId, Timing, TransitionId};
 use crate::policy::{Pattern, Policy, PolicyError, Rule};
+use ros2::resolve_ros2;
+pub use ros2::{DEFAULT_SERVER, ROS2_ACTION, Ros2File, Ros2Settings};
 
 /// A plan ready to run: the net, what each place does, the policy and when to stop.
 #[derive(Clone, Debug)]
@@ -75,6 +80,8 @@ pub struct Plan {
     pub warnings: Vec<String>,
     /// The room simulated robots drive in (`[map]`), when the plan has one.
     pub map: Option<map::Map>,
+    /// The ROS 2 backend's settings and the places it serves (feature `ros2`).
+    pub ros2: Ros2Settings,
 }
 
 /// What a place does when tokens enter it.
@@ -137,6 +144,7 @@ impl Plan {
             robots: Vec::new(),
             warnings: loaded.warnings,
             map: None,
+            ros2: Ros2Settings::default(),
         }
     }
 
@@ -188,6 +196,8 @@ pub struct PlanFile {
     /// obstacles; see `docs/plans.md`.
     #[schemars(with = "Option<map::MapFile>")]
     pub map: Option<Spanned<map::MapFile>>,
+    /// ROS 2 backend settings (feature `ros2`; see `docs/ros2.md`).
+    pub ros2: Option<Ros2File>,
 }
 
 /// The value of a net parameter: a number or an expression the net reader evaluates.
@@ -230,6 +240,10 @@ pub struct PlaceFile {
     pub on_failure: Option<Spanned<String>>,
     /// The robot this place's agents are bound to.
     pub robot: Option<String>,
+    /// With `action = "ros2"`: the ExecPlace action server of the robots, reached at
+    /// `/<robot>/<server>` (default `"exec_place"`).
+    #[schemars(with = "Option<String>")]
+    pub server: Option<Spanned<String>>,
 }
 
 /// One policy rule.
@@ -371,6 +385,8 @@ impl PlanFile {
             }
         }
 
+        let ros2 = resolve_ros2(&net, self.ros2.as_ref(), &self.places, &at)?;
+
         let mut rules = Vec::with_capacity(self.policy.len());
         let mut rule_spans = Vec::with_capacity(self.policy.len());
         for rule in &self.policy {
@@ -471,6 +487,7 @@ impl PlanFile {
             robots,
             warnings,
             map,
+            ros2,
         })
     }
 }
@@ -892,6 +909,53 @@ max_firings = 500
                 ..
             })
         ));
+    }
+
+    #[test]
+    fn ros2_places_and_settings_resolve() {
+        let plan = load(
+            "net = \"n.xml\"\n[ros2]\ndomain_id = 42\nnetworks = [\"127.0.0.1\"]\nlost_after = 0.5\n\
+             [places.P2]\naction = \"ros2\"\nserver = \"exec_p2\"\n[places.P3]\naction = \"ros2\"\n",
+        )
+        .unwrap();
+        assert_eq!(plan.ros2.domain_id, Some(42));
+        assert_eq!(
+            plan.ros2.networks,
+            vec![std::net::IpAddr::from([127, 0, 0, 1])]
+        );
+        assert_eq!(plan.ros2.lost_after, Some(0.5));
+        assert_eq!(plan.ros2.heartbeat, None);
+        assert_eq!(
+            plan.ros2.servers,
+            vec![
+                (PlaceId(1), "exec_p2".to_string()),
+                (PlaceId(2), DEFAULT_SERVER.to_string())
+            ]
+        );
+    }
+
+    #[test]
+    fn ros2_mistakes_are_refused_at_their_position() {
+        let (l, c, m) = err_at("net = \"n.xml\"\n[places.P2]\naction = \"a\"\nserver = \"s\"\n");
+        assert_eq!((l, c), (4, 10));
+        assert!(
+            m.contains("`server` applies to places with action = \"ros2\""),
+            "{m}"
+        );
+        let (l, c, m) =
+            err_at("net = \"n.xml\"\n[places.P2]\naction = \"ros2\"\nserver = \"a b\"\n");
+        assert_eq!((l, c), (4, 10));
+        assert!(m.contains("server `a b` is not a ROS 2 name"), "{m}");
+        let (l, c, m) = err_at("net = \"n.xml\"\n[ros2]\nnetworks = [\"127.0.0.1\", \"lo\"]\n");
+        assert_eq!((l, c), (3, 26));
+        assert!(m.contains("`lo` is not an IP address"), "{m}");
+        let (l, c, _) = err_at("net = \"n.xml\"\n[ros2]\ndomain_id = 300\n");
+        assert_eq!((l, c), (3, 13));
+        let (l, c, _) = err_at("net = \"n.xml\"\n[ros2]\nlost_after = 0.0\n");
+        assert_eq!((l, c), (3, 14));
+        let (l, c, m) = err_at("net = \"n.xml\"\n[ros2]\ndomian_id = 3\n");
+        assert_eq!((l, c), (3, 1));
+        assert!(m.contains("domian_id"), "{m}");
     }
 
     #[test]

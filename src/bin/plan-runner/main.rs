@@ -11,6 +11,8 @@ mod import_thesis;
 mod replay;
 #[cfg(feature = "sim")]
 mod robots;
+#[cfg(feature = "ros2")]
+mod ros2;
 mod run;
 #[cfg(feature = "web")]
 mod serve;
@@ -48,6 +50,10 @@ enum Command {
     /// Play a run's journal back: print its firings, or show them with --web (feature `web`).
     #[cfg(feature = "web")]
     Replay(replay::Args),
+    /// Serve a plan's `ros2` places as one robot: ExecPlace action servers at /<ID>/<server>
+    /// with net-timed local actions, a heartbeat, the firings (feature `ros2`).
+    #[cfg(feature = "ros2")]
+    Robot(ros2::RobotArgs),
 }
 
 fn main() -> ExitCode {
@@ -64,6 +70,8 @@ fn main() -> ExitCode {
         Command::Serve(a) => serve::main(a),
         #[cfg(feature = "web")]
         Command::Replay(a) => replay::main(a),
+        #[cfg(feature = "ros2")]
+        Command::Robot(a) => ros2::robot(a),
     };
     match result {
         Ok(code) => code,

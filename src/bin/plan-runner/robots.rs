@@ -10,7 +10,7 @@ use gspn::io::plan::Plan;
 use gspn::sim::world::{Fleet, SimMetrics};
 
 use crate::common::BadInput;
-use crate::run::{Args, execute_with, print_summary};
+use crate::run::{Args, Backends, execute_with, print_summary};
 
 pub(crate) fn main(plan: Plan, args: &Args) -> anyhow::Result<ExitCode> {
     let virtual_time = plan.time_scale.unwrap_or(0.0) == 0.0;
@@ -28,7 +28,13 @@ pub(crate) fn main(plan: Plan, args: &Args) -> anyhow::Result<ExitCode> {
     .context("starting tokio")?;
     let (summary, metrics) = rt.block_on(async {
         let fleet = Fleet::new(plan, args.robots).map_err(|e| BadInput(e.to_string()))?;
-        let run = execute_with(fleet.builder, args).await;
+        #[cfg_attr(not(feature = "web"), allow(unused_mut))]
+        let mut backends = Backends::default();
+        #[cfg(feature = "web")]
+        if args.web.is_some() {
+            backends.world = Some(world_feed(fleet.world.view()));
+        }
+        let run = execute_with(fleet.builder, args, backends).await;
         let metrics = fleet.world.metrics().await;
         fleet.world.stop();
         anyhow::Ok((run?, metrics))
@@ -60,4 +66,24 @@ fn print_metrics(m: &SimMetrics) {
         m.stuck_events
     );
     println!("  patrol cycles per robot {:?}", m.cycles_per_robot);
+}
+
+/// The world's view as JSON for the viewer's map: a task forwards each new view.
+#[cfg(feature = "web")]
+fn world_feed(
+    mut view: tokio::sync::watch::Receiver<gspn::sim::world::WorldView>,
+) -> tokio::sync::watch::Receiver<serde_json::Value> {
+    let json = |v: &gspn::sim::world::WorldView| {
+        serde_json::to_value(v).unwrap_or(serde_json::Value::Null)
+    };
+    let (tx, rx) = tokio::sync::watch::channel(json(&view.borrow_and_update()));
+    tokio::spawn(async move {
+        while view.changed().await.is_ok() {
+            let v = json(&view.borrow_and_update());
+            if tx.send(v).is_err() {
+                break;
+            }
+        }
+    });
+    rx
 }

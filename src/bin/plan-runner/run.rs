@@ -48,7 +48,7 @@ pub(crate) struct Args {
     /// (feature `web`); after the run it stays up until Ctrl-C.
     #[cfg(feature = "web")]
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
-    web: Option<std::net::SocketAddr>,
+    pub(crate) web: Option<std::net::SocketAddr>,
     /// Run the plan's map with N simulated robots (the net's initial robot tokens scaled to
     /// N; feature `sim`).
     #[cfg(feature = "sim")]
@@ -56,6 +56,10 @@ pub(crate) struct Args {
     pub(crate) robots: Option<usize>,
     #[command(flatten)]
     net: NetArgs,
+    /// ROS 2 flags, used when the plan has `ros2` places (feature `ros2`).
+    #[cfg(feature = "ros2")]
+    #[command(flatten)]
+    ros2: crate::ros2::RunArgs,
 }
 
 fn load(args: &Args) -> anyhow::Result<Plan> {
@@ -110,22 +114,57 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
-    execute_with(Runtime::from_plan(plan), args).await
+    #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
+    let mut backends = Backends::default();
+    #[cfg(feature = "ros2")]
+    if crate::ros2::wanted(&plan) {
+        backends.ros2 = Some(crate::ros2::connect(&plan, &args.ros2).await?);
+    }
+    execute_with(Runtime::from_plan(plan), args, backends).await
 }
 
-/// Runs a configured builder: journal, viewer, progress, Ctrl-C, summary.
-pub(crate) async fn execute_with(b: RuntimeBuilder, args: &Args) -> anyhow::Result<Summary> {
+/// What a run drives besides the runtime itself.
+#[derive(Default)]
+pub(crate) struct Backends {
+    /// The ROS 2 connection (plans with `ros2` places).
+    #[cfg(feature = "ros2")]
+    pub(crate) ros2: Option<gspn::ros2::Ros2Backend>,
+    /// The simulated world's view, for the viewer's map (`run --web` on a plan with a map).
+    #[cfg(feature = "web")]
+    pub(crate) world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
+}
+
+/// Runs a configured builder: journal, viewer, backends, progress, Ctrl-C, summary.
+pub(crate) async fn execute_with(
+    b: RuntimeBuilder,
+    args: &Args,
+    #[cfg_attr(not(any(feature = "web", feature = "ros2")), allow(unused_variables))]
+    backends: Backends,
+) -> anyhow::Result<Summary> {
     #[cfg(feature = "web")]
     let watched = args.web.is_some();
     #[cfg(not(feature = "web"))]
     let watched = false;
+    #[cfg(feature = "ros2")]
+    let mut ros2 = backends.ros2;
+    #[cfg(feature = "ros2")]
+    let watched = watched || ros2.is_some();
     let mut b = b.subscribe_at_start(watched);
+    #[cfg(feature = "ros2")]
+    if let Some(r) = &ros2 {
+        b = r.attach(b);
+    }
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
-    let handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
+    let mut handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    #[cfg(feature = "ros2")]
+    if let Some(r) = &mut ros2 {
+        r.publish(handle.events());
+    }
     #[cfg(feature = "web")]
-    let (handle, viewer) = crate::serve::follow(handle, args.web).await?;
+    let (handle, viewer) = crate::serve::follow(handle, args.web, backends.world).await?;
     for w in handle.warnings() {
         eprintln!("warning: {w}");
     }
@@ -164,6 +203,10 @@ pub(crate) async fn execute_with(b: RuntimeBuilder, args: &Args) -> anyhow::Resu
         bar.finish_and_clear();
     }
     eprintln!("seed {}", handle.seed());
+    #[cfg(feature = "ros2")]
+    if let Some(r) = ros2 {
+        crate::ros2::finish(r, &args.ros2).await;
+    }
     #[cfg(feature = "web")]
     crate::serve::linger(viewer, &summary).await;
     Ok(summary)

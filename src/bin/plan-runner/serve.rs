@@ -81,13 +81,17 @@ pub(crate) struct Viewer {
 pub(crate) async fn follow(
     mut handle: RuntimeHandle,
     addr: Option<SocketAddr>,
+    world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
 ) -> anyhow::Result<(Arc<RuntimeHandle>, Option<Viewer>)> {
     let Some(addr) = addr else {
         return Ok((Arc::new(handle), None));
     };
     let events = handle.events();
     let handle = Arc::new(handle);
-    let live = LiveRun::start(handle.clone(), events);
+    let mut live = LiveRun::start(handle.clone(), events);
+    if let Some(world) = world {
+        live = live.with_world(world);
+    }
     let listener = tokio::net::TcpListener::bind(addr)
         .await
         .with_context(|| format!("cannot listen on {addr}"))?;

@@ -1,0 +1,206 @@
+//! The ROS 2 backend in the CLI (feature `ros2`): the DDS flags of `run` and `robot`, the
+//! supervisor's side of `run` for plans with `ros2` places, and `plan-runner robot`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use anyhow::Context as _;
+use gspn::io::plan::{Plan, read_plan};
+use gspn::ros2::config::{parse_domain, parse_networks};
+use gspn::ros2::heartbeat::Liveness;
+use gspn::ros2::robot::{RobotOptions, serve};
+use gspn::ros2::{DdsConfig, Ros2Backend};
+
+use crate::common::{BadInput, NetArgs};
+
+/// DDS flags (override the plan's `[ros2]` table and the `GSPN_ROS2_*` environment).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub(crate) struct DdsArgs {
+    /// DDS domain id (0–232) [default: the plan's, else $GSPN_ROS2_DOMAIN, else 0].
+    #[arg(long, value_name = "ID", value_parser = domain)]
+    ros2_domain: Option<u16>,
+    /// Local IP addresses DDS may use, comma-separated [default: 127.0.0.1].
+    #[arg(long, value_name = "ADDRS")]
+    ros2_networks: Option<String>,
+}
+
+fn domain(s: &str) -> Result<u16, String> {
+    parse_domain(s).map_err(str::to_string)
+}
+
+impl DdsArgs {
+    fn config(&self, plan: &Plan) -> anyhow::Result<DdsConfig> {
+        let mut c = DdsConfig::resolve(&plan.ros2).map_err(|e| BadInput(e.to_string()))?;
+        if let Some(d) = self.ros2_domain {
+            c.domain_id = d;
+        }
+        if let Some(n) = &self.ros2_networks {
+            c.networks = parse_networks(n)
+                .map_err(|why| BadInput(format!("--ros2-networks `{n}`: {why}")))?;
+        }
+        Ok(c)
+    }
+}
+
+/// The ROS 2 flags of `run`.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub(crate) struct RunArgs {
+    #[command(flatten)]
+    dds: DdsArgs,
+    /// Wait (up to the startup time) for this many subscribers of /gspn/firings before the
+    /// first firing.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    ros2_wait_subscribers: usize,
+    /// Seconds to stay on DDS after the run, so subscribers receive the last firings.
+    #[arg(long, value_name = "SECS", default_value_t = 0.5)]
+    ros2_linger: f64,
+}
+
+/// The plan's robots, when it has `ros2` places (else the ROS 2 backend stays off).
+pub(crate) fn wanted(plan: &Plan) -> bool {
+    !plan.ros2.servers.is_empty()
+}
+
+/// Joins DDS and links to the plan's robots.
+pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2Backend> {
+    let cfg = args.dds.config(plan)?;
+    if plan.robots.is_empty() {
+        return Err(BadInput(format!(
+            "{}: the plan has ros2 places but no `robots = [...]` to send their goals to",
+            plan.path.display()
+        ))
+        .into());
+    }
+    eprintln!(
+        "ros2: domain {}, waiting for robot(s) {}",
+        cfg.domain_id,
+        plan.robots.join(", ")
+    );
+    let backend =
+        Ros2Backend::connect(plan, &plan.robots, &cfg, args.ros2_wait_subscribers).await?;
+    eprintln!("ros2: robots ready");
+    // Say when a robot is lost or back (the runs' errors say which action it failed).
+    for r in &plan.robots {
+        if let Some(mut live) = backend.watch().liveness(r) {
+            let r = r.clone();
+            let after = cfg.lost_after;
+            live.borrow_and_update();
+            tokio::spawn(async move {
+                while live.changed().await.is_ok() {
+                    match *live.borrow() {
+                        Liveness::Lost => {
+                            eprintln!("ros2: robot `{r}` lost: no heartbeat for {after:?}")
+                        }
+                        Liveness::Alive => eprintln!("ros2: robot `{r}` is back"),
+                        Liveness::Unknown => {}
+                    }
+                }
+            });
+        }
+    }
+    Ok(backend)
+}
+
+/// After the run: let the publisher finish and linger.
+pub(crate) async fn finish(backend: Ros2Backend, args: &RunArgs) {
+    let linger = Duration::from_secs_f64(args.ros2_linger.clamp(0.0, 60.0));
+    let p = backend.finish(linger).await;
+    eprintln!(
+        "ros2: published {} firings ({} events lost, {} publish errors)",
+        p.firings, p.lagged, p.errors
+    );
+}
+
+/// Arguments of `robot`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct RobotArgs {
+    /// The robot's id, as in the plan's `robots` (its servers are `/<ID>/<server>`).
+    #[arg(long)]
+    id: String,
+    /// The plan.
+    #[arg(long)]
+    plan: PathBuf,
+    /// Seed of the robot's draws [default: the plan's, else 0].
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Seconds per unit of model time for the local delays [default: the plan's
+    /// time_scale, else 1].
+    #[arg(long, value_name = "X")]
+    time_scale: Option<f64>,
+    /// Append `seq stamp_ns received_ns` for every firing received to this file.
+    #[arg(long, value_name = "FILE")]
+    latency_log: Option<PathBuf>,
+    #[command(flatten)]
+    dds: DdsArgs,
+    #[command(flatten)]
+    net: NetArgs,
+}
+
+/// `plan-runner robot`: serve until Ctrl-C or SIGTERM.
+pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
+    let plan = read_plan(&args.plan, &args.net.read_options())?;
+    if !wanted(&plan) {
+        return Err(BadInput(format!(
+            "{}: no place has action = \"ros2\": nothing to serve",
+            args.plan.display()
+        ))
+        .into());
+    }
+    if !plan.robots.is_empty() && !plan.robots.contains(&args.id) {
+        eprintln!(
+            "warning: robot `{}` is not in the plan's robots ({})",
+            args.id,
+            plan.robots.join(", ")
+        );
+    }
+    let scale = args
+        .time_scale
+        .or(plan.time_scale.filter(|&x| x > 0.0))
+        .unwrap_or(1.0);
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(BadInput(format!("--time-scale {scale}: must be ≥ 0")).into());
+    }
+    let cfg = args.dds.config(&plan)?;
+    let opts = RobotOptions {
+        id: args.id.clone(),
+        seed: args.seed.or(plan.seed).unwrap_or(0),
+        time_scale: scale,
+        latency_log: args.latency_log.clone(),
+    };
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting tokio")?;
+    let stats = rt.block_on(async {
+        eprintln!(
+            "robot {}: serving on domain {} ({} ros2 places)",
+            opts.id,
+            cfg.domain_id,
+            plan.ros2.servers.len()
+        );
+        serve(&plan, &cfg, opts, shutdown()).await
+    })?;
+    eprintln!(
+        "robot {}: {} goals, {} cancelled, {} firings received",
+        args.id, stats.goals, stats.cancelled, stats.firings
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Completes on Ctrl-C or SIGTERM.
+async fn shutdown() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{SignalKind, signal};
+        if let Ok(mut term) = signal(SignalKind::terminate()) {
+            tokio::select! {
+                _ = tokio::signal::ctrl_c() => {}
+                _ = term.recv() => {}
+            }
+            return;
+        }
+    }
+    let _ = tokio::signal::ctrl_c().await;
+}

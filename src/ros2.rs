@@ -1,0 +1,50 @@
+//! The ROS 2 backend (feature `ros2`): robots as ROS 2 action servers, firings on a topic,
+//! over real DDS with the pure-Rust `ros2-client` (no ROS installation needed).
+//!
+//! - [`msgs`]: the `gspn_msgs` interfaces (`ros2/gspn_msgs/`) as Rust types with the DDS type
+//!   names ROS 2 gives them.
+//! - [`backend`]: the supervisor's side: [`Ros2Backend`] links to every robot's ExecPlace
+//!   server, registers the `ros2` action ([`remote_place`]) and publishes the run's firings
+//!   and marking ([`firings`]).
+//! - [`robot`]: the robot's side (`plan-runner robot`): serves ExecPlace for the plan's
+//!   `ros2` places with net-timed local actions.
+//! - [`heartbeat`]: robots' heartbeats and the supervisor's [`heartbeat::RobotWatch`], which
+//!   turns a silent robot into a failed action.
+//! - [`config`]: domain, networks (loopback by default), timings.
+//!
+//! See `docs/ros2.md` for the topics, the plan keys and the DDS settings.
+
+pub mod backend;
+pub mod config;
+pub mod firings;
+pub mod heartbeat;
+pub mod msgs;
+pub mod remote_place;
+pub mod robot;
+
+pub use backend::Ros2Backend;
+pub use config::DdsConfig;
+
+/// What went wrong in the ROS 2 backend.
+#[derive(Debug, thiserror::Error)]
+pub enum Ros2Error {
+    /// Creating or using a DDS entity failed.
+    #[error("DDS: {0}")]
+    Dds(String),
+    /// The settings could not be used.
+    #[error(transparent)]
+    Config(#[from] config::ConfigError),
+    /// Robots (or subscribers) did not show up in time.
+    #[error("{0}")]
+    Startup(String),
+    /// Anything else.
+    #[error("{0}")]
+    Other(String),
+}
+
+impl Ros2Error {
+    /// A DDS error from ros2-client or RustDDS (their errors only implement `Debug`).
+    pub fn dds(e: impl std::fmt::Debug) -> Ros2Error {
+        Ros2Error::Dds(format!("{e:?}"))
+    }
+}

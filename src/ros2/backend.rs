@@ -1,0 +1,185 @@
+//! [`Ros2Backend`]: the supervisor's ROS 2 side of `plan-runner run`.
+//!
+//! ```text
+//! connect   node `/gspn/supervisor`, heartbeat watch, /gspn/firings + /gspn/marking
+//!           publishers, one ExecPlace client per (robot, server); waits (≤ startup) for
+//!           every robot's heartbeat and server and for the wanted firing subscribers
+//! attach    registers the `ros2` action (RemotePlaces) on the runtime builder
+//! publish   a task that publishes every firing and the marking from the run's events
+//! finish    waits for the publisher, lingers so reliable samples reach the subscribers
+//! ```
+
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::Duration;
+
+use ros2_client::action::ActionClientQosPolicies;
+use ros2_client::dds::ServiceMapping;
+use ros2_client::qos::{Durability, History};
+use ros2_client::{Name, Node, QosProfile};
+use tokio::task::JoinHandle;
+
+use super::Ros2Error;
+use super::config::DdsConfig;
+use super::firings::{FiringPublisher, Published};
+use super::heartbeat::RobotWatch;
+use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, exec_place_type};
+use super::remote_place::{RemotePlaces, RobotLink};
+use crate::io::plan::{Plan, ROS2_ACTION};
+use crate::runtime::{Events, RuntimeBuilder};
+
+/// The supervisor's ROS 2 side: links to the robots and the firing publisher.
+pub struct Ros2Backend {
+    node: Node,
+    spin: JoinHandle<()>,
+    publisher: Option<FiringPublisher>,
+    task: Option<JoinHandle<Published>>,
+    places: RemotePlaces,
+    watch: RobotWatch,
+}
+
+impl std::fmt::Debug for Ros2Backend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Ros2Backend")
+            .field("places", &self.places)
+            .finish()
+    }
+}
+
+fn client_qos() -> ActionClientQosPolicies {
+    let service = QosProfile::publisher_default()
+        .durability(Durability::Volatile)
+        .history(History::KeepAll);
+    ActionClientQosPolicies {
+        goal_service: service.clone(),
+        result_service: service.clone(),
+        cancel_service: service,
+        feedback_subscription: QosProfile::publisher_default()
+            .durability(Durability::Volatile)
+            .history(History::KeepLast { depth: 1 }),
+        status_subscription: QosProfile::publisher_default()
+            .durability(Durability::TransientLocal)
+            .history(History::KeepLast { depth: 1 }),
+    }
+}
+
+impl Ros2Backend {
+    /// Joins DDS and links to every robot of `robots` for the plan's `ros2` places; waits
+    /// (at most `cfg.startup`) until each robot's heartbeat and servers are seen and
+    /// `/gspn/firings` has at least `subscribers` matched subscriptions.
+    pub async fn connect(
+        plan: &Plan,
+        robots: &[String],
+        cfg: &DdsConfig,
+        subscribers: usize,
+    ) -> Result<Ros2Backend, Ros2Error> {
+        let mut node = cfg.node("supervisor")?;
+        let spinner = node.spinner().map_err(Ros2Error::dds)?;
+        let spin = tokio::spawn(async move {
+            if let Err(e) = spinner.spin().await {
+                tracing::warn!("ROS 2 spinner: {e:?}");
+            }
+        });
+        let watch = RobotWatch::start(&mut node, robots, cfg.lost_after)?;
+        let publisher = FiringPublisher::new(&mut node, Arc::new(plan.net.clone()))?;
+        let mut servers: Vec<&str> = plan.ros2.servers.iter().map(|(_, s)| s.as_str()).collect();
+        servers.sort_unstable();
+        servers.dedup();
+        let mut links = Vec::new();
+        for robot in robots {
+            for &server in &servers {
+                let name = Name::new(&format!("/{robot}"), server).map_err(Ros2Error::dds)?;
+                let client = node
+                    .create_action_client::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
+                        ServiceMapping::Enhanced,
+                        &name,
+                        &exec_place_type(),
+                        client_qos(),
+                    )
+                    .map_err(Ros2Error::dds)?;
+                let live = watch
+                    .liveness(robot)
+                    .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))?;
+                links.push((
+                    server.to_string(),
+                    Arc::new(RobotLink::new(robot.clone(), client, live)),
+                ));
+            }
+        }
+        let startup = cfg.startup;
+        watch.all_alive(startup).await.map_err(|missing| {
+            Ros2Error::Startup(format!(
+                "no heartbeat from robot(s) {} within {startup:?} (domain {}): are `plan-runner robot` processes running?",
+                missing.join(", "),
+                cfg.domain_id
+            ))
+        })?;
+        let servers_ready = async {
+            for (_, l) in &links {
+                l.wait_for_server(&node).await;
+            }
+        };
+        tokio::time::timeout(startup, servers_ready)
+            .await
+            .map_err(|_| {
+                Ros2Error::Startup(format!(
+                    "robots answer heartbeats but their ExecPlace servers were not matched within {startup:?}"
+                ))
+            })?;
+        let subs = async {
+            while publisher.firing_subscribers(&node) < subscribers {
+                tokio::time::sleep(Duration::from_millis(20)).await;
+            }
+        };
+        tokio::time::timeout(startup, subs).await.map_err(|_| {
+            Ros2Error::Startup(format!(
+                "{} of {subscribers} subscriber(s) of /gspn/firings matched within {startup:?}",
+                publisher.firing_subscribers(&node)
+            ))
+        })?;
+        let servers: HashMap<_, _> = plan.ros2.servers.iter().cloned().collect();
+        Ok(Ros2Backend {
+            node,
+            spin,
+            publisher: Some(publisher),
+            task: None,
+            places: RemotePlaces::new(servers, links),
+            watch,
+        })
+    }
+
+    /// Registers the `ros2` action on `b`.
+    pub fn attach(&self, b: RuntimeBuilder) -> RuntimeBuilder {
+        b.action(ROS2_ACTION, self.places.clone())
+    }
+
+    /// Starts publishing the run's firings and marking from `events` (take them before the
+    /// first firing: `handle.events()` right after `spawn`).
+    pub fn publish(&mut self, events: Events) {
+        if let Some(p) = self.publisher.take() {
+            self.task = Some(tokio::spawn(p.run(events)));
+        }
+    }
+
+    /// The heartbeat watch.
+    pub fn watch(&self) -> &RobotWatch {
+        &self.watch
+    }
+
+    /// The node, for extra entities.
+    pub fn node(&mut self) -> &mut Node {
+        &mut self.node
+    }
+
+    /// Waits for the publisher to have sent every firing (the run must be over), then keeps
+    /// the participant alive for `linger` so reliable samples reach slow subscribers.
+    pub async fn finish(mut self, linger: Duration) -> Published {
+        let published = match self.task.take() {
+            Some(t) => t.await.unwrap_or_default(),
+            None => Published::default(),
+        };
+        tokio::time::sleep(linger).await;
+        self.spin.abort();
+        published
+    }
+}

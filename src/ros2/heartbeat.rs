@@ -1,0 +1,159 @@
+//! Heartbeats: every robot process publishes one on `/gspn/heartbeat` a few times a second;
+//! the supervisor's [`RobotWatch`] marks a robot lost when its heartbeats stop for
+//! `lost_after` (a killed process sends nothing, so DDS alone would notice only when the
+//! participant's lease ends, tens of seconds later).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::Duration;
+
+use futures::StreamExt;
+use ros2_client::qos::{Durability, History};
+use ros2_client::{Name, Node, Publisher, QosProfile, Subscription};
+use tokio::sync::watch;
+use tokio::time::Instant;
+
+use super::Ros2Error;
+use super::msgs::{HEARTBEAT_TOPIC, Heartbeat, heartbeat_type};
+
+/// What the supervisor knows of a robot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Liveness {
+    /// No heartbeat seen yet.
+    Unknown,
+    /// Heartbeats arrive.
+    Alive,
+    /// Heartbeats stopped: no heartbeat for `lost_after`.
+    Lost,
+}
+
+fn qos() -> QosProfile {
+    QosProfile::subscription_default()
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth: 64 })
+}
+
+fn topic(node: &Node) -> Result<ros2_client::dds::rustdds::Topic, Ros2Error> {
+    let name = Name::parse(HEARTBEAT_TOPIC).map_err(Ros2Error::dds)?;
+    node.create_topic(&name, heartbeat_type(), &qos())
+        .map_err(Ros2Error::dds)
+}
+
+/// Publishes `robot`'s heartbeat every `period` until the task is aborted.
+pub fn publish(
+    node: &mut Node,
+    robot: &str,
+    period: Duration,
+) -> Result<tokio::task::JoinHandle<()>, Ros2Error> {
+    let t = topic(node)?;
+    let publisher: Publisher<Heartbeat> =
+        node.create_publisher(&t, None).map_err(Ros2Error::dds)?;
+    let robot = robot.to_string();
+    Ok(tokio::spawn(async move {
+        let mut tick = tokio::time::interval(period);
+        tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+        for seq in 0.. {
+            tick.tick().await;
+            let _ = publisher.publish(Heartbeat {
+                robot: robot.clone(),
+                seq,
+            });
+        }
+    }))
+}
+
+/// The supervisor's view of its robots' heartbeats: one [`Liveness`] per robot.
+#[derive(Clone, Debug)]
+pub struct RobotWatch {
+    states: Arc<HashMap<String, watch::Receiver<Liveness>>>,
+}
+
+impl RobotWatch {
+    /// Subscribes to the heartbeats of `robots`; a robot silent for `lost_after` becomes
+    /// [`Liveness::Lost`] (and `Alive` again if its heartbeats come back).
+    pub fn start(
+        node: &mut Node,
+        robots: &[String],
+        lost_after: Duration,
+    ) -> Result<RobotWatch, Ros2Error> {
+        let t = topic(node)?;
+        let sub: Subscription<Heartbeat> =
+            node.create_subscription(&t, None).map_err(Ros2Error::dds)?;
+        let mut senders = HashMap::new();
+        let mut states = HashMap::new();
+        for r in robots {
+            let (tx, rx) = watch::channel(Liveness::Unknown);
+            senders.insert(r.clone(), (tx, None::<Instant>));
+            states.insert(r.clone(), rx);
+        }
+        let check = (lost_after / 4).max(Duration::from_millis(10));
+        tokio::spawn(async move {
+            let stream = sub.async_stream();
+            futures::pin_mut!(stream);
+            let mut tick = tokio::time::interval(check);
+            loop {
+                tokio::select! {
+                    m = stream.next() => match m {
+                        Some(Ok((hb, _))) => {
+                            if let Some((tx, seen)) = senders.get_mut(&hb.robot) {
+                                *seen = Some(Instant::now());
+                                tx.send_if_modified(|s| {
+                                    let changed = *s != Liveness::Alive;
+                                    *s = Liveness::Alive;
+                                    changed
+                                });
+                            }
+                        }
+                        Some(Err(e)) => tracing::warn!("heartbeat: {e:?}"),
+                        None => break,
+                    },
+                    _ = tick.tick() => {
+                        let now = Instant::now();
+                        for (robot, (tx, seen)) in &senders {
+                            if let Some(t) = seen
+                                && now.duration_since(*t) > lost_after
+                                && *tx.borrow() == Liveness::Alive
+                            {
+                                tracing::warn!("robot `{robot}`: no heartbeat for {lost_after:?}: lost");
+                                let _ = tx.send(Liveness::Lost);
+                            }
+                        }
+                        if senders.values().all(|(tx, _)| tx.is_closed()) {
+                            break;
+                        }
+                    }
+                }
+            }
+        });
+        Ok(RobotWatch {
+            states: Arc::new(states),
+        })
+    }
+
+    /// The liveness of `robot` (a receiver that follows its changes), when it is watched.
+    pub fn liveness(&self, robot: &str) -> Option<watch::Receiver<Liveness>> {
+        self.states.get(robot).cloned()
+    }
+
+    /// Waits until every watched robot is [`Liveness::Alive`]; the robots still missing at
+    /// `deadline` are returned as the error.
+    pub async fn all_alive(&self, deadline: Duration) -> Result<(), Vec<String>> {
+        let wait = async {
+            for rx in self.states.values() {
+                let mut rx = rx.clone();
+                let _ = rx.wait_for(|s| *s == Liveness::Alive).await;
+            }
+        };
+        if tokio::time::timeout(deadline, wait).await.is_ok() {
+            return Ok(());
+        }
+        let mut missing: Vec<String> = self
+            .states
+            .iter()
+            .filter(|(_, rx)| *rx.borrow() != Liveness::Alive)
+            .map(|(r, _)| r.clone())
+            .collect();
+        missing.sort();
+        Err(missing)
+    }
+}

@@ -1,0 +1,402 @@
+//! The robot's side: `plan-runner robot --id R --plan PLAN` serves the ExecPlace action at
+//! `/<R>/<server>` for the plan's `ros2` places, publishes its heartbeat, and listens to the
+//! firings (optionally logging when each arrived, for latency measurements).
+//!
+//! The local action is the net's own timing: for a place whose outputs are exponential the
+//! robot waits a delay drawn with the sum of their rates (× the time scale, in seconds) and
+//! answers the transition that won the race (each with probability rate / sum); for a place
+//! with an immediate output it answers at once with an empty transition (the supervisor's
+//! policy decides). Draws come from a seeded RNG (seed and robot id), so a robot repeats
+//! its choices.
+
+use std::collections::BTreeMap;
+use std::future::Future;
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use futures::StreamExt;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use ros2_client::action::{
+    ActionServerQosPolicies, AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId,
+    NewGoalHandle,
+};
+use ros2_client::dds::ServiceMapping;
+use ros2_client::qos::{Durability, History};
+use ros2_client::{Name, QosProfile};
+use tokio::sync::oneshot;
+
+use super::config::DdsConfig;
+use super::firings::FiringListener;
+use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, Time, exec_place_type};
+use super::{Ros2Error, heartbeat};
+use crate::io::plan::Plan;
+use crate::net::{Net, PlaceId, Timing};
+
+type Server = AsyncActionServer<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>;
+
+/// How a robot process runs.
+#[derive(Clone, Debug)]
+pub struct RobotOptions {
+    /// The robot's id (its namespace: `/<id>/<server>`).
+    pub id: String,
+    /// Seed of the robot's draws (mixed with its id).
+    pub seed: u64,
+    /// Seconds per unit of model time for the local delays (0 = answer at once).
+    pub time_scale: f64,
+    /// Appends `seq stamp_ns received_ns` for each firing received to this file.
+    pub latency_log: Option<PathBuf>,
+}
+
+/// What a robot did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RobotStats {
+    /// Goals received.
+    pub goals: u64,
+    /// Goals cancelled by the supervisor.
+    pub cancelled: u64,
+    /// Firings received on `/gspn/firings`.
+    pub firings: u64,
+}
+
+/// The local decision for one goal: wait this long, then answer this transition.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Decision {
+    /// Seconds to wait.
+    pub delay: f64,
+    /// The transition's name; empty = let the policy decide.
+    pub transition: String,
+}
+
+/// The net-timed decision for place `p`: the race of its exponential outputs, or at once
+/// with no transition when it has an immediate output (or none at all).
+pub fn decide(net: &Net, p: PlaceId, time_scale: f64, rng: &mut ChaCha8Rng) -> Decision {
+    let outputs: Vec<_> = net
+        .transition_ids()
+        .filter(|&t| net.inputs(t).iter().any(|&(q, _)| q == p))
+        .collect();
+    let mut rates = Vec::new();
+    for &t in &outputs {
+        match net.transition(t).timing {
+            Timing::Immediate { .. } => {
+                return Decision {
+                    delay: 0.0,
+                    transition: String::new(),
+                };
+            }
+            Timing::Exponential { rate, .. } => rates.push((t, rate)),
+        }
+    }
+    let total: f64 = rates.iter().map(|&(_, r)| r).sum();
+    if rates.is_empty() || total <= 0.0 {
+        return Decision {
+            delay: 0.0,
+            transition: String::new(),
+        };
+    }
+    let u: f64 = rng.random::<f64>();
+    let delay = -(1.0 - u).ln() / total * time_scale;
+    let mut pick = rng.random::<f64>() * total;
+    let mut chosen = rates[rates.len() - 1].0;
+    for &(t, r) in &rates {
+        if pick < r {
+            chosen = t;
+            break;
+        }
+        pick -= r;
+    }
+    Decision {
+        delay,
+        transition: net.transition(chosen).name.clone(),
+    }
+}
+
+fn server_qos() -> ActionServerQosPolicies {
+    let service = QosProfile::publisher_default()
+        .durability(Durability::Volatile)
+        .history(History::KeepAll);
+    ActionServerQosPolicies {
+        goal_service: service.clone(),
+        result_service: service.clone(),
+        cancel_service: service,
+        feedback_publisher: QosProfile::publisher_default()
+            .durability(Durability::Volatile)
+            .history(History::KeepLast { depth: 1 }),
+        status_publisher: QosProfile::publisher_default()
+            .durability(Durability::TransientLocal)
+            .history(History::KeepLast { depth: 1 }),
+    }
+}
+
+/// FNV-1a of the robot id, to give each robot its own stream of draws.
+fn id_hash(id: &str) -> u64 {
+    id.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+struct Shared {
+    net: Arc<Net>,
+    rng: Mutex<ChaCha8Rng>,
+    time_scale: f64,
+    stats: Mutex<RobotStats>,
+    /// Running goals and how to cancel them.
+    running: Mutex<BTreeMap<GoalId, oneshot::Sender<()>>>,
+}
+
+/// Serves the plan's `ros2` places as robot `opts.id` until `stop` completes.
+pub async fn serve(
+    plan: &Plan,
+    cfg: &DdsConfig,
+    opts: RobotOptions,
+    stop: impl Future<Output = ()>,
+) -> Result<RobotStats, Ros2Error> {
+    let node_name = format!("robot_{}", sanitize(&opts.id));
+    let mut node = cfg.node(&node_name)?;
+    let spinner = node.spinner().map_err(Ros2Error::dds)?;
+    let spin = tokio::spawn(spinner.spin());
+    let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;
+    let shared = Arc::new(Shared {
+        net: Arc::new(plan.net.clone()),
+        rng: Mutex::new(ChaCha8Rng::seed_from_u64(opts.seed ^ id_hash(&opts.id))),
+        time_scale: opts.time_scale,
+        stats: Mutex::new(RobotStats::default()),
+        running: Mutex::new(BTreeMap::new()),
+    });
+    let mut servers: Vec<&str> = plan.ros2.servers.iter().map(|(_, s)| s.as_str()).collect();
+    servers.sort_unstable();
+    servers.dedup();
+    let mut tasks = Vec::new();
+    for s in servers {
+        let name = Name::new(&format!("/{}", opts.id), s).map_err(Ros2Error::dds)?;
+        let server = node
+            .create_action_server::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
+                ServiceMapping::Enhanced,
+                &name,
+                &exec_place_type(),
+                server_qos(),
+            )
+            .map_err(Ros2Error::dds)?;
+        let server = Arc::new(AsyncActionServer::new(server));
+        tasks.push(tokio::spawn(serve_goals(server, Arc::clone(&shared))));
+    }
+    let listener = FiringListener::new(&mut node)?;
+    let listen = listen(&listener, opts.latency_log.clone(), Arc::clone(&shared));
+    tokio::select! {
+        _ = stop => {}
+        r = listen => r?,
+    }
+    beat.abort();
+    for t in tasks {
+        t.abort();
+    }
+    spin.abort();
+    let stats = *shared
+        .stats
+        .lock()
+        .map_err(|_| Ros2Error::Other("poisoned".into()))?;
+    Ok(stats)
+}
+
+/// A robot id as part of a node name (letters, digits, underscores).
+fn sanitize(id: &str) -> String {
+    id.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
+}
+
+async fn listen(
+    listener: &FiringListener,
+    log: Option<PathBuf>,
+    shared: Arc<Shared>,
+) -> Result<(), Ros2Error> {
+    let mut out = match &log {
+        Some(p) => Some(
+            std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(p)
+                .map_err(|e| Ros2Error::Other(format!("{}: {e}", p.display())))?,
+        ),
+        None => None,
+    };
+    let firings = listener.firings();
+    futures::pin_mut!(firings);
+    while let Some(f) = firings.next().await {
+        let now = Time::now();
+        if let Ok(mut s) = shared.stats.lock() {
+            s.firings += 1;
+        }
+        if let Some(out) = &mut out {
+            // One line per firing, written at once: a killed robot loses nothing logged.
+            let _ = writeln!(out, "{} {} {}", f.seq, f.stamp.as_nanos(), now.as_nanos());
+        }
+    }
+    Ok(())
+}
+
+/// Receives goals and cancel requests of one server; each goal runs in its own task.
+async fn serve_goals(server: Arc<Server>, shared: Arc<Shared>) {
+    loop {
+        tokio::select! {
+            g = server.receive_new_goal() => match g {
+                Ok(handle) => {
+                    tokio::spawn(run_goal(Arc::clone(&server), handle, Arc::clone(&shared)));
+                }
+                Err(e) => tracing::warn!("receiving a goal: {e:?}"),
+            },
+            c = server.receive_cancel_request() => match c {
+                Ok(cancel) => {
+                    let ours: Vec<GoalId> = {
+                        let mut running = match shared.running.lock() {
+                            Ok(r) => r,
+                            Err(_) => continue,
+                        };
+                        let ids: Vec<GoalId> =
+                            cancel.goals().filter(|g| running.contains_key(g)).collect();
+                        for g in &ids {
+                            if let Some(tx) = running.remove(g) {
+                                let _ = tx.send(());
+                            }
+                        }
+                        ids
+                    };
+                    let _ = server.respond_to_cancel_requests(&cancel, ours.into_iter()).await;
+                }
+                Err(e) => tracing::warn!("receiving a cancel request: {e:?}"),
+            },
+        }
+    }
+}
+
+async fn run_goal(server: Arc<Server>, handle: NewGoalHandle<ExecPlaceGoal>, shared: Arc<Shared>) {
+    let Some(goal) = server.get_new_goal(handle.clone()) else {
+        return;
+    };
+    if let Ok(mut s) = shared.stats.lock() {
+        s.goals += 1;
+    }
+    let Some(place) = shared.net.place_by_name(&goal.place) else {
+        tracing::warn!("goal for unknown place `{}`: rejected", goal.place);
+        let _ = server.reject_goal(handle).await;
+        return;
+    };
+    let decision = match shared.rng.lock() {
+        Ok(mut rng) => decide(&shared.net, place, shared.time_scale, &mut rng),
+        Err(_) => return,
+    };
+    let id = handle.goal_id();
+    let (tx, rx) = oneshot::channel();
+    if let Ok(mut r) = shared.running.lock() {
+        r.insert(id, tx);
+    }
+    let Ok(accepted) = server.accept_goal(handle).await else {
+        return;
+    };
+    let Ok(executing) = server.start_executing_goal(accepted).await else {
+        return;
+    };
+    let (status, result) = run_decision(&server, executing.clone(), decision, rx, &shared).await;
+    if let Ok(mut r) = shared.running.lock() {
+        r.remove(&id);
+    }
+    let send = server.send_result_response(executing, status, result);
+    if tokio::time::timeout(Duration::from_secs(5), send)
+        .await
+        .is_err()
+    {
+        tracing::warn!("goal {id:?}: nobody asked for the result");
+    }
+}
+
+async fn run_decision(
+    server: &Server,
+    executing: ExecutingGoalHandle<ExecPlaceGoal>,
+    decision: Decision,
+    mut cancelled: oneshot::Receiver<()>,
+    shared: &Shared,
+) -> (GoalEndStatus, ExecPlaceResult) {
+    let start = tokio::time::Instant::now();
+    let done = tokio::time::sleep(Duration::from_secs_f64(decision.delay.max(0.0)));
+    tokio::pin!(done);
+    let mut feedback =
+        tokio::time::interval_at(start + Duration::from_secs(1), Duration::from_secs(1));
+    loop {
+        tokio::select! {
+            _ = &mut done => {
+                let outcome = if decision.transition.is_empty() { "decide" } else { "fire" };
+                return (
+                    GoalEndStatus::Succeeded,
+                    ExecPlaceResult { transition: decision.transition, outcome: outcome.into() },
+                );
+            }
+            _ = &mut cancelled => {
+                if let Ok(mut s) = shared.stats.lock() {
+                    s.cancelled += 1;
+                }
+                return (
+                    GoalEndStatus::Canceled,
+                    ExecPlaceResult { transition: String::new(), outcome: "cancelled".into() },
+                );
+            }
+            _ = feedback.tick() => {
+                let elapsed = start.elapsed().as_secs_f64();
+                let _ = server
+                    .publish_feedback(executing.clone(), ExecPlaceFeedback { elapsed })
+                    .await;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::net::{NetBuilder, Servers};
+
+    #[test]
+    fn the_race_picks_outputs_in_proportion_to_their_rates() {
+        let mut b = NetBuilder::new("n");
+        let p = b.place("P", 1);
+        let q = b.place("Q", 0);
+        let fast = b.exponential("fast", 3.0, Servers::Single);
+        let slow = b.exponential("slow", 1.0, Servers::Single);
+        let now = b.immediate("now", 1.0, 1);
+        for t in [fast, slow] {
+            b.input(p, t, 1);
+            b.output(t, p, 1);
+        }
+        b.input(q, now, 1);
+        b.output(now, p, 1);
+        let net = b.build().unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let n = 20_000;
+        let (mut fasts, mut delay) = (0, 0.0);
+        for _ in 0..n {
+            let d = decide(&net, p, 2.0, &mut rng);
+            fasts += usize::from(d.transition == "fast");
+            delay += d.delay;
+        }
+        let share = fasts as f64 / n as f64;
+        assert!((share - 0.75).abs() < 0.02, "{share}");
+        // Mean of Exp(4) × 2 s = 0.5 s.
+        let mean = delay / n as f64;
+        assert!((mean - 0.5).abs() < 0.02, "{mean}");
+        let d = decide(&net, q, 2.0, &mut rng);
+        assert_eq!(
+            d,
+            Decision {
+                delay: 0.0,
+                transition: String::new()
+            }
+        );
+    }
+
+    #[test]
+    fn each_robot_draws_its_own_stream() {
+        assert_ne!(id_hash("r1"), id_hash("r2"));
+        assert_eq!(sanitize("r-1.a"), "r_1_a");
+    }
+}
