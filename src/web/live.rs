@@ -17,7 +17,7 @@ use serde_json::{Map, Value, json};
 use tokio::sync::watch;
 
 use crate::net::Net;
-use crate::runtime::{EventKind, Events, Received, RuntimeHandle};
+use crate::runtime::{EventKind, Events, Outcome, Received, RuntimeHandle};
 use crate::web::WebState;
 use crate::web::api::net_json;
 
@@ -219,23 +219,45 @@ impl LiveRun {
 fn describe(net: &Net, kind: &EventKind) -> String {
     let place = |p: crate::net::PlaceId| net.place(p).name.as_str();
     match kind {
-        EventKind::Fired { transition, .. } => {
-            format!("{} fired", net.transition(*transition).name)
+        EventKind::Fired {
+            transition, robots, ..
+        } => {
+            let name = &net.transition(*transition).name;
+            if robots.is_empty() {
+                format!("{name} fired")
+            } else {
+                format!("{name} fired ({})", robots.join(", "))
+            }
         }
         EventKind::AgentSpawned {
-            agent, place: p, ..
-        } => {
-            format!("{agent:?} spawned in {}", place(*p))
-        }
+            agent,
+            place: p,
+            robot,
+        } => match robot {
+            Some(r) => format!("agent {} ({r}) spawned in {}", agent.0, place(*p)),
+            None => format!("agent {} spawned in {}", agent.0, place(*p)),
+        },
         EventKind::ActionStarted {
             agent, place: p, ..
-        } => format!("{agent:?} started the action of {}", place(*p)),
+        } => format!("agent {} started the action of {}", agent.0, place(*p)),
         EventKind::ActionEnded {
             agent,
             place: p,
             outcome,
-        } => format!("{agent:?} ended the action of {}: {outcome:?}", place(*p)),
-        EventKind::AgentEnded { agent } => format!("{agent:?} ended"),
+        } => {
+            let outcome = match outcome {
+                Outcome::Fire(t) => format!("fire {}", net.transition(*t).name),
+                Outcome::Decide => "decide".to_string(),
+                Outcome::Failed(why) => format!("failed: {why}"),
+                Outcome::Cancelled => "cancelled".to_string(),
+            };
+            format!(
+                "agent {} ended the action of {}: {outcome}",
+                agent.0,
+                place(*p)
+            )
+        }
+        EventKind::AgentEnded { agent } => format!("agent {} ended", agent.0),
         EventKind::Error { message } => format!("error: {message}"),
         EventKind::Stopped { reason } => format!("stopped: {reason}"),
     }
@@ -341,5 +363,49 @@ async fn follow(mut socket: WebSocket, live: LiveRun) {
                 Some(Ok(_)) => {}
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use super::describe;
+    use crate::net::{NetBuilder, Servers};
+    use crate::runtime::{AgentId, EventKind, Outcome};
+
+    #[test]
+    fn log_lines_name_agents_places_transitions_and_robots() {
+        let mut b = NetBuilder::new("n");
+        let p = b.place("p1:Check_L1", 1);
+        let t = b.exponential("t1:Temperature_High_L1", 1.0, Servers::Single);
+        b.input(p, t, 1);
+        let net = b.build().unwrap();
+        let ended = EventKind::ActionEnded {
+            agent: AgentId(3),
+            place: p,
+            outcome: Outcome::Fire(t),
+        };
+        assert_eq!(
+            describe(&net, &ended),
+            "agent 3 ended the action of p1:Check_L1: fire t1:Temperature_High_L1"
+        );
+        let fired = EventKind::Fired {
+            transition: t,
+            consumed: vec![AgentId(3)],
+            produced: vec![],
+            marking: net.initial_marking(),
+            robots: vec![Arc::from("r2")],
+        };
+        assert_eq!(describe(&net, &fired), "t1:Temperature_High_L1 fired (r2)");
+        let spawned = EventKind::AgentSpawned {
+            agent: AgentId(0),
+            place: p,
+            robot: Some(Arc::from("r1")),
+        };
+        assert_eq!(
+            describe(&net, &spawned),
+            "agent 0 (r1) spawned in p1:Check_L1"
+        );
     }
 }
