@@ -34,11 +34,7 @@ fn steps_per_second(n: usize) -> (f64, u64) {
             [0.0, size, 0.0, 0.0],
         ],
         obstacles: vec![],
-        robot: RobotSpec {
-            radius: 0.15,
-            max_speed: 1.0,
-            max_accel: 2.0,
-        },
+        robot: RobotSpec::default(),
         queue: QueueSpec {
             lanes: 1,
             spacing: 0.5,

@@ -7,22 +7,8 @@ use gspn::runtime::{
     AgentId, AgentMode, AgentState, EventKind, Outcome, Runtime, StopReason, action_fn,
 };
 
-/// Runs a scenario `async fn NAME(mode: AgentMode)` as two tests, `NAME::light` and
-/// `NAME::actor`: every behaviour holds with light agents and with one kameo actor per agent.
-macro_rules! in_both_agent_modes {
-    ($($name:ident),* $(,)?) => {$(
-        mod $name {
-            #[tokio::test(start_paused = true)]
-            async fn light() {
-                super::$name(gspn::runtime::AgentMode::Light).await
-            }
-            #[tokio::test(start_paused = true)]
-            async fn actor() {
-                super::$name(gspn::runtime::AgentMode::Actor).await
-            }
-        }
-    )*};
-}
+#[macro_use]
+mod common;
 
 in_both_agent_modes!(
     many_to_many_fires_once_keeps_two_agents_and_spawns_a_third,

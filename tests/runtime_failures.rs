@@ -9,22 +9,8 @@ use gspn::io::plan::{FailurePolicy, Role};
 use gspn::net::{Net, NetBuilder, Servers};
 use gspn::runtime::{AgentMode, EventKind, Outcome, Runtime, StopReason, action_fn};
 
-/// Runs a scenario `async fn NAME(mode: AgentMode)` as two tests, `NAME::light` and
-/// `NAME::actor`: every behaviour holds with light agents and with one kameo actor per agent.
-macro_rules! in_both_agent_modes {
-    ($($name:ident),* $(,)?) => {$(
-        mod $name {
-            #[tokio::test(start_paused = true)]
-            async fn light() {
-                super::$name(gspn::runtime::AgentMode::Light).await
-            }
-            #[tokio::test(start_paused = true)]
-            async fn actor() {
-                super::$name(gspn::runtime::AgentMode::Actor).await
-            }
-        }
-    )*};
-}
+#[macro_use]
+mod common;
 
 in_both_agent_modes!(
     a_panicking_action_does_not_take_the_plan_down,

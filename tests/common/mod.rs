@@ -91,3 +91,21 @@ pub fn cyc3(servers: Servers) -> Net {
     b.output(t3, p1, 1);
     b.build().expect("cyc3 is a valid net")
 }
+
+/// Runs a scenario `async fn NAME(mode: AgentMode)` as two tests, `NAME::light` and
+/// `NAME::actor`: every behaviour holds with light agents and with one kameo actor per agent.
+#[allow(unused_macros)]
+macro_rules! in_both_agent_modes {
+    ($($name:ident),* $(,)?) => {$(
+        mod $name {
+            #[tokio::test(start_paused = true)]
+            async fn light() {
+                super::$name(gspn::runtime::AgentMode::Light).await
+            }
+            #[tokio::test(start_paused = true)]
+            async fn actor() {
+                super::$name(gspn::runtime::AgentMode::Actor).await
+            }
+        }
+    )*};
+}

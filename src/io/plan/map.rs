@@ -173,6 +173,17 @@ pub struct RobotSpec {
     pub max_accel: f64,
 }
 
+impl Default for RobotSpec {
+    /// A small indoor robot: radius 0.15 m, 1 m/s, 2 m/s² (the plan's defaults).
+    fn default() -> Self {
+        RobotSpec {
+            radius: 0.15,
+            max_speed: 1.0,
+            max_accel: 2.0,
+        }
+    }
+}
+
 /// Queue layout at every location.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QueueSpec {
@@ -380,10 +391,23 @@ impl MapFile {
             max_speed: None,
             max_accel: None,
         });
+        let d = RobotSpec::default();
         let robot = RobotSpec {
-            radius: positive(rf.radius, 0.15, "robot.radius", section.clone(), at)?,
-            max_speed: positive(rf.max_speed, 1.0, "robot.max_speed", section.clone(), at)?,
-            max_accel: positive(rf.max_accel, 2.0, "robot.max_accel", section.clone(), at)?,
+            radius: positive(rf.radius, d.radius, "robot.radius", section.clone(), at)?,
+            max_speed: positive(
+                rf.max_speed,
+                d.max_speed,
+                "robot.max_speed",
+                section.clone(),
+                at,
+            )?,
+            max_accel: positive(
+                rf.max_accel,
+                d.max_accel,
+                "robot.max_accel",
+                section.clone(),
+                at,
+            )?,
         };
         let qf = self.queue.unwrap_or(QueueFile {
             lanes: None,
@@ -509,11 +533,7 @@ mod tests {
             patrol: vec![],
             walls: vec![],
             obstacles: vec![],
-            robot: RobotSpec {
-                radius: 0.15,
-                max_speed: 1.0,
-                max_accel: 2.0,
-            },
+            robot: RobotSpec::default(),
             queue: QueueSpec {
                 lanes: 1,
                 spacing: 0.5,

@@ -111,11 +111,7 @@ mod tests {
             patrol: vec![],
             walls: vec![],
             obstacles: vec![],
-            robot: RobotSpec {
-                radius: 0.15,
-                max_speed: 1.0,
-                max_accel: 2.0,
-            },
+            robot: RobotSpec::default(),
             queue: QueueSpec {
                 lanes: 2,
                 spacing: 0.5,
