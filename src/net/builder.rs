@@ -378,3 +378,25 @@ fn check_unique<'a>(
     }
     Ok(())
 }
+
+impl Net {
+    /// The same net with another initial marking (`marking[p]` tokens in place `p`; places
+    /// past the end of `marking` keep theirs). Fails like [`NetBuilder::build`] when a count
+    /// exceeds a place's capacity.
+    pub fn with_initial_marking(&self, marking: &[u32]) -> Result<Net, NetError> {
+        let mut b = NetBuilder::new(self.name());
+        for (i, p) in self.places().iter().enumerate() {
+            b.add_place(Place {
+                initial: marking.get(i).copied().unwrap_or(p.initial),
+                ..p.clone()
+            });
+        }
+        for t in self.transitions() {
+            b.add_transition(t.clone());
+        }
+        for a in self.arcs() {
+            b.arc(a.kind, a.place, a.transition, a.weight, a.points.clone());
+        }
+        b.build()
+    }
+}

@@ -16,7 +16,7 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use crate::net::{Net, NetBuilder, Place, TransitionId};
+use crate::net::{Net, TransitionId};
 use crate::policy::Policy;
 use crate::sim::{SimError, Simulator};
 
@@ -166,7 +166,11 @@ impl Session {
         self.net.fire(&mut self.marking, t);
         self.manual += 1;
         self.firings += 1;
-        self.segment = Arc::new(with_initial(&self.net, &self.marking)?);
+        self.segment = Arc::new(
+            self.net
+                .with_initial_marking(&self.marking)
+                .map_err(|e| SessionError::Net(e.to_string()))?,
+        );
         self.segment_seed = self
             .seed
             .wrapping_add(self.manual.wrapping_mul(0x9E37_79B9_7F4A_7C15));
@@ -192,28 +196,10 @@ impl Session {
     }
 }
 
-/// `net` with its initial marking replaced by `marking`.
-fn with_initial(net: &Net, marking: &[u32]) -> Result<Net, SessionError> {
-    let mut b = NetBuilder::new(net.name());
-    for (p, &k) in net.places().iter().zip(marking) {
-        b.add_place(Place {
-            initial: k,
-            ..p.clone()
-        });
-    }
-    for t in net.transitions() {
-        b.add_transition(t.clone());
-    }
-    for a in net.arcs() {
-        b.arc(a.kind, a.place, a.transition, a.weight, a.points.clone());
-    }
-    b.build().map_err(|e| SessionError::Net(e.to_string()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::net::Servers;
+    use crate::net::{NetBuilder, Servers};
 
     fn cyc3() -> Arc<Net> {
         let mut b = NetBuilder::new("cyc3");

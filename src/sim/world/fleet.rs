@@ -13,7 +13,7 @@ use std::sync::Arc;
 use super::{RobotStart, SimAction, World, WorldHandle};
 use crate::analysis::invariants::conserves_tokens;
 use crate::io::plan::{Plan, Role};
-use crate::net::{Net, NetBuilder, Place, PlaceId};
+use crate::net::{Net, PlaceId};
 use crate::runtime::{Runtime, RuntimeBuilder};
 
 /// Why a plan cannot run on simulated robots.
@@ -133,24 +133,6 @@ pub fn scaled_marking(net: &Net, robot: &[bool], n: usize) -> Vec<u32> {
     out
 }
 
-/// `net` with its initial marking replaced by `marking`.
-fn with_initial(net: &Net, marking: &[u32]) -> Result<Net, FleetError> {
-    let mut b = NetBuilder::new(net.name());
-    for (p, &k) in net.places().iter().zip(marking) {
-        b.add_place(Place {
-            initial: k,
-            ..p.clone()
-        });
-    }
-    for t in net.transitions() {
-        b.add_transition(t.clone());
-    }
-    for a in net.arcs() {
-        b.arc(a.kind, a.place, a.transition, a.weight, a.points.clone());
-    }
-    b.build().map_err(|e| FleetError::Net(e.to_string()))
-}
-
 impl Fleet {
     /// Prepares `plan` (which must have a `[map]`) for `robots` robots (`None`: as many as
     /// the net's initial tokens in robot places) and spawns the world. Call inside a tokio
@@ -175,7 +157,10 @@ impl Fleet {
                 return Err(FleetError::ZeroRobots);
             }
             let m = scaled_marking(&plan.net, &robot, n);
-            plan.net = with_initial(&plan.net, &m)?;
+            plan.net = plan
+                .net
+                .with_initial_marking(&m)
+                .map_err(|e| FleetError::Net(e.to_string()))?;
         }
         let mut starts = Vec::new();
         for p in plan.net.place_ids() {
