@@ -484,7 +484,8 @@ async fn a_long_analysis_shows_progress_and_can_be_cancelled() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_cancel_during_the_steady_state_stops_the_solver() {
     // Kanban N = 4 again: once the search is over, the Gauss–Seidel sweeps take seconds;
-    // a cancel then ends the job in the steady-state phase, with every marking counted.
+    // a cancel then ends the job in the steady-state phase, with every marking counted. A
+    // solver that ignored the cancel would finish, and the job would end `done`.
     let state = state_for(&common::fixture("kanban/kanban_gspn_N4.pnml"), 0);
     call(&state, "POST", "/api/analysis/start", None).await;
     let solving = progress_until(&state, |p| {

@@ -140,7 +140,9 @@ impl AnalysisJob {
         let seconds = started.elapsed().as_secs_f64();
         {
             let mut s = self.lock();
-            *s = if progress.monitor.is_cancelled() {
+            // Cancelled only when the analysis really stopped: a cancel that arrives after
+            // the last phase finished keeps the finished result.
+            *s = if value.get("kind").and_then(Value::as_str) == Some("cancelled") {
                 State::Cancelled {
                     markings: progress.monitor.markings(),
                     phase: progress.phase(),
