@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use gspn::net::{NetBuilder, Servers};
+use gspn::net::Servers;
 use gspn::runtime::{AgentMode, EventKind, Outcome, Runtime, action_fn};
 
 #[macro_use]
@@ -14,14 +14,7 @@ mod common;
 in_both_agent_modes!(every_action_sees_the_marking_of_its_start);
 
 async fn every_action_sees_the_marking_of_its_start(mode: AgentMode) {
-    let mut b = NetBuilder::new("ring");
-    let places: Vec<_> = (0..5).map(|i| b.place(format!("p{i}"), 2)).collect();
-    for i in 0..5 {
-        let t = b.exponential(format!("t{i}"), 1.0 + i as f64, Servers::Infinite);
-        b.input(places[i], t, 1);
-        b.output(t, places[(i + 1) % 5], 1);
-    }
-    let net = b.build().unwrap();
+    let (net, _) = common::ring(5, |_| 2, |i| 1.0 + i as f64, Servers::Infinite);
     let initial = net.initial_marking().to_vec();
     let seen: Arc<Mutex<HashMap<u64, Vec<Vec<u32>>>>> = Arc::default();
     let log = Arc::clone(&seen);

@@ -5,20 +5,12 @@
 use gspn::net::{NetBuilder, Servers};
 use gspn::runtime::{AgentMode, AgentState, Outcome, Runtime, StopReason, action_fn};
 
+mod common;
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn twenty_five_thousand_agent_actors_start_and_run() {
     let n = 25_000u32;
-    let mut b = NetBuilder::new("ring");
-    let places: Vec<_> = (0..4).map(|i| b.place(format!("p{i}"), n / 4)).collect();
-    let ts: Vec<_> = (0..4)
-        .map(|i| {
-            let t = b.exponential(format!("t{i}"), 1.0, Servers::Infinite);
-            b.input(places[i], t, 1);
-            b.output(t, places[(i + 1) % 4], 1);
-            t
-        })
-        .collect();
-    let net = b.build().unwrap();
+    let (net, ts) = common::ring(4, |_| n / 4, |_| 1.0, Servers::Infinite);
     let mut rb = Runtime::builder(net)
         .agent_mode(AgentMode::Actor)
         .seed(9)

@@ -24,7 +24,7 @@ use browser::Browser;
 use fantoccini::Locator;
 use gspn::analysis::state_space::{Options, StateSpace};
 use gspn::io::{ReadOptions, read_net};
-use gspn::net::{Net, NetBuilder, Servers};
+use gspn::net::{Net, Servers};
 use gspn::runtime::Runtime;
 use gspn::sim::Simulator;
 use gspn::web::{CONTENT_SECURITY_POLICY, LiveRun, WebState, serve};
@@ -489,16 +489,7 @@ async fn a_journal_plays_back_on_the_time_slider() {
 
 /// A ring of `n` places, one token in every tenth.
 fn ring(n: usize) -> Net {
-    let mut b = NetBuilder::new(format!("ring{n}"));
-    let places: Vec<_> = (0..n)
-        .map(|i| b.place(format!("p{i}"), u32::from(i % 10 == 0)))
-        .collect();
-    for i in 0..n {
-        let t = b.exponential(format!("t{i}"), 1.0, Servers::Single);
-        b.input(places[i], t, 1);
-        b.output(t, places[(i + 1) % n], 1);
-    }
-    b.build().unwrap()
+    common::ring(n, |i| u32::from(i % 10 == 0), |_| 1.0, Servers::Single).0
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -109,3 +109,26 @@ macro_rules! in_both_agent_modes {
         }
     )*};
 }
+
+/// A ring p0 → t0 → p1 → … → p{k-1} → t{k-1} → p0 with `tokens(i)` tokens in place `i` and
+/// exponential transitions of rate `rate(i)`; returns the net and its transitions in order.
+pub fn ring(
+    k: usize,
+    tokens: impl Fn(usize) -> u32,
+    rate: impl Fn(usize) -> f64,
+    servers: Servers,
+) -> (Net, Vec<gspn::net::TransitionId>) {
+    let mut b = NetBuilder::new(format!("ring{k}"));
+    let places: Vec<_> = (0..k)
+        .map(|i| b.place(format!("p{i}"), tokens(i)))
+        .collect();
+    let ts = (0..k)
+        .map(|i| {
+            let t = b.exponential(format!("t{i}"), rate(i), servers);
+            b.input(places[i], t, 1);
+            b.output(t, places[(i + 1) % k], 1);
+            t
+        })
+        .collect();
+    (b.build().expect("a ring is a valid net"), ts)
+}
