@@ -156,3 +156,23 @@ fn a_plan_naming_a_robot_twice_is_refused_at_its_line_and_column() {
     assert!(msg.starts_with("plan.toml:2:23:"), "{msg}");
     assert!(msg.contains("robot `r1` is listed twice"), "{msg}");
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_robot_place_without_an_action_is_warned_about() {
+    // `c` has no action: a robot's agent would end there and its identity be lost.
+    let h = Runtime::builder(ring())
+        .action("go", action_fn(|_| async { Outcome::Decide }))
+        .bind("a", "go")
+        .bind("b", "go")
+        .robots(["r1", "r2", "r3"])
+        .max_firings(1)
+        .spawn()
+        .unwrap();
+    assert_eq!(
+        h.warnings(),
+        [
+            "place `c` has no registered action: a robot entering it leaves its agent, and the robot's identity is lost"
+        ]
+    );
+    h.wait().await;
+}

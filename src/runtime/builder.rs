@@ -246,14 +246,18 @@ impl RuntimeBuilder {
                     agents,
                 });
             }
+            // One pass over the arcs and the setups, not a search per place.
+            let mut keeps_agents = vec![false; net.place_count()];
+            for s in &setups {
+                keeps_agents[s.place.index()] = true;
+            }
+            let mut used = vec![false; net.place_count()];
+            for a in net.arcs() {
+                used[a.place.index()] = true;
+            }
             for p in net.place_ids() {
-                let handled = setups.iter().any(|s| s.place == p);
                 let resource = matches!(self.roles[p.index()], Some(Role::Resource));
-                let used = net.transition_ids().any(|t| {
-                    net.inputs(t).iter().any(|&(q, _)| q == p)
-                        || net.outputs(t).iter().any(|&(q, _)| q == p)
-                });
-                if !handled && !resource && used {
+                if used[p.index()] && !keeps_agents[p.index()] && !resource {
                     warnings.push(format!(
                         "place `{}` has no registered action: a robot entering it leaves its agent, and the robot's identity is lost",
                         net.place(p).name
