@@ -4,21 +4,15 @@
 //! `cargo bench --bench pnpro`; figures in docs/benchmarks.md ("Reading PNPRO").
 
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use gspn::io::{ReadOptions, pnpro};
 use gspn::net::{NetBuilder, Position, Servers};
 
-fn fixture(rel: &str) -> PathBuf {
-    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/fixtures");
-    let root = if beside.is_dir() {
-        beside
-    } else {
-        PathBuf::from("/work/shared/fixtures")
-    };
-    root.join(rel)
-}
+#[path = "support/fixtures.rs"]
+mod fixtures;
+use fixtures::fixture;
 
 /// A ring of `n` places and `n` transitions (alternating exponential and immediate), with
 /// positions and one token per place: about 270 bytes of PNPRO per place.

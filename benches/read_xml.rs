@@ -11,13 +11,11 @@ use std::time::Instant;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use gspn::io::{ReadOptions, read_net};
 
+#[path = "support/fixtures.rs"]
+mod fixtures_root;
+
 fn fixtures() -> PathBuf {
-    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/fixtures");
-    if beside.is_dir() {
-        beside
-    } else {
-        PathBuf::from("/work/shared/fixtures")
-    }
+    fixtures_root::root()
 }
 
 /// Writes a PIPE ring of `n` places and `n` transitions (one token per 10 places) without

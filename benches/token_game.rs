@@ -8,7 +8,7 @@
 //! `cargo bench --bench token_game`; figures in docs/benchmarks.md ("Token game").
 
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use gspn::io::{ReadOptions, read_net};
@@ -18,13 +18,11 @@ use gspn::sim::Simulator;
 /// Firings per measured iteration.
 const BATCH: u64 = 100_000;
 
+#[path = "support/fixtures.rs"]
+mod fixtures_root;
+
 fn fixtures() -> PathBuf {
-    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/fixtures");
-    if beside.is_dir() {
-        beside
-    } else {
-        PathBuf::from("/work/shared/fixtures")
-    }
+    fixtures_root::root()
 }
 
 fn temperature_patrol() -> Net {

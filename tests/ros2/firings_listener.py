@@ -6,7 +6,7 @@ one JSON line on stdout.
     firings_listener.py DOMAIN COUNT TIMEOUT_SECS
 
 Prints `ready` on stderr once the reader exists; exits 0 after COUNT firings, 1 on timeout.
-Set CYCLONEDDS_URI to the loopback-only configuration (tests/ros2_interop.rs does).
+Set CYCLONEDDS_URI to the loopback-only configuration (tests/ros2/interop.rs does).
 The IDL below is gspn_msgs/msg/Firing (ros2/gspn_msgs/msg/Firing.msg) under the DDS names
 ROS 2 gives it.
 """

@@ -30,7 +30,7 @@ let firedIndex = -1;
 
 const $ = (id) => document.getElementById(id);
 
-// Timings for the benchmark and the browser tests (examples/viewer_bench.rs): when the first
+// Timings for the benchmark and the browser tests (examples/bench_viewer.rs): when the first
 // drawing reached the screen (ms since navigation start), and per live frame the time from
 // the message to the paint after it, and the script's share of it (the last 1000 of each).
 const gspnPerf = { drawn: null, frames: [], handler: [] };

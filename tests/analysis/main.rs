@@ -1,0 +1,14 @@
+//! Behaviour tests of the `analysis` layer: one test binary, one module per behaviour.
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod ctmc;
+mod invariants;
+mod mcc_oracles;
+mod properties;
+mod state_space;
+mod steady_state_from_columns;
+mod steady_state_random_nets;
+mod thesis_reference;
+mod vanishing_elimination;

@@ -1,0 +1,155 @@
+//! `plan-runner analyze`: JSON values on cyc3 and a non-ergodic net, transient entries,
+//! predicate probabilities, PRISM export, unbounded nets reported (exit 0), too many states
+//! (exit 1) and bad input (exit 2).
+
+use crate::support::fixtures as shared_fixtures;
+
+use assert_cmd::Command;
+use serde_json::Value;
+use shared_fixtures::fixture;
+
+fn analyze(args: &[&str]) -> (i32, Value, String) {
+    let out = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .arg("analyze")
+        .args(args)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    let json = serde_json::from_str(&stdout).unwrap_or(Value::Null);
+    (
+        out.status.code().unwrap_or(-1),
+        json,
+        String::from_utf8_lossy(&out.stderr).to_string(),
+    )
+}
+
+fn close(v: &Value, x: f64) -> bool {
+    (v.as_f64().expect("a number") - x).abs() < 1e-9
+}
+
+#[test]
+fn cyc3_json_has_state_space_steady_state_and_transient() {
+    let f = fixture("greatspn/cyc3/cyc3_ss.PNPRO");
+    let (code, j, err) = analyze(&[
+        f.to_str().unwrap(),
+        "--steady",
+        "--transient",
+        "0,1",
+        "--json",
+        "--prob",
+        "P3>0",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let ss = &j["state_space"];
+    for key in [
+        "reachable",
+        "tangible",
+        "vanishing",
+        "edges",
+        "dead_markings",
+        "bounded",
+        "unbounded_places",
+        "place_bounds",
+        "max_tokens_in_place",
+        "max_tokens_per_marking",
+        "safe",
+        "reversible",
+        "deadlock_free",
+        "live_transitions",
+        "dead_transitions",
+        "p_invariants",
+        "t_invariants",
+    ] {
+        assert!(ss.get(key).is_some(), "state_space.{key} missing");
+    }
+    assert_eq!(
+        (ss["reachable"].as_u64(), ss["tangible"].as_u64()),
+        (Some(5), Some(3))
+    );
+    assert_eq!(ss["vanishing"], 2);
+    assert_eq!(ss["bounded"], true);
+    assert_eq!(ss["place_bounds"]["P1"], 2);
+    assert_eq!(ss["deadlock_free"], true);
+    assert_eq!(ss["reversible"], true);
+    let st = &j["steady_state"];
+    assert_eq!(st["ergodic"], true);
+    assert!(close(&st["mean_tokens"]["P1"], 10.0 / 7.0));
+    assert!(close(&st["mean_tokens"]["P3"], 4.0 / 7.0));
+    assert!(close(&st["prob_nonempty"]["P3"], 3.0 / 7.0));
+    for t in ["T1", "t2", "T3"] {
+        assert!(close(&st["throughput"][t], 6.0 / 7.0));
+    }
+    // Little: E[P1] / X(T1) = (10/7) / (6/7).
+    assert!(close(&st["mean_wait"]["P1"], 10.0 / 6.0));
+    assert!(close(&st["probability"]["P3>0"], 3.0 / 7.0));
+    let tr = j["transient"].as_array().unwrap();
+    assert_eq!(tr.len(), 2);
+    assert!(close(&tr[0]["t"], 0.0) && close(&tr[0]["mean_tokens"]["P1"], 2.0));
+    assert!(close(&tr[1]["t"], 1.0));
+    assert!(tr[1]["throughput"]["T3"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn non_ergodic_net_reports_its_limiting_distribution() {
+    let f = fixture("thesis/caldeira_2020_package/standalone_example/example_gspn.xml");
+    let (code, j, _) = analyze(&[f.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0);
+    assert_eq!(j["state_space"]["dead_markings"][0], "p3=2");
+    assert_eq!(j["state_space"]["deadlock_free"], false);
+    assert_eq!(j["steady_state"]["ergodic"], false);
+    assert!(close(&j["steady_state"]["mean_tokens"]["p3"], 2.0));
+    assert_eq!(j["steady_state"]["mean_wait"]["p3"], Value::Null);
+}
+
+#[test]
+fn unbounded_net_is_reported_with_its_places() {
+    let f = fixture("thesis/caldeira_2020_package/ros_Example/example_gspn.xml");
+    let (code, j, _) = analyze(&[f.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0);
+    assert_eq!(j["state_space"]["bounded"], false);
+    assert_eq!(
+        j["state_space"]["unbounded_places"],
+        serde_json::json!(["p4"])
+    );
+}
+
+#[test]
+fn too_many_states_is_an_analysis_failure() {
+    let f = fixture("generated/ring_K4_N100.xml");
+    let (code, _, err) = analyze(&[f.to_str().unwrap(), "--max-states", "100"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("more than 100"), "{err}");
+}
+
+#[test]
+fn bad_input_exits_2() {
+    let f = fixture("greatspn/cyc3/cyc3_ss.PNPRO");
+    let (code, _, err) = analyze(&[f.to_str().unwrap(), "--prob", "Nope > 0"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("Nope"), "{err}");
+    let (code, _, _) = analyze(&[f.to_str().unwrap(), "--transient", "-1"]);
+    assert_eq!(code, 2);
+    let (code, _, _) = analyze(&["/nonexistent/net.xml"]);
+    assert_eq!(code, 2);
+}
+
+#[test]
+fn prism_export_writes_the_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    let prefix = dir.path().join("cyc3");
+    let f = fixture("greatspn/cyc3/cyc3_ss.PNPRO");
+    let (code, _, err) = analyze(&[
+        f.to_str().unwrap(),
+        "--export-prism",
+        prefix.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let tra = std::fs::read_to_string(dir.path().join("cyc3.tra")).unwrap();
+    assert_eq!(tra.lines().next(), Some("3 4"));
+    let sta = std::fs::read_to_string(dir.path().join("cyc3.sta")).unwrap();
+    assert_eq!(sta.lines().next(), Some("(P1,P2,P3)"));
+    assert!(sta.contains("0:(2,0,0)"));
+    let lab = std::fs::read_to_string(dir.path().join("cyc3.lab")).unwrap();
+    assert!(lab.contains("0: 0"));
+}

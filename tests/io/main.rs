@@ -1,0 +1,12 @@
+//! Behaviour tests of the `io` layer: one test binary, one module per behaviour.
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod bad_input;
+mod convert_pnpro;
+mod pipe;
+mod pnml;
+mod pnpro;
+mod roundtrip_pnpro;
+mod roundtrip_xml;

@@ -1,0 +1,11 @@
+//! Behaviour tests of the `ros2` layer: one test binary, one module per behaviour.
+#![cfg(feature = "ros2")]
+
+#[path = "../support/mod.rs"]
+mod support;
+
+#[path = "support.rs"]
+mod ros2_support;
+
+mod interop;
+mod multiprocess;

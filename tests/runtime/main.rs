@@ -1,0 +1,18 @@
+//! Behaviour tests of the `runtime` layer: one test binary, one module per behaviour.
+
+#[macro_use]
+#[path = "../support/mod.rs"]
+mod support;
+
+mod actions_see_the_marking;
+mod actor_agents_at_scale;
+mod agent_identity;
+mod agents_match_tokens;
+mod failures;
+mod matches_analysis;
+mod policy;
+mod repeats_from_seed;
+mod robot_tokens;
+mod robots_follow_agents;
+mod stop_leaves_complete_journal;
+mod thesis_nets_match_reference;

@@ -1,0 +1,8 @@
+//! Behaviour tests of the `token_game` layer: one test binary, one module per behaviour.
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod firing;
+mod reference_nets;
+mod token_game_runs;

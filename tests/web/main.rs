@@ -1,0 +1,9 @@
+//! Behaviour tests of the `web` layer: one test binary, one module per behaviour.
+#![cfg(feature = "web")]
+
+#[path = "../support/mod.rs"]
+mod support;
+
+mod api;
+mod browser;
+mod live;
