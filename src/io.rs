@@ -14,10 +14,21 @@ pub mod prism;
 pub mod thesis;
 mod xml;
 
+pub use xml::MAX_XML_DEPTH;
+
 use std::fmt;
 use std::path::{Path, PathBuf};
 
 use crate::net::{Net, NetError};
+
+/// `text` as a message quotes it: whole when it has at most `max` characters, else its first
+/// `max` characters and `…` (a generated 100,000-character expression is not echoed whole).
+pub fn excerpt(text: &str, max: usize) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(max) {
+        None => text.into(),
+        Some((cut, _)) => format!("{}…", &text[..cut]).into(),
+    }
+}
 
 /// A 1-based line and column in a file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -160,7 +171,7 @@ pub enum LoadErrorKind {
     #[error("unsupported: {0}")]
     Unsupported(String),
     /// An expression (PNPRO rates, markings, multiplicities) could not be evaluated.
-    #[error("expression `{expr}` of `{name}`: {reason}")]
+    #[error("expression `{}` of `{name}`: {reason}", excerpt(expr, 80))]
     Expression {
         /// The expression text.
         expr: String,

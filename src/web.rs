@@ -28,6 +28,23 @@
 //! | `POST /api/live/stop` | asks the live run to stop |
 //! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "state", ...}` snapshots (log entries since the previous one, `world` with a world feed), at most one per [`FRAME`]; a new event or world value wakes the next one |
 //!
+//! # Security
+//!
+//! The viewer has no accounts: whoever can send it requests can drive the token game and
+//! stop a live run. So it binds the loopback unless told otherwise (`plan-runner serve
+//! --addr` and `run --web` refuse a non-loopback address without `--allow-remote`), and it
+//! checks every request before any route runs, so that a page on another site cannot use
+//! the visitor's browser to reach it:
+//!
+//! | check | refused with |
+//! |---|---|
+//! | `Host` names this server: `localhost`, `127.0.0.1`, `[::1]` or the bound IP, with the bound port (any IP literal when bound to a non-loopback address; never another name, which defeats DNS rebinding) | 421 Misdirected Request |
+//! | `Origin`, when sent, is the page's own (`http://` + `Host`); this covers the live websocket | 403 Forbidden |
+//! | `POST` requests say `Content-Type: application/json` (what a cross-origin form or `no-cors` fetch cannot send) | 415 Unsupported Media Type |
+//!
+//! Every response carries `Content-Security-Policy` ([`CONTENT_SECURITY_POLICY`]),
+//! `X-Content-Type-Options: nosniff` and `Referrer-Policy: no-referrer`.
+//!
 //! ```no_run
 //! # async fn demo(net: gspn::net::Net) -> std::io::Result<()> {
 //! let state = gspn::web::WebState::new(net, None, 42);
@@ -38,12 +55,14 @@
 
 mod analysis_job;
 mod api;
+mod guard;
 pub mod layout;
 mod live;
 pub mod replay;
 mod report;
 mod session;
 
+use std::net::SocketAddr;
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
 use axum::Router;
@@ -227,8 +246,22 @@ impl WebState {
     }
 }
 
-/// The viewer's routes: the assets and the [JSON API](self#api).
+/// The viewer's routes: the assets and the [JSON API](self#api), for a server whose address
+/// is not known here: the `Host` of a request must then be `localhost`, `127.0.0.1` or
+/// `[::1]` (any port). [`serve`] uses [`router_on`] with the listener's address instead.
+/// Either way every request passes the [security checks](self#security).
 pub fn router(state: WebState) -> Router {
+    routes(state, guard::Bound::Unknown)
+}
+
+/// The viewer's routes for a server listening on `addr`: the `Host` of a request must name
+/// `addr`'s port and, as host, `localhost`, `127.0.0.1`, `[::1]` or `addr`'s own IP (any IP
+/// literal when `addr` is not a loopback address) — see [security](self#security).
+pub fn router_on(state: WebState, addr: SocketAddr) -> Router {
+    routes(state, guard::Bound::At(addr))
+}
+
+fn routes(state: WebState, bound: guard::Bound) -> Router {
     let mut r = Router::new();
     for asset in ASSETS {
         r = r.route(
@@ -253,6 +286,7 @@ pub fn router(state: WebState) -> Router {
         .route("/api/live/stop", post(live::stop))
         .route("/api/live/ws", get(live::ws))
         .fallback(|| async { api::error(StatusCode::NOT_FOUND, "no such route") })
+        .layer(axum::middleware::from_fn_with_state(bound, guard::guard))
         .layer(axum::middleware::map_response(add_security_headers))
         .with_state(state)
 }
@@ -281,6 +315,14 @@ async fn add_security_headers(mut res: Response) -> Response {
         HeaderValue::from_static(CONTENT_SECURITY_POLICY),
     );
     h.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-cache"));
+    h.insert(
+        header::X_CONTENT_TYPE_OPTIONS,
+        HeaderValue::from_static("nosniff"),
+    );
+    h.insert(
+        header::REFERRER_POLICY,
+        HeaderValue::from_static("no-referrer"),
+    );
     res
 }
 
@@ -292,7 +334,9 @@ fn asset_response(asset: &'static Asset) -> Response {
         .into_response()
 }
 
-/// Serves the viewer on `listener` until the task is dropped or the listener fails.
+/// Serves the viewer on `listener` ([`router_on`] its address) until the task is dropped or
+/// the listener fails.
 pub async fn serve(listener: TcpListener, state: WebState) -> std::io::Result<()> {
-    axum::serve(listener, router(state)).await
+    let addr = listener.local_addr()?;
+    axum::serve(listener, router_on(state, addr)).await
 }

@@ -20,6 +20,12 @@ mod parse;
 
 use std::fmt;
 
+/// How deeply an expression may nest: parentheses, unary operators (`-`, `+`, `!`), function
+/// calls and each operator of a chain (`1 + 1 + 1` is two deep) open one level. Deeper text
+/// is refused by [`Expr::parse`] at the character that goes one level too deep, so neither
+/// parsing, evaluating nor dropping an expression can exhaust the stack.
+pub const MAX_DEPTH: usize = 256;
+
 /// A parsed expression.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Expr {

@@ -45,6 +45,8 @@ mod build;
 mod scan;
 mod write;
 
+pub use build::MAX_CONSTANT_CHAIN;
+
 use std::path::Path;
 
 use super::{LoadError, LoadErrorKind, Loaded, ReadOptions, Span};

@@ -126,6 +126,12 @@ pub struct Imported {
 pub fn read_input(path: &Path) -> Result<ThesisInput, LoadError> {
     let bytes =
         std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+    parse_input(path, &bytes)
+}
+
+/// Reads the thesis execution input in `bytes`, the contents of `path` (named in errors).
+pub fn parse_input(path: &Path, bytes: &[u8]) -> Result<ThesisInput, LoadError> {
+    let bytes = bytes.to_vec();
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(LoadError::file(path, LoadErrorKind::Empty));
     }

@@ -22,6 +22,11 @@ use quick_xml::events::{BytesStart, Event};
 use super::{LoadError, LoadErrorKind, Span};
 use crate::net::Net;
 
+/// How many elements may be open at once in a PIPE or PNML file. Real files nest six or
+/// seven deep; deeper text (thousands of nested `<page>`s) is refused at the element that
+/// goes one level too deep, so no reader can exhaust its stack on it.
+pub const MAX_XML_DEPTH: usize = 256;
+
 /// One step of the stream. Names are local names (namespace prefixes dropped).
 #[derive(Debug)]
 pub(crate) enum XmlEvent<'a> {
@@ -175,6 +180,12 @@ impl<'a> XmlStream<'a> {
                 {
                     let _ = start;
                     return Err(self.error_at(before, "a second root element".into()));
+                }
+                Event::Start(_) | Event::Empty(_) if self.open.len() >= MAX_XML_DEPTH => {
+                    return Err(self.error_at(
+                        before,
+                        format!("elements nested deeper than {MAX_XML_DEPTH} levels"),
+                    ));
                 }
                 Event::Start(start) => {
                     self.seen_root = true;

@@ -5,6 +5,8 @@ mod support;
 
 mod bad_input;
 mod convert_pnpro;
+mod deep_nesting;
+mod fuzz_corpus;
 mod pipe;
 mod pnml;
 mod pnpro;

@@ -33,6 +33,12 @@ async fn call(
     body: Option<Value>,
 ) -> (StatusCode, Value) {
     let mut req = Request::builder().method(method).uri(uri);
+    // As the page does: every POST is JSON, `{}` when there is nothing to say.
+    let body = match body {
+        Some(v) => Some(v),
+        None if method != "GET" => Some(json!({})),
+        None => None,
+    };
     let body = match body {
         Some(v) => {
             req = req.header(header::CONTENT_TYPE, "application/json");

@@ -59,7 +59,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let predicates = args
         .prob
         .iter()
-        .map(|p| Predicate::parse(net, p).map_err(|e| BadInput(format!("--prob `{p}`: {e}"))))
+        .map(|p| {
+            Predicate::parse(net, p)
+                .map_err(|e| BadInput(format!("--prob `{}`: {e}", gspn::io::excerpt(p, 80))))
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let opts = Options {
         max_states: args.max_states,

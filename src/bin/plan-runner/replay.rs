@@ -26,11 +26,17 @@ pub(crate) struct Args {
     /// Show it in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080].
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
     web: Option<SocketAddr>,
+    /// Let `--web` listen on a non-loopback address (the viewer has no login).
+    #[arg(long)]
+    allow_remote: bool,
     #[command(flatten)]
     net_args: NetArgs,
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    if let Some(addr) = args.web {
+        crate::serve::check_bind(addr, args.allow_remote)?;
+    }
     let is_plan = args
         .net
         .extension()

@@ -49,6 +49,11 @@ pub(crate) struct Args {
     #[cfg(feature = "web")]
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
     pub(crate) web: Option<std::net::SocketAddr>,
+    /// Let `--web` listen on a non-loopback address (the viewer has no login: anyone who
+    /// can reach it can stop the run).
+    #[cfg(feature = "web")]
+    #[arg(long)]
+    pub(crate) allow_remote: bool,
     /// Run the plan's map with N simulated robots (the net's initial robot tokens scaled to
     /// N; feature `sim`).
     #[cfg(feature = "sim")]
@@ -76,6 +81,10 @@ fn load(args: &Args) -> anyhow::Result<Plan> {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    #[cfg(feature = "web")]
+    if let Some(addr) = args.web {
+        crate::serve::check_bind(addr, args.allow_remote)?;
+    }
     let mut plan = load(&args)?;
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && x >= 0.0) {

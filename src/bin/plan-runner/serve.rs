@@ -15,7 +15,7 @@ use std::sync::Arc;
 use gspn::runtime::{RuntimeHandle, Summary};
 use gspn::web::{LiveRun, WebState, serve};
 
-use crate::common::{NetArgs, load_net};
+use crate::common::{BadInput, NetArgs, load_net};
 
 /// Arguments of `serve`.
 #[derive(clap::Args, Debug)]
@@ -25,6 +25,10 @@ pub(crate) struct Args {
     /// Address to listen on (port 0 picks a free one; the URL is printed).
     #[arg(long, default_value = "127.0.0.1:8080")]
     addr: SocketAddr,
+    /// Let `--addr` be a non-loopback address (the viewer has no login: anyone who can
+    /// reach it can drive it).
+    #[arg(long)]
+    allow_remote: bool,
     /// Seed of the token game [default: the plan's seed, else 0].
     #[arg(long)]
     seed: Option<u64>,
@@ -33,6 +37,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    check_bind(args.addr, args.allow_remote)?;
     let is_plan = args
         .file
         .extension()
@@ -68,6 +73,25 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         }
         Ok(ExitCode::SUCCESS)
     })
+}
+
+/// Refuses to serve the viewer on a non-loopback `addr` unless `allow_remote` (exit code 2);
+/// with it, warns that anyone who can reach the address can drive the viewer.
+pub(crate) fn check_bind(addr: SocketAddr, allow_remote: bool) -> Result<(), BadInput> {
+    if addr.ip().is_loopback() {
+        return Ok(());
+    }
+    if !allow_remote {
+        return Err(BadInput(format!(
+            "{addr} is not a loopback address: the viewer has no login, so anyone who can \
+             reach it could drive it; pass --allow-remote to listen there anyway"
+        )));
+    }
+    eprintln!(
+        "warning: the viewer listens on {addr}, reachable from other machines; it has no \
+         login, so anyone who can reach it can drive it"
+    );
+    Ok(())
 }
 
 /// A viewer following a run (`plan-runner run --web`).

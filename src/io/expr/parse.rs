@@ -1,6 +1,11 @@
-//! The lexer and recursive-descent parser of [`Expr`](super::Expr).
+//! The lexer and recursive-descent parser of [`Expr`](super::Expr), with its depth limit.
+//!
+//! Two depths are bounded by [`MAX_DEPTH`]: the parser's own nesting (parentheses, unary
+//! operators, function calls), which is its recursion, and the depth of the tree it builds
+//! (a chain `1 + 1 + … + 1` is as deep as it has operators), which is the recursion of
+//! [`Expr::eval`](super::Expr::eval) and of dropping the tree.
 
-use super::{BinOp, Expr, ExprError, Func};
+use super::{BinOp, Expr, ExprError, Func, MAX_DEPTH};
 
 #[derive(Clone, Debug, PartialEq)]
 enum Tok {
@@ -82,6 +87,39 @@ fn lex(text: &str) -> Result<Vec<(Tok, usize)>, ExprError> {
 struct Parser {
     toks: Vec<(Tok, usize)>,
     pos: usize,
+    /// Levels open now: parentheses, unary operators, function calls.
+    nesting: usize,
+}
+
+/// A parsed sub-expression and the depth of its tree (a leaf is 1).
+struct Sub {
+    expr: Expr,
+    depth: usize,
+}
+
+fn too_deep(at: usize) -> ExprError {
+    ExprError {
+        at,
+        reason: format!(
+            "the expression nests deeper than {MAX_DEPTH} levels (parentheses, unary \
+             operators, function calls and chained operators each add one)"
+        ),
+    }
+}
+
+impl Sub {
+    fn leaf(expr: Expr) -> Sub {
+        Sub { expr, depth: 1 }
+    }
+
+    /// A node over `children`, refused at `at` when it would be deeper than [`MAX_DEPTH`].
+    fn node(expr: Expr, children_depth: usize, at: usize) -> Result<Sub, ExprError> {
+        let depth = children_depth + 1;
+        if depth > MAX_DEPTH {
+            return Err(too_deep(at));
+        }
+        Ok(Sub { expr, depth })
+    }
 }
 
 impl Parser {
@@ -133,12 +171,26 @@ impl Parser {
         }
     }
 
+    /// Opens one level of nesting at `at`, refusing to go past [`MAX_DEPTH`]; the caller
+    /// closes it with [`Parser::leave`].
+    fn enter(&mut self, at: usize) -> Result<(), ExprError> {
+        self.nesting += 1;
+        if self.nesting > MAX_DEPTH {
+            return Err(too_deep(at));
+        }
+        Ok(())
+    }
+
+    fn leave(&mut self) {
+        self.nesting -= 1;
+    }
+
     fn binary(
         &mut self,
         ops: &[(&str, BinOp)],
-        next: fn(&mut Parser) -> Result<Expr, ExprError>,
+        next: fn(&mut Parser) -> Result<Sub, ExprError>,
         chain: bool,
-    ) -> Result<Expr, ExprError> {
+    ) -> Result<Sub, ExprError> {
         let mut lhs = next(self)?;
         loop {
             let Some(&(_, op)) = ops
@@ -147,24 +199,28 @@ impl Parser {
             else {
                 return Ok(lhs);
             };
-            self.bump();
+            let (_, at) = self.bump();
             let rhs = next(self)?;
-            lhs = Expr::Bin(op, Box::new(lhs), Box::new(rhs));
+            lhs = Sub::node(
+                Expr::Bin(op, Box::new(lhs.expr), Box::new(rhs.expr)),
+                lhs.depth.max(rhs.depth),
+                at,
+            )?;
             if !chain {
                 return Ok(lhs);
             }
         }
     }
 
-    fn or(&mut self) -> Result<Expr, ExprError> {
+    fn or(&mut self) -> Result<Sub, ExprError> {
         self.binary(&[("||", BinOp::Or)], Parser::and, true)
     }
 
-    fn and(&mut self) -> Result<Expr, ExprError> {
+    fn and(&mut self) -> Result<Sub, ExprError> {
         self.binary(&[("&&", BinOp::And)], Parser::cmp, true)
     }
 
-    fn cmp(&mut self) -> Result<Expr, ExprError> {
+    fn cmp(&mut self) -> Result<Sub, ExprError> {
         use BinOp::*;
         let ops = [
             ("<=", Le),
@@ -177,36 +233,46 @@ impl Parser {
         self.binary(&ops, Parser::add, false)
     }
 
-    fn add(&mut self) -> Result<Expr, ExprError> {
+    fn add(&mut self) -> Result<Sub, ExprError> {
         self.binary(&[("+", BinOp::Add), ("-", BinOp::Sub)], Parser::mul, true)
     }
 
-    fn mul(&mut self) -> Result<Expr, ExprError> {
+    fn mul(&mut self) -> Result<Sub, ExprError> {
         self.binary(&[("*", BinOp::Mul), ("/", BinOp::Div)], Parser::unary, true)
     }
 
-    fn unary(&mut self) -> Result<Expr, ExprError> {
-        if self.eat("-") {
-            return Ok(Expr::Neg(Box::new(self.unary()?)));
-        }
-        if self.eat("+") {
-            return self.unary();
-        }
-        if self.eat("!") {
-            return Ok(Expr::Not(Box::new(self.unary()?)));
-        }
-        self.primary()
+    fn unary(&mut self) -> Result<Sub, ExprError> {
+        let at = self.at();
+        let wrap: fn(Box<Expr>) -> Expr = match self.peek() {
+            Tok::Sym("-") => Expr::Neg,
+            Tok::Sym("!") => Expr::Not,
+            Tok::Sym("+") => {
+                self.enter(at)?;
+                self.bump();
+                let e = self.unary()?;
+                self.leave();
+                return Ok(e);
+            }
+            _ => return self.primary(),
+        };
+        self.enter(at)?;
+        self.bump();
+        let e = self.unary()?;
+        self.leave();
+        Sub::node(wrap(Box::new(e.expr)), e.depth, at)
     }
 
-    fn primary(&mut self) -> Result<Expr, ExprError> {
+    fn primary(&mut self) -> Result<Sub, ExprError> {
         match self.peek().clone() {
             Tok::Num(v) => {
                 self.bump();
-                Ok(Expr::Num(v))
+                Ok(Sub::leaf(Expr::Num(v)))
             }
             Tok::Sym("(") => {
-                self.bump();
+                let (_, at) = self.bump();
+                self.enter(at)?;
                 let e = self.or()?;
+                self.leave();
                 self.expect(")")?;
                 Ok(e)
             }
@@ -218,23 +284,29 @@ impl Parser {
                     _ => None,
                 };
                 match (name.as_str(), open) {
-                    ("True", None) => Ok(Expr::Num(1.0)),
-                    ("False", None) => Ok(Expr::Num(0.0)),
+                    ("True", None) => Ok(Sub::leaf(Expr::Num(1.0))),
+                    ("False", None) => Ok(Sub::leaf(Expr::Num(0.0))),
                     ("Infinite", None) => Err(ExprError {
                         at,
                         reason: "`Infinite` is only allowed as a whole server count".into(),
                     }),
-                    (_, None) => Ok(Expr::Ident { name, at }),
+                    (_, None) => Ok(Sub::leaf(Expr::Ident { name, at })),
                     (_, Some(close)) => {
                         let func = Func::from_name(&name).ok_or_else(|| ExprError {
                             at,
                             reason: format!("unknown function `{name}`"),
                         })?;
                         self.bump();
-                        let mut args = vec![self.or()?];
+                        self.enter(at)?;
+                        let first = self.or()?;
+                        let mut depth = first.depth;
+                        let mut args = vec![first.expr];
                         while self.eat(",") {
-                            args.push(self.or()?);
+                            let a = self.or()?;
+                            depth = depth.max(a.depth);
+                            args.push(a.expr);
                         }
+                        self.leave();
                         self.expect(close)?;
                         if args.len() != func.arity() {
                             return Err(ExprError {
@@ -246,7 +318,7 @@ impl Parser {
                                 ),
                             });
                         }
-                        Ok(Expr::Call { func, args, at })
+                        Sub::node(Expr::Call { func, args, at }, depth, at)
                     }
                 }
             }
@@ -262,10 +334,14 @@ fn static_sym(s: &str) -> &'static str {
 
 pub(super) fn parse(text: &str) -> Result<Expr, ExprError> {
     let toks = lex(text)?;
-    let mut p = Parser { toks, pos: 0 };
+    let mut p = Parser {
+        toks,
+        pos: 0,
+        nesting: 0,
+    };
     let e = p.or()?;
     if *p.peek() != Tok::End {
         return Err(p.unexpected());
     }
-    Ok(e)
+    Ok(e.expr)
 }

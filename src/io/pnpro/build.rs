@@ -11,6 +11,12 @@ use crate::io::expr::{EvalError, Expr, ExprError};
 use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span};
 use crate::net::{ArcKind, NetBuilder, Place, PlaceId, Position, Servers, Timing, Transition};
 
+/// How many constants may stand in a chain, each defined by the next (`A = B + 1`,
+/// `B = C * 2`, ...). Each link evaluates an expression up to
+/// [`expr::MAX_DEPTH`](crate::io::expr::MAX_DEPTH) deep inside the one before, so the chain
+/// is kept short enough that the worst case stays far from the stack's end.
+pub const MAX_CONSTANT_CHAIN: usize = 16;
+
 /// Constants and template parameters of the page, evaluated on demand.
 struct Env<'a> {
     path: &'a Path,
@@ -73,6 +79,12 @@ impl Env<'_> {
             if self.visiting.borrow().iter().any(|n| n == name) {
                 return Err(fail(format!(
                     "constant `{name}` is defined in terms of itself"
+                )));
+            }
+            if self.visiting.borrow().len() >= MAX_CONSTANT_CHAIN {
+                return Err(fail(format!(
+                    "constant `{name}` is reached through a chain of more than \
+                     {MAX_CONSTANT_CHAIN} constants, each defined by the next"
                 )));
             }
             let value = c.get("value").ok_or_else(|| {

@@ -63,11 +63,13 @@ function status(text) {
   $('status').textContent = text || '';
 }
 
+// Every request that changes something is JSON (an empty object when there is nothing to
+// say): the server refuses any other content type, which is what keeps other sites out.
 async function api(method, path, body) {
   const opts = { method, headers: {} };
-  if (body !== undefined) {
+  if (method !== 'GET' || body !== undefined) {
     opts.headers['Content-Type'] = 'application/json';
-    opts.body = JSON.stringify(body);
+    opts.body = JSON.stringify(body === undefined ? {} : body);
   }
   const res = await fetch(path, opts);
   const data = await res.json();
