@@ -150,8 +150,8 @@ fn a_chain_of_constants_longer_than_the_limit_is_refused_at_its_last_use() {
     let gspn::net::Timing::Exponential { rate, .. } = net.transitions()[0].timing else {
         panic!("T1 is exponential")
     };
-    // The delay is the mean: C0 = 16, so the rate is 1/16.
-    assert_eq!(rate, 1.0 / MAX_CONSTANT_CHAIN as f64);
+    // A PNPRO `delay` is the rate: C0 = C1 + 1 = … = 16.
+    assert_eq!(rate, MAX_CONSTANT_CHAIN as f64);
 
     let long = write(dir.path(), "long.PNPRO", &pnpro("C0", &consts(10_000)));
     let shown = long.display().to_string();
