@@ -104,25 +104,25 @@ fn a_delay_with_100000_leading_minus_or_not_signs_is_refused_at_the_257th() {
 }
 
 #[test]
-fn a_delay_that_chains_100000_additions_is_refused_at_the_256th_plus() {
+fn a_delay_that_chains_100000_additions_is_refused_at_the_257th_plus() {
     // `1+1+…` builds a tree as deep as its operators: evaluating or dropping it recursed once
-    // per `+`. The 256th `+` would make the tree 257 deep; it sits at byte 2·256 − 1.
+    // per `+`. The 257th `+` would make the tree 257 deep; it sits at byte 2·257 − 1.
     let delay = vec!["1"; 100_000].join("+");
-    delay_refused_at(&delay, delay_column(2 * expr::MAX_DEPTH - 1));
+    delay_refused_at(&delay, delay_column(2 * (expr::MAX_DEPTH + 1) - 1));
 }
 
 #[test]
 fn expressions_at_the_depth_limit_still_parse_and_evaluate() {
     let n = expr::MAX_DEPTH;
     let parens = format!("{}2{}", "(".repeat(n), ")".repeat(n));
-    let minus = format!("{}2", "-".repeat(n - 1));
-    let chain = vec!["1"; n].join("+");
+    let minus = format!("{}2", "-".repeat(n));
+    let chain = vec!["1"; n + 1].join("+");
     let none = &mut |_: &str, _| Err::<f64, ()>(());
     assert_eq!(Expr::parse(&parens).unwrap().eval(none), Ok(2.0));
-    assert_eq!(Expr::parse(&minus).unwrap().eval(none), Ok(-2.0));
-    assert_eq!(Expr::parse(&chain).unwrap().eval(none), Ok(n as f64));
-    let e = Expr::parse(&format!("{}2", "-".repeat(n))).unwrap_err();
-    assert_eq!(e.at, n - 1);
+    assert_eq!(Expr::parse(&minus).unwrap().eval(none), Ok(2.0));
+    assert_eq!(Expr::parse(&chain).unwrap().eval(none), Ok((n + 1) as f64));
+    let e = Expr::parse(&format!("{}2", "-".repeat(n + 1))).unwrap_err();
+    assert_eq!(e.at, n);
 }
 
 #[test]

@@ -91,7 +91,8 @@ struct Parser {
     nesting: usize,
 }
 
-/// A parsed sub-expression and the depth of its tree (a leaf is 1).
+/// A parsed sub-expression and the depth of its tree: how many operators, function calls
+/// and unary signs are nested in it (a leaf is 0, `-x` is 1, `1 + 1 + 1` is 2).
 struct Sub {
     expr: Expr,
     depth: usize,
@@ -109,7 +110,7 @@ fn too_deep(at: usize) -> ExprError {
 
 impl Sub {
     fn leaf(expr: Expr) -> Sub {
-        Sub { expr, depth: 1 }
+        Sub { expr, depth: 0 }
     }
 
     /// A node over `children`, refused at `at` when it would be deeper than [`MAX_DEPTH`].
