@@ -7,5 +7,11 @@ mod support;
 #[path = "support.rs"]
 mod ros2_support;
 
+#[path = "rtps.rs"]
+mod ros2_rtps;
+
 mod interop;
 mod multiprocess;
+mod fleet;
+mod lifecycle;
+mod security;

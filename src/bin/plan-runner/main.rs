@@ -58,6 +58,7 @@ enum Command {
 
 fn main() -> ExitCode {
     restore_sigpipe();
+    init_logging();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check(a) => check::main(a),
@@ -80,6 +81,20 @@ fn main() -> ExitCode {
             ExitCode::from(common::exit_code_for(&e))
         }
     }
+}
+
+/// Warnings and errors of the library and of its dependencies (RustDDS and ros2-client log
+/// through `log`, bridged) go to stderr; `RUST_LOG` overrides the default filter
+/// (`warn,gspn=info`: the library's notices, everyone's warnings).
+fn init_logging() {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn,gspn=info"));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(true)
+        .without_time()
+        .try_init();
 }
 
 /// Rust ignores SIGPIPE, so printing to a closed pipe (`plan-runner … | head`) would panic;

@@ -11,16 +11,19 @@ use gspn::ros2::config::{parse_domain, parse_networks};
 use gspn::ros2::heartbeat::Liveness;
 use gspn::ros2::robot::{RobotOptions, serve};
 use gspn::ros2::{DdsConfig, Ros2Backend};
+use gspn::runtime::Summary;
 
 use crate::common::{BadInput, NetArgs};
 
 /// DDS flags (override the plan's `[ros2]` table and the `GSPN_ROS2_*` environment).
 #[derive(clap::Args, Debug, Clone, Default)]
 pub(crate) struct DdsArgs {
-    /// DDS domain id (0–232) [default: the plan's, else $GSPN_ROS2_DOMAIN, else 0].
+    /// DDS domain id (0–232) [default: the plan's, else $GSPN_ROS2_DOMAIN, else
+    /// $ROS_DOMAIN_ID, else 0].
     #[arg(long, value_name = "ID", value_parser = domain)]
     ros2_domain: Option<u16>,
-    /// Local IP addresses DDS may use, comma-separated [default: 127.0.0.1].
+    /// The local IPv4 address every DDS socket binds to [default: the plan's, else
+    /// $GSPN_ROS2_NETWORKS, else 127.0.0.1; 0.0.0.0 = every interface].
     #[arg(long, value_name = "ADDRS")]
     ros2_networks: Option<String>,
 }
@@ -39,7 +42,9 @@ impl DdsArgs {
             c.networks = parse_networks(n)
                 .map_err(|why| BadInput(format!("--ros2-networks `{n}`: {why}")))?;
         }
-        Ok(c)
+        c.bind_address().map_err(|e| BadInput(e.to_string()))?;
+        // The supervisor, the robots and a viewer or two on one host: any start order.
+        Ok(c.for_fleet(plan.robots.len() + 2))
     }
 }
 
@@ -55,6 +60,25 @@ pub(crate) struct RunArgs {
     /// Seconds to stay on DDS after the run, so subscribers receive the last firings.
     #[arg(long, value_name = "SECS", default_value_t = 0.5)]
     ros2_linger: f64,
+    /// Accept time scale 0 (virtual time) with ros2 places: the robots still act in real
+    /// time, so model times mean nothing.
+    #[arg(long)]
+    allow_virtual_time: bool,
+}
+
+/// Refuses virtual time (time scale 0, the default without one) for a plan with ros2 places
+/// unless `--allow-virtual-time`: robots act in real time.
+pub(crate) fn check_time_scale(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
+    if wanted(plan) && plan.time_scale.unwrap_or(0.0) == 0.0 && !args.allow_virtual_time {
+        return Err(BadInput(format!(
+            "{}: time scale 0 (virtual time) with ros2 places: the robots act in real time, so \
+             the run's model times would mean nothing; give --time-scale X > 0 (or the plan's \
+             time_scale), or --allow-virtual-time",
+            plan.path.display()
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 /// The plan's robots, when it has `ros2` places (else the ROS 2 backend stays off).
@@ -102,10 +126,14 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2B
     Ok(backend)
 }
 
-/// After the run: let the publisher finish and linger.
-pub(crate) async fn finish(backend: Ros2Backend, args: &RunArgs) {
+/// After the run: let the publisher finish, tell the robots the run is over, linger.
+pub(crate) async fn finish(backend: Ros2Backend, args: &RunArgs, summary: &Summary) {
     let linger = Duration::from_secs_f64(args.ros2_linger.clamp(0.0, 60.0));
-    let p = backend.finish(linger).await;
+    let stopped = serde_json::to_value(&summary.stopped)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default();
+    let p = backend.finish(linger, &stopped).await;
     eprintln!(
         "ros2: published {} firings ({} events lost, {} publish errors)",
         p.firings, p.lagged, p.errors
@@ -131,13 +159,17 @@ pub(crate) struct RobotArgs {
     /// Append `seq stamp_ns received_ns` for every firing received to this file.
     #[arg(long, value_name = "FILE")]
     latency_log: Option<PathBuf>,
+    /// Keep serving after the supervisor says its run is over (default: exit then).
+    #[arg(long)]
+    stay: bool,
     #[command(flatten)]
     dds: DdsArgs,
     #[command(flatten)]
     net: NetArgs,
 }
 
-/// `plan-runner robot`: serve until Ctrl-C or SIGTERM.
+/// `plan-runner robot`: serve until the supervisor's run is over (with `--stay`: until
+/// Ctrl-C or SIGTERM).
 pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
     let plan = read_plan(&args.plan, &args.net.read_options())?;
     if !wanted(&plan) {
@@ -167,6 +199,7 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         seed: args.seed.or(plan.seed).unwrap_or(0),
         time_scale: scale,
         latency_log: args.latency_log.clone(),
+        stay: args.stay,
     };
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -182,6 +215,9 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         );
         serve(&plan, &cfg, opts, shutdown()).await
     })?;
+    if let Some(over) = &stats.run_over {
+        eprintln!("robot {}: the supervisor's run is over ({over}): leaving", args.id);
+    }
     eprintln!(
         "robot {}: {} goals, {} cancelled, {} firings received",
         args.id, stats.goals, stats.cancelled, stats.firings

@@ -19,7 +19,7 @@ use anyhow::Context as _;
 use gspn::io::plan::{Plan, read_plan};
 use gspn::runtime::{Runtime, RuntimeBuilder, Summary};
 
-use crate::common::{BadInput, NetArgs, load_net};
+use crate::common::{BadInput, Interrupted, NetArgs, load_net};
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
@@ -95,6 +95,8 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     for w in &plan.warnings {
         eprintln!("warning: {w}");
     }
+    #[cfg(feature = "ros2")]
+    crate::ros2::check_time_scale(&plan, &args.ros2)?;
     #[cfg(feature = "sim")]
     if plan.map.is_some() {
         return crate::robots::main(plan, &args);
@@ -118,7 +120,14 @@ async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
     let mut backends = Backends::default();
     #[cfg(feature = "ros2")]
     if crate::ros2::wanted(&plan) {
-        backends.ros2 = Some(crate::ros2::connect(&plan, &args.ros2).await?);
+        // Ctrl-C while waiting for the robots ends at once (exit 130).
+        tokio::select! {
+            b = crate::ros2::connect(&plan, &args.ros2) => backends.ros2 = Some(b?),
+            r = tokio::signal::ctrl_c() => {
+                r.context("waiting for Ctrl-C")?;
+                return Err(Interrupted("while waiting for the robots").into());
+            }
+        }
     }
     execute_with(Runtime::from_plan(plan), args, backends).await
 }
@@ -205,7 +214,7 @@ pub(crate) async fn execute_with(
     eprintln!("seed {}", handle.seed());
     #[cfg(feature = "ros2")]
     if let Some(r) = ros2 {
-        crate::ros2::finish(r, &args.ros2).await;
+        crate::ros2::finish(r, &args.ros2, &summary).await;
     }
     #[cfg(feature = "web")]
     crate::serve::linger(viewer, &summary).await;

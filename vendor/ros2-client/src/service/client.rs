@@ -204,6 +204,30 @@ where
     } // loop
   }
 
+  /// Every response this client receives, with the id of the request it
+  /// answers, as it arrives.
+  ///
+  /// For callers that make concurrent calls through one client:
+  /// [`async_receive_response`](Self::async_receive_response) takes whatever
+  /// response comes next and drops it when it answers another request, so
+  /// concurrent calls lose each other's responses (and the reader keeps only
+  /// one waker, so several waiting streams cannot share it either). With one
+  /// task reading this stream and handing each response to its caller by
+  /// request id, any number of calls can be in flight.
+  pub fn response_stream(
+    &self,
+  ) -> impl futures::stream::FusedStream<Item = ReadResult<(RmwRequestId, Resp)>> + '_ {
+    self.response_receiver.as_async_stream().map(move |r| match r {
+      Err(e) => Err(e.into()),
+      Ok(dcc) => {
+        let mi = MessageInfo::from(&dcc);
+        dcc
+          .into_value()
+          .unwrap(self.service_mapping, mi, self.client_guid)
+      }
+    })
+  }
+
   pub async fn async_call_service(&self, request: Req) -> Result<Resp, CallServiceError<()>> {
     let req_id = self.async_send_request(request).await?;
     self

@@ -37,7 +37,9 @@ use crate::{
     discovery_db::DiscoveryDB,
     sedp_messages::{DiscoveredReaderData, DiscoveredTopicData, DiscoveredWriterData},
   },
-  network::{constant::*, udp_listener::UDPListener},
+  network::{
+    constant::*, udp_listener::UDPListener, util::get_local_multicast_ip_addrs_filtered,
+  },
   polling::{
     ready_channel, wake_channel, wake_channel_unbounded, LoopWaker, ReadySender, WakeReceiver,
     WakeSender, WakeUnboundedSender,
@@ -78,6 +80,9 @@ pub struct DomainParticipantBuilder {
 
   same_host_loopback: bool, // prefer loopback for same-host peers + localhost SPDP discovery peers
 
+  bind_address: Option<IpAddr>, // bind every socket to this address instead of the wildcard
+  localhost_peer_count: u16,    // participant indices announced to over localhost unicast SPDP
+
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
 
@@ -93,6 +98,8 @@ impl DomainParticipantBuilder {
       domain_id,
       only_networks: None,
       same_host_loopback: true,
+      bind_address: None,
+      localhost_peer_count: SPDP_LOCALHOST_PEER_COUNT,
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       #[cfg(feature = "security")]
@@ -126,6 +133,35 @@ impl DomainParticipantBuilder {
   /// `src/rtps/loopback_same_host_design.md`.
   pub fn same_host_loopback(mut self, enabled: bool) -> Self {
     self.same_host_loopback = enabled;
+    self
+  }
+
+  /// Bind every UDP socket of the participant to `addr` instead of the
+  /// wildcard address `0.0.0.0` (default: wildcard).
+  ///
+  /// [`with_only_networks`](Self::with_only_networks) only filters what is
+  /// advertised and where multicast is joined; the unicast listeners (SPDP
+  /// well-known port, user traffic) and the unicast sender still bind to
+  /// `0.0.0.0` and so accept datagrams from every interface. With a bind
+  /// address, they bind to `addr`; the multicast listeners bind to the
+  /// multicast group address (so they receive only datagrams sent to the
+  /// group), and are not created at all when no interface of `only_networks`
+  /// joined the group (e.g. loopback only), instead of listening on
+  /// `0.0.0.0:<multicast port>` for nothing but unicast. Only IPv4 addresses
+  /// are supported (the listeners are IPv4).
+  pub fn bind_address(mut self, addr: IpAddr) -> Self {
+    self.bind_address = Some(addr);
+    self
+  }
+
+  /// How many participant indices (0..count) of this host the SPDP writer
+  /// announces itself to over localhost unicast when `same_host_loopback` is
+  /// on (default 12, at most 120: RTPS 2.5 Section 9.6.2.3). Without loopback
+  /// multicast, a participant with an index beyond this range is discovered
+  /// only if it announces itself first, so start order would matter on
+  /// hosts with more participants.
+  pub fn localhost_peer_count(mut self, count: u16) -> Self {
+    self.localhost_peer_count = count.min(120);
     self
   }
 
@@ -344,6 +380,8 @@ impl DomainParticipantBuilder {
       self.socket_send_buffer_size,
       self.only_networks,
       self.same_host_loopback,
+      self.bind_address,
+      self.localhost_peer_count,
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -977,6 +1015,8 @@ impl DomainParticipantDisc {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    bind_address: Option<IpAddr>,
+    localhost_peer_count: u16,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
@@ -994,6 +1034,8 @@ impl DomainParticipantDisc {
       socket_send_buffer_size,
       only_networks,
       same_host_loopback,
+      bind_address,
+      localhost_peer_count,
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -1236,6 +1278,8 @@ impl DomainParticipantInner {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    bind_address: Option<IpAddr>,
+    localhost_peer_count: u16,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
@@ -1246,17 +1290,30 @@ impl DomainParticipantInner {
 
     let mut listeners = HashMap::new();
 
-    match UDPListener::new_multicast_with_buf_size(
-      "0.0.0.0",
+    // Where the sockets bind: the wildcard address unless a bind address is
+    // given. Then a multicast listener binds to its group address, and is left
+    // out when no interface joins the group (it would only hear unicast).
+    let unicast_host = bind_address.map_or_else(|| "0.0.0.0".to_string(), |a| a.to_string());
+    let multicast_host = match bind_address {
+      None => Some("0.0.0.0"),
+      Some(_) => match get_local_multicast_ip_addrs_filtered(only_networks.as_deref()) {
+        Ok(addrs) if !addrs.is_empty() => Some("239.255.0.1"),
+        _ => None,
+      },
+    };
+
+    match multicast_host.map(|host| UDPListener::new_multicast_with_buf_size(
+      host,
       spdp_well_known_multicast_port(domain_id),
       Ipv4Addr::new(239, 255, 0, 1),
       socket_receive_buffer_size,
       only_networks.as_deref(),
-    ) {
-      Ok(l) => {
+    )) {
+      Some(Ok(l)) => {
         listeners.insert(DISCOVERY_MUL_LISTENER_TOKEN, l);
       }
-      Err(e) => warn!("Cannot get multicast discovery listener: {e:?}"),
+      Some(Err(e)) => warn!("Cannot get multicast discovery listener: {e:?}"),
+      None => info!("No multicast interface: no multicast discovery listener"),
     }
 
     let mut participant_id = 0;
@@ -1267,7 +1324,7 @@ impl DomainParticipantInner {
     // Numbers"
     while discovery_listener.is_none() && participant_id < 120 {
       discovery_listener = UDPListener::new_unicast_with_buf_size(
-        "0.0.0.0",
+        &unicast_host,
         spdp_well_known_unicast_port(domain_id, participant_id),
         socket_receive_buffer_size,
       )
@@ -1288,21 +1345,22 @@ impl DomainParticipantInner {
 
     // Now the user traffic listeners
 
-    match UDPListener::new_multicast_with_buf_size(
-      "0.0.0.0",
+    match multicast_host.map(|host| UDPListener::new_multicast_with_buf_size(
+      host,
       user_traffic_multicast_port(domain_id),
       Ipv4Addr::new(239, 255, 0, 1),
       socket_receive_buffer_size,
       only_networks.as_deref(),
-    ) {
-      Ok(l) => {
+    )) {
+      Some(Ok(l)) => {
         listeners.insert(USER_TRAFFIC_MUL_LISTENER_TOKEN, l);
       }
-      Err(e) => warn!("Cannot get multicast user traffic listener: {e:?}"),
+      Some(Err(e)) => warn!("Cannot get multicast user traffic listener: {e:?}"),
+      None => info!("No multicast interface: no multicast user traffic listener"),
     }
 
     let user_traffic_listener = UDPListener::new_unicast_with_buf_size(
-      "0.0.0.0",
+      &unicast_host,
       user_traffic_unicast_port(domain_id, participant_id),
       socket_receive_buffer_size,
     )
@@ -1310,7 +1368,7 @@ impl DomainParticipantInner {
       if matches!(e.kind(), ErrorKind::AddrInUse) {
         // If we do not get the preferred listening port,
         // try again, with "any" port number.
-        UDPListener::new_unicast_with_buf_size("0.0.0.0", 0, socket_receive_buffer_size).or_else(
+        UDPListener::new_unicast_with_buf_size(&unicast_host, 0, socket_receive_buffer_size).or_else(
           |e| {
             create_error_out_of_resources!(
               "Could not open unicast user traffic listener, any port number: {:?}",
@@ -1412,6 +1470,8 @@ impl DomainParticipantInner {
           only_networks_for_ev_loop,
           socket_send_buffer_size,
           same_host_loopback,
+          bind_address,
+          localhost_peer_count,
           reader_ready_rx,
           writer_ready_rx,
           dp_waker,

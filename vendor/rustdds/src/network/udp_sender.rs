@@ -43,7 +43,7 @@ pub struct UDPSender {
 impl UDPSender {
   #[cfg(test)]
   pub fn new(sender_port: u16) -> io::Result<Self> {
-    Self::new_with_networks(sender_port, None, 0)
+    Self::new_with_networks(sender_port, None, 0, None)
   }
 
   // Request (and verify) SO_SNDBUF on a sender socket. `size == 0` leaves the
@@ -75,9 +75,13 @@ impl UDPSender {
     sender_port: u16,
     only_networks: Option<&[IpAddr]>,
     send_buffer_size: usize,
+    bind_address: Option<IpAddr>,
   ) -> io::Result<Self> {
     let unicast_socket = {
-      let saddr: SocketAddr = SocketAddr::new("0.0.0.0".parse().unwrap(), sender_port);
+      let saddr: SocketAddr = SocketAddr::new(
+        bind_address.unwrap_or_else(|| "0.0.0.0".parse().unwrap()),
+        sender_port,
+      );
       let raw_socket = Socket::new(Domain::IPV4, Type::DGRAM, Some(Protocol::UDP))?;
       Self::set_and_verify_send_buffer(&raw_socket, send_buffer_size);
       raw_socket.bind(&SockAddr::from(saddr))?;

@@ -140,6 +140,8 @@ pub struct DPEventLoop {
   // route same-host peers over loopback. See
   // `src/rtps/loopback_same_host_design.md`.
   same_host_loopback: bool,
+  // How many localhost participant indices the SPDP writer announces to.
+  localhost_peer_count: u16,
 }
 
 impl DPEventLoop {
@@ -164,6 +166,8 @@ impl DPEventLoop {
     only_networks: Option<Arc<[IpAddr]>>,
     socket_send_buffer_size: usize,
     same_host_loopback: bool,
+    bind_address: Option<IpAddr>,
+    localhost_peer_count: u16,
     reader_ready: ReadyReceiver<EntityId>,
     writer_ready: ReadyReceiver<EntityId>,
     waker: LoopWaker,
@@ -212,7 +216,12 @@ impl DPEventLoop {
 
     // port number 0 means OS chooses an available port number.
     let udp_sender = try_init!(
-      UDPSender::new_with_networks(0, only_networks.as_deref(), socket_send_buffer_size),
+      UDPSender::new_with_networks(
+        0,
+        only_networks.as_deref(),
+        socket_send_buffer_size,
+        bind_address
+      ),
       "UDPSender construction fail"
     );
 
@@ -257,6 +266,7 @@ impl DPEventLoop {
       participant_status_sender,
       discovery_command_sender,
       same_host_loopback,
+      localhost_peer_count,
     })
   }
 
@@ -1119,7 +1129,7 @@ impl DPEventLoop {
       new_writer.set_extra_unicast_destinations(localhost_spdp_peer_locators(
         self.domain_info.domain_id,
         self.domain_info.participant_id,
-        SPDP_LOCALHOST_PEER_COUNT,
+        self.localhost_peer_count,
       ));
     }
 
@@ -1344,6 +1354,8 @@ mod tests {
         None,
         0,
         true,
+        None,
+        SPDP_LOCALHOST_PEER_COUNT,
         reader_ready,
         writer_ready,
         waker,

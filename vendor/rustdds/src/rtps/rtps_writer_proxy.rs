@@ -77,6 +77,10 @@ pub(crate) struct RtpsWriterProxy {
   last_received_timestamp: Timestamp,
 }
 
+/// At most this many missing sequence numbers are listed from one HEARTBEAT:
+/// an ACKNACK's SequenceNumberSet holds at most 256 (RTPS 2.5 Section 9.4.2.6).
+const MAX_MISSING_SEQNUMS: usize = 256;
+
 impl RtpsWriterProxy {
   pub fn new(
     remote_writer_guid: GUID,
@@ -174,8 +178,15 @@ impl RtpsWriterProxy {
     let mut known_iter = known.iter();
     let mut known_head = known_iter.next();
 
-    // Iterate over all SequenceNumbers (indices) in the advertised range.
+    // Iterate over the SequenceNumbers (indices) in the advertised range, up to
+    // MAX_MISSING_SEQNUMS missing ones: a HEARTBEAT may claim any last_sn (a
+    // hostile or broken one claims ~2^63), and an ACKNACK reports at most 256
+    // missing numbers anyway. Iterating or collecting the whole range costs
+    // time and memory proportional to what the packet claims.
     for s in relevant_interval {
+      if missing_seqnums.len() >= MAX_MISSING_SEQNUMS {
+        break;
+      }
       match known_head {
         None => missing_seqnums.push(s), // no known changes left => s is missing
         Some(known_sn) => {
@@ -281,12 +292,26 @@ impl RtpsWriterProxy {
         self.ack_base, remove_from, remove_until_before, self.remote_writer_guid
       );
     } else {
-      // TODO: This potentially generates a very large BTreeMap
+      // Marking the range one number at a time costs time and memory
+      // proportional to the range, which the GAP or HEARTBEAT sets (up to
+      // ~2^63). Only the last MAX_TRACKED_CHANGES_PER_WRITER numbers of the
+      // range would survive enforce_change_map_cap, which accounts for
+      // everything below them: do that first, then insert the rest.
+      let cap = SequenceNumber::from(MAX_TRACKED_CHANGES_PER_WRITER as i64);
+      let mut remove_from = remove_from;
+      if remove_until_before - remove_from > cap {
+        remove_from = remove_until_before - cap;
+        self.changes = self.changes.split_off(&remove_from);
+        if self.ack_base < remove_from {
+          self.ack_base = remove_from;
+        }
+      }
       for na in
         SequenceNumber::range_inclusive(remove_from, remove_until_before - SequenceNumber::new(1))
       {
         self.changes.insert(na, None);
       }
+      self.advance_ack_base();
       self.enforce_change_map_cap();
     }
   }
