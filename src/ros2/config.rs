@@ -257,7 +257,10 @@ mod tests {
         };
         let lo = IpAddr::from([127, 0, 0, 1]);
         assert_eq!(DdsConfig::default().bind_address().unwrap(), Some(lo));
-        assert_eq!(with(&[IpAddr::from([0, 0, 0, 0])]).bind_address().unwrap(), None);
+        assert_eq!(
+            with(&[IpAddr::from([0, 0, 0, 0])]).bind_address().unwrap(),
+            None
+        );
         let two = with(&[lo, IpAddr::from([10, 0, 0, 5])]).bind_address();
         assert_eq!(
             two.unwrap_err().to_string(),

@@ -66,8 +66,15 @@ async fn sixty_four_robots_started_in_random_order_run_the_patrol() {
     order.push(None);
     order.shuffle(&mut ChaCha8Rng::seed_from_u64(17));
     let sup_at = order.iter().position(Option::is_none).unwrap();
-    println!("supervisor started as process {} of {}", sup_at + 1, order.len());
-    assert!(sup_at > 12, "the order must put the supervisor beyond index 12");
+    println!(
+        "supervisor started as process {} of {}",
+        sup_at + 1,
+        order.len()
+    );
+    assert!(
+        sup_at > 12,
+        "the order must put the supervisor beyond index 12"
+    );
 
     let (mut firings, _markings) = listen(d);
     let start = Instant::now();

@@ -160,7 +160,12 @@ async fn ctrl_c_while_waiting_for_the_robots_exits_130_at_once() {
         &["--time-scale", "0", "--allow-virtual-time"],
     );
     assert!(
-        wait_for_log(&sup, "waiting for robot(s) r1, r2, r3", Duration::from_secs(20)).await,
+        wait_for_log(
+            &sup,
+            "waiting for robot(s) r1, r2, r3",
+            Duration::from_secs(20)
+        )
+        .await,
         "{}",
         sup.log()
     );
@@ -176,6 +181,9 @@ async fn ctrl_c_while_waiting_for_the_robots_exits_130_at_once() {
     let took = sent.elapsed();
     let log = std::fs::read_to_string(log).unwrap();
     assert_eq!(code, Some(130), "{log}");
-    assert!(log.contains("interrupted while waiting for the robots"), "{log}");
+    assert!(
+        log.contains("interrupted while waiting for the robots"),
+        "{log}"
+    );
     assert!(took < Duration::from_secs(2), "took {took:?}");
 }

@@ -10,8 +10,8 @@ mod ros2_support;
 #[path = "rtps.rs"]
 mod ros2_rtps;
 
-mod interop;
-mod multiprocess;
 mod fleet;
+mod interop;
 mod lifecycle;
+mod multiprocess;
 mod security;

@@ -39,7 +39,11 @@ async fn every_dds_socket_of_a_default_run_is_bound_to_loopback() {
         // unicast sender, per participant.
         assert!(socks.len() >= 3, "{}: {socks:?}", p.name);
         for s in &socks {
-            assert_eq!(s.addr, LOOPBACK, "{} has a socket on {s:?}: {socks:?}", p.name);
+            assert_eq!(
+                s.addr, LOOPBACK,
+                "{} has a socket on {s:?}: {socks:?}",
+                p.name
+            );
         }
         all.push((p.name.clone(), socks));
     }
@@ -62,7 +66,7 @@ async fn malformed_rtps_packets_do_not_make_a_robot_grow() {
     const HUGE: i64 = 60_000_000_000_000;
     let dir = tempfile::tempdir().unwrap();
     let d = domain(6);
-    let r = robot(dir.path(), "r1", d);
+    let mut r = robot(dir.path(), "r1", d);
     assert!(
         wait_for_log(&r, "serving on domain", Duration::from_secs(30)).await,
         "{}",

@@ -216,7 +216,10 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         serve(&plan, &cfg, opts, shutdown()).await
     })?;
     if let Some(over) = &stats.run_over {
-        eprintln!("robot {}: the supervisor's run is over ({over}): leaving", args.id);
+        eprintln!(
+            "robot {}: the supervisor's run is over ({over}): leaving",
+            args.id
+        );
     }
     eprintln!(
         "robot {}: {} goals, {} cancelled, {} firings received",

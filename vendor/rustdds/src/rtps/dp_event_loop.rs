@@ -24,7 +24,6 @@ use crate::{
   },
   messages::submessages::submessages::AckSubmessage,
   network::{
-    constant::SPDP_LOCALHOST_PEER_COUNT,
     udp_listener::UDPListener,
     udp_sender::UDPSender,
     util::{local_interface_table, localhost_spdp_peer_locators, IfAddr},
@@ -1355,7 +1354,7 @@ mod tests {
         0,
         true,
         None,
-        SPDP_LOCALHOST_PEER_COUNT,
+        crate::network::constant::SPDP_LOCALHOST_PEER_COUNT,
         reader_ready,
         writer_ready,
         waker,
