@@ -44,7 +44,7 @@ fn command(dir: &Path, name: &str, args: &[String], stdout: bool) -> Proc {
     let child = Command::new(env!("CARGO_BIN_EXE_plan-runner"))
         .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env("RUST_LOG", "warn,gspn=info")
+        .env_remove("RUST_LOG")
         .stdin(Stdio::null())
         .stdout(if stdout {
             Stdio::piped()

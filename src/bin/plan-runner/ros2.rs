@@ -66,10 +66,21 @@ pub(crate) struct RunArgs {
     allow_virtual_time: bool,
 }
 
-/// Refuses virtual time (time scale 0, the default without one) for a plan with ros2 places
-/// unless `--allow-virtual-time`: robots act in real time.
-pub(crate) fn check_time_scale(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
-    if wanted(plan) && plan.time_scale.unwrap_or(0.0) == 0.0 && !args.allow_virtual_time {
+/// Refuses a plan with ros2 places the supervisor cannot run: no robots to send goals to,
+/// or virtual time (time scale 0, the default without one) without `--allow-virtual-time`
+/// (robots act in real time).
+pub(crate) fn check_plan(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
+    if !wanted(plan) {
+        return Ok(());
+    }
+    if plan.robots.is_empty() {
+        return Err(BadInput(format!(
+            "{}: the plan has ros2 places but no `robots = [...]` to send their goals to",
+            plan.path.display()
+        ))
+        .into());
+    }
+    if plan.time_scale.unwrap_or(0.0) == 0.0 && !args.allow_virtual_time {
         return Err(BadInput(format!(
             "{}: time scale 0 (virtual time) with ros2 places: the robots act in real time, so \
              the run's model times would mean nothing; give --time-scale X > 0 (or the plan's \
@@ -89,13 +100,6 @@ pub(crate) fn wanted(plan: &Plan) -> bool {
 /// Joins DDS and links to the plan's robots.
 pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2Backend> {
     let cfg = args.dds.config(plan)?;
-    if plan.robots.is_empty() {
-        return Err(BadInput(format!(
-            "{}: the plan has ros2 places but no `robots = [...]` to send their goals to",
-            plan.path.display()
-        ))
-        .into());
-    }
     eprintln!(
         "ros2: domain {}, waiting for robot(s) {}",
         cfg.domain_id,

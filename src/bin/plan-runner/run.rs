@@ -96,7 +96,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         eprintln!("warning: {w}");
     }
     #[cfg(feature = "ros2")]
-    crate::ros2::check_time_scale(&plan, &args.ros2)?;
+    crate::ros2::check_plan(&plan, &args.ros2)?;
     #[cfg(feature = "sim")]
     if plan.map.is_some() {
         return crate::robots::main(plan, &args);
@@ -120,11 +120,18 @@ async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
     let mut backends = Backends::default();
     #[cfg(feature = "ros2")]
     if crate::ros2::wanted(&plan) {
-        // Ctrl-C while waiting for the robots ends at once (exit 130).
+        // Ctrl-C while waiting for the robots ends at once (exit 130). The handler is
+        // installed before joining DDS (which blocks a while), so no Ctrl-C is missed.
+        #[cfg(unix)]
+        let mut int = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::interrupt())
+            .context("installing the Ctrl-C handler")?;
+        #[cfg(unix)]
+        let interrupted = int.recv();
+        #[cfg(not(unix))]
+        let interrupted = tokio::signal::ctrl_c();
         tokio::select! {
             b = crate::ros2::connect(&plan, &args.ros2) => backends.ros2 = Some(b?),
-            r = tokio::signal::ctrl_c() => {
-                r.context("waiting for Ctrl-C")?;
+            _ = interrupted => {
                 return Err(Interrupted("while waiting for the robots").into());
             }
         }
