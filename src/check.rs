@@ -33,7 +33,7 @@ use serde::Serialize;
 
 pub use self::structure::Structure;
 use crate::io::Format;
-use crate::io::plan::Plan;
+use crate::plan::Plan;
 use crate::net::{ArcKind, Net, PlaceId, Timing};
 use crate::policy::{Pattern, Rule};
 

@@ -4,7 +4,7 @@
 
 use super::RuntimeError;
 use crate::analysis::invariants::conserves_tokens;
-use crate::io::plan::Role;
+use super::Role;
 use crate::net::{Net, PlaceId};
 
 /// Refuses a net whose transitions change the number of tokens outside resource places,

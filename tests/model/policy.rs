@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use gspn::io::plan::{Plan, PlanFile};
+use gspn::plan::{Plan, PlanFile};
 use gspn::net::{Net, NetBuilder, Servers, TransitionId};
 
 /// `Decide` (1 token) feeds immediate `a` (weight 1), `b` (weight 3), `c` (weight 0, needs

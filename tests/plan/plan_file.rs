@@ -6,7 +6,8 @@
 
 use std::path::{Path, PathBuf};
 
-use gspn::io::plan::{FailurePolicy, Role, json_schema, read_plan};
+use gspn::plan::{json_schema, read_plan};
+use gspn::runtime::{FailurePolicy, Role};
 use gspn::io::{LoadError, LoadErrorKind, ReadOptions};
 use gspn::policy::Pattern;
 
@@ -27,7 +28,7 @@ fn with_plan(text: &str) -> (tempfile::TempDir, PathBuf) {
     (dir, path)
 }
 
-fn load(text: &str) -> Result<gspn::io::plan::Plan, LoadError> {
+fn load(text: &str) -> Result<gspn::plan::Plan, LoadError> {
     let (_dir, path) = with_plan(text);
     read_plan(&path, &ReadOptions::default())
 }

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use gspn::io::plan::{FailurePolicy, Role};
+use gspn::runtime::{FailurePolicy, Role};
 use gspn::net::{Net, NetBuilder, Servers};
 use gspn::runtime::{AgentMode, EventKind, Outcome, Runtime, StopReason, action_fn};
 

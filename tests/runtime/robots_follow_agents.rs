@@ -4,7 +4,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use gspn::io::plan::PlanFile;
+use gspn::plan::PlanFile;
 use gspn::net::{Net, NetBuilder, Servers};
 use gspn::runtime::{EventKind, Outcome, Runtime, RuntimeError, action_fn};
 

@@ -6,8 +6,8 @@
 use std::process::ExitCode;
 
 use anyhow::Context as _;
-use gspn::io::plan::Plan;
-use gspn::sim::world::{Fleet, SimMetrics};
+use gspn::plan::Plan;
+use gspn::world::{Fleet, SimMetrics};
 
 use crate::common::BadInput;
 use crate::run::{Args, Backends, execute_with, print_summary};
@@ -71,9 +71,9 @@ fn print_metrics(m: &SimMetrics) {
 /// The world's view as JSON for the viewer's map: a task forwards each new view.
 #[cfg(feature = "web")]
 fn world_feed(
-    mut view: tokio::sync::watch::Receiver<gspn::sim::world::WorldView>,
+    mut view: tokio::sync::watch::Receiver<gspn::world::WorldView>,
 ) -> tokio::sync::watch::Receiver<serde_json::Value> {
-    let json = |v: &gspn::sim::world::WorldView| {
+    let json = |v: &gspn::world::WorldView| {
         serde_json::to_value(v).unwrap_or(serde_json::Value::Null)
     };
     let (tx, rx) = tokio::sync::watch::channel(json(&view.borrow_and_update()));

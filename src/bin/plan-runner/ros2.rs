@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use gspn::io::plan::{Plan, read_plan};
+use gspn::plan::{Plan, read_plan};
 use gspn::ros2::config::{parse_domain, parse_networks};
 use gspn::ros2::heartbeat::Liveness;
 use gspn::ros2::robot::{RobotOptions, serve};
@@ -78,7 +78,14 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2B
         plan.robots.join(", ")
     );
     let backend =
-        Ros2Backend::connect(plan, &plan.robots, &cfg, args.ros2_wait_subscribers).await?;
+        Ros2Backend::connect(
+            &plan.net,
+            &plan.ros2,
+            &plan.robots,
+            &cfg,
+            args.ros2_wait_subscribers,
+        )
+        .await?;
     eprintln!("ros2: robots ready");
     // Say when a robot is lost or back (the runs' errors say which action it failed).
     for r in &plan.robots {
@@ -180,7 +187,7 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
             cfg.domain_id,
             plan.ros2.servers.len()
         );
-        serve(&plan, &cfg, opts, shutdown()).await
+        serve(&plan.net, &plan.ros2, &cfg, opts, shutdown()).await
     })?;
     eprintln!(
         "robot {}: {} goals, {} cancelled, {} firings received",

@@ -8,7 +8,7 @@
 //! A plan with a `[map]` runs on simulated robots (feature `sim`): `--robots N` scales the
 //! net's initial robot tokens to N; with time scale 0 the run uses tokio's paused clock, so the
 //! world runs faster than real time; `--json` adds the key `sim` (see
-//! `gspn::sim::world::SimMetrics`).
+//! `gspn::world::SimMetrics`).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -16,10 +16,10 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use gspn::io::plan::{Plan, read_plan};
-use gspn::runtime::{Runtime, RuntimeBuilder, Summary};
+use gspn::plan::{Plan, open};
+use gspn::runtime::{RuntimeBuilder, Summary};
 
-use crate::common::{BadInput, NetArgs, load_net};
+use crate::common::{BadInput, NetArgs};
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
@@ -62,21 +62,8 @@ pub(crate) struct Args {
     ros2: crate::ros2::RunArgs,
 }
 
-fn load(args: &Args) -> anyhow::Result<Plan> {
-    let is_plan = args
-        .file
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    if is_plan {
-        Ok(read_plan(&args.file, &args.net.read_options())?)
-    } else {
-        let loaded = load_net(&args.file, &args.net)?;
-        Ok(Plan::for_net(&args.file, loaded))
-    }
-}
-
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let mut plan = load(&args)?;
+    let mut plan = open(&args.file, &args.net.read_options())?.into_plan();
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && x >= 0.0) {
             return Err(BadInput(format!("--time-scale {x}: must be ≥ 0")).into());
@@ -120,7 +107,7 @@ async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
     if crate::ros2::wanted(&plan) {
         backends.ros2 = Some(crate::ros2::connect(&plan, &args.ros2).await?);
     }
-    execute_with(Runtime::from_plan(plan), args, backends).await
+    execute_with(plan.runtime_builder(), args, backends).await
 }
 
 /// What a run drives besides the runtime itself.

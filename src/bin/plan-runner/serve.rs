@@ -9,13 +9,13 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context as _;
-use gspn::io::plan::read_plan;
+use gspn::plan::open;
 use std::sync::Arc;
 
 use gspn::runtime::{RuntimeHandle, Summary};
 use gspn::web::{LiveRun, WebState, serve};
 
-use crate::common::{NetArgs, load_net};
+use crate::common::NetArgs;
 
 /// Arguments of `serve`.
 #[derive(clap::Args, Debug)]
@@ -33,25 +33,13 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let is_plan = args
-        .file
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    let state = if is_plan {
-        let plan = read_plan(&args.file, &args.net.read_options())?;
-        for w in &plan.warnings {
-            eprintln!("warning: {w}");
-        }
-        let seed = args.seed.or(plan.seed).unwrap_or(0);
-        let policy = (!plan.policy.is_empty()).then_some(plan.policy);
-        WebState::new(plan.net, policy, seed)
-    } else {
-        let loaded = load_net(&args.file, &args.net)?;
-        for w in &loaded.warnings {
-            eprintln!("warning: {w}");
-        }
-        WebState::new(loaded.net, None, args.seed.unwrap_or(0))
-    };
+    let plan = open(&args.file, &args.net.read_options())?.into_plan();
+    for w in &plan.warnings {
+        eprintln!("warning: {w}");
+    }
+    let seed = args.seed.or(plan.seed).unwrap_or(0);
+    let policy = (!plan.policy.is_empty()).then_some(plan.policy);
+    let state = WebState::new(plan.net, policy, seed);
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
