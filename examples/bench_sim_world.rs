@@ -8,9 +8,9 @@
 use std::time::Instant;
 
 use gspn::io::ReadOptions;
-use gspn::world::map::{Map, QueueSpec, RobotSpec};
 use gspn::plan::read_plan;
 use gspn::world::Fleet;
+use gspn::world::map::{Map, QueueSpec, RobotSpec};
 use gspn::world::room::{Room, Vec2};
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -55,6 +55,7 @@ pub mod prelude {
     pub use crate::net::{
         ArcKind, Marking, Net, NetBuilder, PlaceId, Servers, Timing, TransitionId,
     };
+    pub use crate::plan::{Plan, read_plan};
     pub use crate::runtime::{
         Action, ActionContext, AgentId, Outcome, Runtime, RuntimeHandle, StopReason, action_fn,
     };

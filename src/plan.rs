@@ -46,12 +46,13 @@ use std::path::{Path, PathBuf};
 use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span, read_net};
 use crate::net::{Net, PlaceId};
 use crate::policy::Policy;
+use crate::ros2::Ros2Settings;
 use crate::runtime::{Role, Runtime, RuntimeBuilder, StopConditions};
 use crate::world::map::Map;
 use file::locate;
 
 pub use file::{ParamValue, PlaceFile, PlanFile, RuleFile, StopFile, json_schema};
-pub use ros2::{DEFAULT_SERVER, ROS2_ACTION, Ros2File, Ros2Settings};
+pub use ros2::Ros2File;
 
 /// A plan ready to run: the net, what each place does, the policy and when to stop.
 #[derive(Clone, Debug)]
@@ -194,13 +195,13 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
 #[derive(Clone, Debug)]
 pub enum Opened {
     /// A plan file (`.toml`) with the net it names.
-    Plan(Plan),
+    Plan(Box<Plan>),
     /// A net file (PIPE, PNML, PNPRO).
     Net {
         /// The file.
         path: PathBuf,
         /// The net, its format and the reader's warnings.
-        loaded: Loaded,
+        loaded: Box<Loaded>,
     },
 }
 
@@ -209,8 +210,8 @@ impl Opened {
     /// net-timed, no policy, no stop condition).
     pub fn into_plan(self) -> Plan {
         match self {
-            Opened::Plan(plan) => plan,
-            Opened::Net { path, loaded } => Plan::for_net(&path, loaded),
+            Opened::Plan(plan) => *plan,
+            Opened::Net { path, loaded } => Plan::for_net(&path, *loaded),
         }
     }
 }
@@ -219,11 +220,11 @@ impl Opened {
 /// Every command that accepts "a plan or a net" goes through here.
 pub fn open(path: &Path, opts: &ReadOptions) -> Result<Opened, LoadError> {
     if Format::from_extension(path) == Some(Format::Plan) {
-        Ok(Opened::Plan(read_plan(path, opts)?))
+        Ok(Opened::Plan(Box::new(read_plan(path, opts)?)))
     } else {
         Ok(Opened::Net {
             path: path.to_path_buf(),
-            loaded: read_net(path, opts)?,
+            loaded: Box::new(read_net(path, opts)?),
         })
     }
 }

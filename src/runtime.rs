@@ -9,6 +9,8 @@
 //! - [`event`]: the broadcast bus of [`Event`]s; [`journal`]: the JSON Lines journal.
 //! - [`RuntimeBuilder`] / [`RuntimeHandle`]: embedding in an existing tokio runtime.
 //! - [`Role`] and [`FailurePolicy`] (what a place does), [`StopConditions`] (when a run ends).
+//! - [`Backend`]: what a run drives besides its actors (robot world, ROS 2, viewer), kept in
+//!   [`Backends`].
 //!
 //! Places without a registered action are *net-timed*: the supervisor samples their
 //! exponential transitions with the net's rates and server semantics, so a plan with no user
@@ -44,6 +46,7 @@
 
 pub mod action;
 pub mod agent;
+mod backend;
 mod builder;
 mod conservation;
 mod engine;
@@ -61,6 +64,7 @@ use serde::Serialize;
 
 pub use action::{Action, ActionContext, ActionFuture, CancelToken, FnAction, Outcome, action_fn};
 pub use agent::{AgentId, AgentMode, AgentState};
+pub use backend::{Backend, BackendError, BackendFuture, Backends, RunError, Section};
 pub use builder::RuntimeBuilder;
 pub use event::{Event, EventKind, Events, Received};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};

@@ -11,6 +11,7 @@
 //! - [`queue`]: first-come-first-served queues with lanes at every location.
 //! - [`action`]: the built-in [`Action`](crate::runtime::Action)s and how a plan names them.
 //! - [`fleet`]: a plan with a `[map]` → robots placed, world spawned, actions registered.
+//! - [`backend`]: the world as a [`Backend`](crate::runtime::Backend) of its run.
 //! - [`metrics`]: collisions, clearance, order violations, stuck robots, patrol cycles.
 //! - [`view`]: [`WorldView`], what a viewer draws, published on a `watch` channel.
 //!
@@ -49,6 +50,10 @@ pub mod program;
 #[cfg(feature = "sim")]
 pub mod action;
 #[cfg(feature = "sim")]
+mod actor;
+#[cfg(feature = "sim")]
+pub mod backend;
+#[cfg(feature = "sim")]
 pub mod fleet;
 #[cfg(feature = "sim")]
 pub mod metrics;
@@ -58,13 +63,13 @@ pub mod queue;
 pub mod room;
 #[cfg(feature = "sim")]
 pub mod view;
-#[cfg(feature = "sim")]
-mod actor;
 
 #[cfg(feature = "sim")]
 pub use action::SimAction;
 #[cfg(feature = "sim")]
 pub use actor::{GotoError, RobotStart, World, WorldHandle};
+#[cfg(feature = "sim")]
+pub use backend::WorldBackend;
 #[cfg(feature = "sim")]
 pub use fleet::{Fleet, FleetError};
 #[cfg(feature = "sim")]

@@ -7,9 +7,9 @@ use std::path::Path;
 
 use toml::Spanned;
 
+use super::Plan;
 use super::file::{PlaceFile, PlanFile, RuleFile, locate};
 use super::ros2::resolve_ros2;
-use super::Plan;
 use crate::io::{LoadError, LoadErrorKind};
 use crate::net::predicate::Predicate;
 use crate::net::{Net, PlaceId, Timing, TransitionId};
@@ -176,7 +176,12 @@ fn unknown(what: &'static str, name: &str) -> LoadErrorKind {
     }
 }
 
-pub(super) fn out_of_range(what: &'static str, name: &str, v: f64, expected: &'static str) -> LoadErrorKind {
+pub(super) fn out_of_range(
+    what: &'static str,
+    name: &str,
+    v: f64,
+    expected: &'static str,
+) -> LoadErrorKind {
     LoadErrorKind::OutOfRange {
         what,
         name: name.to_string(),

@@ -31,8 +31,8 @@ use tokio::sync::oneshot;
 use super::config::DdsConfig;
 use super::firings::FiringListener;
 use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, Time, exec_place_type};
-use super::{Ros2Error, heartbeat};
 use super::settings::Ros2Settings;
+use super::{Ros2Error, heartbeat};
 use crate::net::{Net, PlaceId, Timing};
 
 type Server = AsyncActionServer<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>;

@@ -81,12 +81,15 @@ impl Map {
                 }
             };
             let step = match words.as_slice() {
-                ["goto", loc] => Step::Goto(self.location(loc).ok_or_else(|| {
-                    ProgramError::UnknownLocation {
-                        step: step_name(),
-                        location: loc.to_string(),
-                    }
-                })?),
+                ["goto", loc] => {
+                    Step::Goto(
+                        self.location(loc)
+                            .ok_or_else(|| ProgramError::UnknownLocation {
+                                step: step_name(),
+                                location: loc.to_string(),
+                            })?,
+                    )
+                }
                 ["goto", ..] => return Err(ProgramError::GotoArity { step: step_name() }),
                 ["measure", rest @ ..] if rest.len() <= 1 => Step::Measure(seconds(rest.first())?),
                 ["wait", rest @ ..] if rest.len() <= 1 => Step::Wait(seconds(rest.first())?),

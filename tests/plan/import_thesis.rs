@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
 use gspn::io::LoadErrorKind;
-use gspn::plan::Plan;
-use gspn::runtime::Role;
-use gspn::plan::thesis::{ImportOptions, KeyItem, import, plan_text, read_input};
 use gspn::net::{NetBuilder, Servers};
+use gspn::plan::Plan;
+use gspn::plan::thesis::{ImportOptions, KeyItem, import, plan_text, read_input};
 use gspn::policy::Pattern;
+use gspn::runtime::Role;
 
 fn fixtures() -> PathBuf {
     crate::support::fixtures::root()

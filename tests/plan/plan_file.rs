@@ -6,10 +6,10 @@
 
 use std::path::{Path, PathBuf};
 
-use gspn::plan::{json_schema, read_plan};
-use gspn::runtime::{FailurePolicy, Role};
 use gspn::io::{LoadError, LoadErrorKind, ReadOptions};
+use gspn::plan::{json_schema, read_plan};
 use gspn::policy::Pattern;
+use gspn::runtime::{FailurePolicy, Role};
 
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)

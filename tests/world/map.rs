@@ -6,8 +6,8 @@
 use std::path::{Path, PathBuf};
 
 use gspn::io::ReadOptions;
-use gspn::plan::read_plan;
 use gspn::net::{NetBuilder, Servers};
+use gspn::plan::read_plan;
 use gspn::runtime::{EventKind, Received, StopReason};
 use gspn::world::{Fleet, FleetError};
 use serde_json::{Value, json};

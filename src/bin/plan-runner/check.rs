@@ -31,13 +31,13 @@ pub(crate) struct Args {
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let (report, extra) = match open(&args.file, &args.net.read_options())? {
         Opened::Plan(plan) => {
-        let roles = plan.roles.iter().flatten().count();
-        let extra = format!(
-            "net {}; {} policy rule(s), {roles} place role(s)",
-            plan.net_path.display(),
-            plan.policy.rules().len()
-        );
-        (Report::for_plan(&plan), Some(extra))
+            let roles = plan.roles.iter().flatten().count();
+            let extra = format!(
+                "net {}; {} policy rule(s), {roles} place role(s)",
+                plan.net_path.display(),
+                plan.policy.rules().len()
+            );
+            (Report::for_plan(&plan), Some(extra))
         }
         Opened::Net { loaded, .. } => (
             Report::for_net(&loaded.net, loaded.format, &loaded.warnings),

@@ -9,9 +9,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context;
-use gspn::plan::open;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
+use gspn::plan::open;
 use gspn::policy::Policy;
 use gspn::sim::{Estimate, Horizon, MonteCarlo, SimError, Simulator};
 use serde_json::{Map, Value, json};

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::net::{NetBuilder, Servers};
+use crate::ros2::DEFAULT_SERVER;
 
 /// P1 -T1-> P2 -t2|t3-> P3|P1 ; P3 -T4-> P1. Names with `:` as in the thesis.
 fn net() -> Net {
@@ -113,9 +114,8 @@ fn unknown_names_are_load_errors_at_their_position() {
     let (l, c, m) = err_at("net = \"n.xml\"\n[places.P9]\naction = \"a\"\n");
     assert_eq!((l, c), (2, 9));
     assert_eq!(m, "place `P9` does not exist");
-    let (l, c, m) = err_at(
-        "net = \"n.xml\"\n[[policy]]\nmarking = { P2 = 1, Q = 0 }\nchoose = { t2 = 1 }\n",
-    );
+    let (l, c, m) =
+        err_at("net = \"n.xml\"\n[[policy]]\nmarking = { P2 = 1, Q = 0 }\nchoose = { t2 = 1 }\n");
     assert_eq!((l, c), (3, 21));
     assert_eq!(m, "place `Q` does not exist");
     let (l, c, m) =
@@ -160,8 +160,7 @@ fn role_mistakes_are_refused() {
     let (l, _, m) = err_at("net = \"n.xml\"\n[places.P2]\ntimeout = 3.0\n");
     assert_eq!(l, 2);
     assert!(m.contains("`action`"), "{m}");
-    let (l, c, m) =
-        err_at("net = \"n.xml\"\n[places.P2]\nrole = \"resource\"\ntimeout = 3.0\n");
+    let (l, c, m) = err_at("net = \"n.xml\"\n[places.P2]\nrole = \"resource\"\ntimeout = 3.0\n");
     assert_eq!((l, c), (4, 11));
     assert!(m.contains("resource"), "{m}");
     let (l, c, _) = err_at("net = \"n.xml\"\n[places.P2]\naction = \"a\"\ntimeout = -1.0\n");
@@ -172,8 +171,8 @@ fn role_mistakes_are_refused() {
     let (_, _, m) =
         err_at("net = \"n.xml\"\n[places.P2]\naction = \"a\"\non_failure = \"retry x\"\n");
     assert!(m.contains("`x` is not a number"), "{m}");
-    let plan = load("net = \"n.xml\"\n[places.P2]\naction = \"a\"\non_failure = \"retry 3\"\n")
-        .unwrap();
+    let plan =
+        load("net = \"n.xml\"\n[places.P2]\naction = \"a\"\non_failure = \"retry 3\"\n").unwrap();
     assert!(matches!(
         plan.roles[1],
         Some(Role::Action {
@@ -214,8 +213,7 @@ fn ros2_mistakes_are_refused_at_their_position() {
         m.contains("`server` applies to places with action = \"ros2\""),
         "{m}"
     );
-    let (l, c, m) =
-        err_at("net = \"n.xml\"\n[places.P2]\naction = \"ros2\"\nserver = \"a b\"\n");
+    let (l, c, m) = err_at("net = \"n.xml\"\n[places.P2]\naction = \"ros2\"\nserver = \"a b\"\n");
     assert_eq!((l, c), (4, 10));
     assert!(m.contains("server `a b` is not a ROS 2 name"), "{m}");
     let (l, c, m) = err_at("net = \"n.xml\"\n[ros2]\nnetworks = [\"127.0.0.1\", \"lo\"]\n");
