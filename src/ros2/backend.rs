@@ -30,7 +30,8 @@ use super::msgs::{
     exec_place_type,
 };
 use super::remote_place::{RemotePlaces, RobotLink};
-use crate::io::plan::{Plan, ROS2_ACTION};
+use super::settings::{ROS2_ACTION, Ros2Settings};
+use crate::net::Net;
 use crate::runtime::{Events, RuntimeBuilder};
 
 /// The supervisor's ROS 2 side: links to the robots and the firing publisher.
@@ -70,11 +71,12 @@ fn client_qos() -> ActionClientQosPolicies {
 }
 
 impl Ros2Backend {
-    /// Joins DDS and links to every robot of `robots` for the plan's `ros2` places; waits
-    /// (at most `cfg.startup`) until each robot's heartbeat and servers are seen and
-    /// `/gspn/firings` has at least `subscribers` matched subscriptions.
+    /// Joins DDS and links to every robot of `robots` for the `ros2` places of `settings`
+    /// (places of `net`); waits (at most `cfg.startup`) until each robot's heartbeat and
+    /// servers are seen and `/gspn/firings` has at least `subscribers` matched subscriptions.
     pub async fn connect(
-        plan: &Plan,
+        net: &Net,
+        settings: &Ros2Settings,
         robots: &[String],
         cfg: &DdsConfig,
         subscribers: usize,
@@ -87,9 +89,9 @@ impl Ros2Backend {
             }
         });
         let watch = RobotWatch::start(&mut node, robots, cfg.lost_after)?;
-        let publisher = FiringPublisher::new(&mut node, Arc::new(plan.net.clone()))?;
+        let publisher = FiringPublisher::new(&mut node, Arc::new(net.clone()))?;
         let run_state = RunStatePublisher::new(&mut node)?;
-        let mut servers: Vec<&str> = plan.ros2.servers.iter().map(|(_, s)| s.as_str()).collect();
+        let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
         servers.sort_unstable();
         servers.dedup();
         let mut clients = Vec::new();
@@ -147,7 +149,7 @@ impl Ros2Backend {
                 publisher.firing_subscribers(&node)
             ))
         })?;
-        let servers: HashMap<_, _> = plan.ros2.servers.iter().cloned().collect();
+        let servers: HashMap<_, _> = settings.servers.iter().cloned().collect();
         run_state
             .publish(RunState {
                 state: RUN_RUNNING.into(),
