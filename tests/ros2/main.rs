@@ -10,7 +10,6 @@ mod ros2_support;
 #[path = "rtps.rs"]
 mod ros2_rtps;
 
-mod fleet;
 mod interop;
 mod lifecycle;
 mod multiprocess;
