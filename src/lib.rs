@@ -7,6 +7,11 @@
 //!
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
 //! - [`io`]: readers and writers — PIPE XML, PNML, GreatSPN PNPRO, DOT, plan files.
+//! - [`sample`]: chance at the bottom layer — the seeded generator, the portable exponential
+//!   sampler, weighted picks and the sum tree; every random draw goes through it.
+//! - [`firing`]: the firing rules, once — enabling, the immediate choice, the exponential
+//!   race with server semantics, the statistics; the explorer, the token game and the
+//!   runtime drive it with their own choosers.
 //! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded; `sim::world`
 //!   (feature `sim`): simulated robots in a rapier2d room, driven by built-in actions.
 //! - [`analysis`]: the tangible reachability graph, properties (bounds, deadlocks, liveness,
@@ -28,12 +33,14 @@
 
 pub mod analysis;
 pub mod check;
+pub mod firing;
 pub mod io;
 pub mod net;
 pub mod policy;
 #[cfg(feature = "ros2")]
 pub mod ros2;
 pub mod runtime;
+pub mod sample;
 pub mod sim;
 #[cfg(feature = "web")]
 pub mod web;

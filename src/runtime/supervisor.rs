@@ -432,20 +432,20 @@ impl Supervisor {
             self.kick();
             return;
         }
-        let total = self.eng.race.total();
+        let total = self.eng.race_total();
         if total <= 0.0 && self.eng.running == 0 {
             self.dead();
             return;
         }
         if let Some((_, version)) = &self.timer
-            && *version == self.eng.race_version
+            && *version == self.eng.race_version()
         {
             return; // the race did not change: the pending sample stays valid (memoryless)
         }
         self.cancel_timer();
         self.generation += 1;
         let (mut at, mut limit) = (f64::INFINITY, false);
-        if let Some((dt, _)) = self.eng.sample_race() {
+        if let Some(dt) = self.eng.sample_delay() {
             at = self.now + dt;
         }
         if let Some(u) = self.stop.time_limit
@@ -467,7 +467,7 @@ impl Supervisor {
                     })
                     .try_send();
             });
-            self.timer = Some((h, self.eng.race_version));
+            self.timer = Some((h, self.eng.race_version()));
         }
     }
 

@@ -9,6 +9,7 @@ mod actor_agents_at_scale;
 mod agent_identity;
 mod agents_match_tokens;
 mod failures;
+mod golden_trace;
 mod matches_analysis;
 mod policy;
 mod repeats_from_seed;

@@ -156,8 +156,7 @@ impl Message<Timer> for Supervisor {
         self.jump_to(msg.at.max(self.now));
         if msg.limit {
             self.begin_stop(StopReason::TimeLimit);
-        } else if self.eng.race.total() > 0.0 {
-            let t = self.eng.pick_race();
+        } else if let Some(t) = self.eng.pick_race() {
             self.fire_one(t);
             self.settle();
             self.schedule();
