@@ -23,7 +23,10 @@ fn main() {
         .collect();
     // Each call site is its own monomorphised loop, so every logarithm is inlined as in the
     // sampler.
-    report("libm::log (gspn::sample::ln)", measure(&xs, gspn::sample::ln));
+    report(
+        "libm::log (gspn::sample::ln)",
+        measure(&xs, gspn::sample::ln),
+    );
     report("hand-written series", measure(&xs, gspn::sample::ln_series));
     report("f64::ln (platform, not portable)", measure(&xs, f64::ln));
 }

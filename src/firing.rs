@@ -27,8 +27,8 @@
 
 mod statistics;
 
-pub(crate) use statistics::Tally;
 pub use statistics::Statistics;
+pub(crate) use statistics::Tally;
 
 use crate::net::{Net, Servers, Timing, TransitionId};
 use crate::policy::Policy;
@@ -38,7 +38,8 @@ use crate::sample::{self, Rng, SumTree};
 /// exceeded. `has_capacity` is false when no place of the net has a capacity (skips a loop).
 #[inline]
 pub(crate) fn enabled(net: &Net, m: &[u32], t: TransitionId, has_capacity: bool) -> bool {
-    net.inputs(t).iter().all(|&(p, w)| m[p.index()] >= w) && side_conditions(net, m, t, has_capacity)
+    net.inputs(t).iter().all(|&(p, w)| m[p.index()] >= w)
+        && side_conditions(net, m, t, has_capacity)
 }
 
 /// Inhibitors below threshold and no capacity exceeded (the input arcs checked apart).
@@ -127,7 +128,12 @@ impl Rules {
 /// Every move out of `m`, for the exhaustive chooser: fills `out` with what may fire and its
 /// rate (tangible `m`) or its probability (vanishing `m`, by weight, uniform when all weights
 /// are 0; no policy); returns whether `m` is tangible. Empty `out`: `m` is dead.
-pub(crate) fn moves(net: &Net, rules: &Rules, m: &[u32], out: &mut Vec<(TransitionId, f64)>) -> bool {
+pub(crate) fn moves(
+    net: &Net,
+    rules: &Rules,
+    m: &[u32],
+    out: &mut Vec<(TransitionId, f64)>,
+) -> bool {
     out.clear();
     let mut level = None;
     for &(t, w, pr) in &rules.immediates {

@@ -152,7 +152,10 @@ mod tests {
         assert_eq!(pick_weighted_with(0.25, &items), Some('c'));
         assert_eq!(pick_weighted_with(0.999_999, &items), Some('c'));
         // Past the end by rounding: the last positive item, never a zero one.
-        assert_eq!(pick_weighted_with(1.0, &[('a', 1.0), ('z', 0.0)]), Some('a'));
+        assert_eq!(
+            pick_weighted_with(1.0, &[('a', 1.0), ('z', 0.0)]),
+            Some('a')
+        );
         assert_eq!(pick_weighted_with(0.5, &[('a', 0.0)]), None);
         assert_eq!(pick_weighted_with::<char>(0.5, &[]), None);
     }

@@ -138,6 +138,10 @@ impl Simulator {
     }
 
     /// A run of `net` from `marking` at time 0, drawing from `seed` (stream 0).
+    ///
+    /// # Panics
+    ///
+    /// When `marking` does not have one count per place of `net` (a caller's bug).
     pub fn from_marking(net: impl Into<Arc<Net>>, marking: Marking, seed: u64) -> Simulator {
         let net = net.into();
         assert_eq!(marking.len(), net.place_count(), "one count per place");

@@ -12,7 +12,8 @@ use std::sync::Arc;
 
 use rustc_hash::FxHashMap;
 
-use super::agent::{AgentId, AgentState};
+use super::agent::AgentState;
+use super::id::AgentId;
 use crate::firing::{Firable, Statistics, Tally};
 use crate::net::{Marking, Net, PlaceId, TransitionId};
 use crate::policy::Policy;
@@ -92,7 +93,7 @@ pub(crate) struct Engine {
     pub(crate) agents_spawned: u64,
     pub(crate) agents_ended: u64,
     /// Some agent is bound to a robot (firings then report the robots they moved).
-    pub(crate) has_robots: bool,
+    has_robots: bool,
 }
 
 impl Engine {
@@ -159,6 +160,25 @@ impl Engine {
             },
         );
         id
+    }
+
+    /// Binds the initial agents to their robots, in order (none: no robots).
+    pub(crate) fn bind_robots(
+        &mut self,
+        agents: impl Iterator<Item = AgentId>,
+        robots: Vec<Arc<str>>,
+    ) {
+        self.has_robots = !robots.is_empty();
+        for (id, robot) in agents.zip(robots) {
+            if let Some(rec) = self.agents.get_mut(&id) {
+                rec.robot = Some(robot);
+            }
+        }
+    }
+
+    /// An agent's running action ended (its report was accepted).
+    pub(crate) fn action_ended(&mut self) {
+        self.running -= 1;
     }
 
     /// True when a place's agents have something to do (an output transition).

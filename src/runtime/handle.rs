@@ -9,9 +9,10 @@ use serde::Serialize;
 use tokio::sync::{broadcast, watch};
 
 use super::StopReason;
-use super::agent::{AgentId, AgentState};
+use super::agent::AgentState;
 use super::engine::Engine;
 use super::event::{Event, Events};
+use super::id::AgentId;
 use super::supervisor::{GetAgents, GetMarking, StopRequest, Supervisor};
 use crate::net::{Marking, Net, PlaceId};
 

@@ -24,7 +24,11 @@ fn plan() -> Plan {
 fn hash(trace: &[(u32, f64)]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for &(t, time) in trace {
-        for b in t.to_le_bytes().into_iter().chain(time.to_bits().to_le_bytes()) {
+        for b in t
+            .to_le_bytes()
+            .into_iter()
+            .chain(time.to_bits().to_le_bytes())
+        {
             h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
         }
     }
@@ -32,8 +36,8 @@ fn hash(trace: &[(u32, f64)]) -> u64 {
 }
 
 fn token_game(plan: &Plan) -> Vec<(u32, f64)> {
-    let mut sim = Simulator::new(plan.net.clone(), plan.seed.unwrap())
-        .with_policy(plan.policy.clone());
+    let mut sim =
+        Simulator::new(plan.net.clone(), plan.seed.unwrap()).with_policy(plan.policy.clone());
     (0..FIRINGS)
         .map(|_| {
             let step = sim.step().unwrap().expect("the patrol never dies");

@@ -11,6 +11,7 @@ mod agents_match_tokens;
 mod failures;
 mod golden_trace;
 mod matches_analysis;
+mod old_journal_replays;
 mod policy;
 mod repeats_from_seed;
 mod robot_tokens;

@@ -33,7 +33,7 @@ fn choice() -> (Net, [TransitionId; 2]) {
     (n.build().unwrap(), [a, b])
 }
 
-fn trace(sim: &mut Simulator<'_>, n: usize) -> Vec<Step> {
+fn trace(sim: &mut Simulator, n: usize) -> Vec<Step> {
     (0..n).map_while(|_| sim.step().unwrap()).collect()
 }
 

@@ -460,7 +460,7 @@ async fn a_journal_plays_back_on_the_time_slider() {
         .wait()
         .await;
     let text = std::fs::read_to_string(&path).unwrap();
-    let frames = gspn::web::replay::read_journal(&text, &cyc3()).unwrap();
+    let frames = gspn::runtime::journal::read_journal(&text, &cyc3()).unwrap();
     let (addr, server) = start_server(WebState::for_replay(cyc3(), frames.clone())).await;
     let b = Browser::start(1200, 800).await;
     open(&b, addr).await;
