@@ -14,7 +14,7 @@ use gspn::sim::Simulator;
 const FIRINGS: usize = 10_000;
 
 /// FNV-1a over each firing's transition index and the bits of its time.
-const TRACE_HASH: u64 = 0;
+const TRACE_HASH: u64 = 0x3f76_94b2_3e89_f26c;
 
 fn plan() -> Plan {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("plans/temperature_patrol.toml");

@@ -9,7 +9,6 @@ use super::super::agent::AgentState;
 use super::super::engine::Ready;
 use super::super::event::EventKind;
 use super::super::handle::AgentInfo;
-use super::super::id::AgentId;
 use super::Supervisor;
 
 /// The next net-timed firing (or the time limit) is due.
