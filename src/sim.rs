@@ -50,8 +50,6 @@
 //! ```
 
 mod monte_carlo;
-#[cfg(feature = "sim")]
-pub mod world;
 
 pub use crate::firing::Statistics;
 pub use monte_carlo::{Estimate, Estimates, Horizon, MonteCarlo, monte_carlo, t_quantile_975};

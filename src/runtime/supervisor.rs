@@ -31,7 +31,7 @@ use super::journal::Journal;
 use super::place::{Place, Start};
 use super::sink::EventSink;
 use super::snapshot::Snapshots;
-use crate::io::plan::{FailurePolicy, StopConditions};
+use super::{FailurePolicy, StopConditions};
 use crate::net::{PlaceId, TransitionId};
 
 mod messages;
