@@ -7,8 +7,8 @@
 use std::path::Path;
 
 use gspn::io::ReadOptions;
-use gspn::io::plan::{Plan, read_plan};
-use gspn::runtime::{EventKind, Received, Runtime};
+use gspn::plan::{Plan, read_plan};
+use gspn::runtime::{EventKind, Received};
 use gspn::sim::Simulator;
 
 const FIRINGS: usize = 10_000;
@@ -47,7 +47,8 @@ fn token_game(plan: &Plan) -> Vec<(u32, f64)> {
 }
 
 async fn runtime(plan: Plan) -> Vec<(u32, f64)> {
-    let mut h = Runtime::from_plan(plan)
+    let mut h = plan
+        .runtime_builder()
         .max_firings(FIRINGS as u64)
         .until(1e12)
         .event_capacity(1 << 16)

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use gspn::io::ReadOptions;
-use gspn::io::plan::read_plan;
+use gspn::plan::read_plan;
 use gspn::runtime::journal::{read_events, read_journal};
 use gspn::runtime::{EventKind, StopReason};
 
