@@ -10,8 +10,8 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use gspn::io::expr::Expr;
-use gspn::io::plan::PlanFile;
-use gspn::io::{ReadOptions, pipe, pnml, pnpro, thesis};
+use gspn::io::{ReadOptions, pipe, pnml, pnpro};
+use gspn::plan::{PlanFile, thesis};
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
 

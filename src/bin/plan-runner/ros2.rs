@@ -3,24 +3,30 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use gspn::io::plan::{Plan, read_plan};
+use gspn::plan::{Plan, read_plan};
 use gspn::ros2::config::{parse_domain, parse_networks};
 use gspn::ros2::heartbeat::Liveness;
 use gspn::ros2::robot::{RobotOptions, serve};
 use gspn::ros2::{DdsConfig, Ros2Backend};
+use gspn::runtime::{
+    Backend, BackendError, BackendFuture, Events, RuntimeBuilder, RuntimeHandle, Section, Summary,
+};
 
 use crate::common::{BadInput, NetArgs};
 
 /// DDS flags (override the plan's `[ros2]` table and the `GSPN_ROS2_*` environment).
 #[derive(clap::Args, Debug, Clone, Default)]
 pub(crate) struct DdsArgs {
-    /// DDS domain id (0–232) [default: the plan's, else $GSPN_ROS2_DOMAIN, else 0].
+    /// DDS domain id (0–232) [default: the plan's, else $GSPN_ROS2_DOMAIN, else
+    /// $ROS_DOMAIN_ID, else 0].
     #[arg(long, value_name = "ID", value_parser = domain)]
     ros2_domain: Option<u16>,
-    /// Local IP addresses DDS may use, comma-separated [default: 127.0.0.1].
+    /// The local IPv4 address every DDS socket binds to [default: the plan's, else
+    /// $GSPN_ROS2_NETWORKS, else 127.0.0.1; 0.0.0.0 = every interface].
     #[arg(long, value_name = "ADDRS")]
     ros2_networks: Option<String>,
 }
@@ -39,7 +45,9 @@ impl DdsArgs {
             c.networks = parse_networks(n)
                 .map_err(|why| BadInput(format!("--ros2-networks `{n}`: {why}")))?;
         }
-        Ok(c)
+        c.bind_address().map_err(|e| BadInput(e.to_string()))?;
+        // The supervisor, the robots and a viewer or two on one host: any start order.
+        Ok(c.for_fleet(plan.robots.len() + 2))
     }
 }
 
@@ -55,6 +63,36 @@ pub(crate) struct RunArgs {
     /// Seconds to stay on DDS after the run, so subscribers receive the last firings.
     #[arg(long, value_name = "SECS", default_value_t = 0.5)]
     ros2_linger: f64,
+    /// Accept time scale 0 (virtual time) with ros2 places: the robots still act in real
+    /// time, so model times mean nothing.
+    #[arg(long)]
+    allow_virtual_time: bool,
+}
+
+/// Refuses a plan with ros2 places the supervisor cannot run: no robots to send goals to,
+/// or virtual time (time scale 0, the default without one) without `--allow-virtual-time`
+/// (robots act in real time).
+pub(crate) fn check_plan(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
+    if !wanted(plan) {
+        return Ok(());
+    }
+    if plan.robots.is_empty() {
+        return Err(BadInput(format!(
+            "{}: the plan has ros2 places but no `robots = [...]` to send their goals to",
+            plan.path.display()
+        ))
+        .into());
+    }
+    if plan.time_scale.unwrap_or(0.0) == 0.0 && !args.allow_virtual_time {
+        return Err(BadInput(format!(
+            "{}: time scale 0 (virtual time) with ros2 places: the robots act in real time, so \
+             the run's model times would mean nothing; give --time-scale X > 0 (or the plan's \
+             time_scale), or --allow-virtual-time",
+            plan.path.display()
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 /// The plan's robots, when it has `ros2` places (else the ROS 2 backend stays off).
@@ -63,22 +101,21 @@ pub(crate) fn wanted(plan: &Plan) -> bool {
 }
 
 /// Joins DDS and links to the plan's robots.
-pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2Backend> {
+pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2Run> {
     let cfg = args.dds.config(plan)?;
-    if plan.robots.is_empty() {
-        return Err(BadInput(format!(
-            "{}: the plan has ros2 places but no `robots = [...]` to send their goals to",
-            plan.path.display()
-        ))
-        .into());
-    }
     eprintln!(
         "ros2: domain {}, waiting for robot(s) {}",
         cfg.domain_id,
         plan.robots.join(", ")
     );
-    let backend =
-        Ros2Backend::connect(plan, &plan.robots, &cfg, args.ros2_wait_subscribers).await?;
+    let backend = Ros2Backend::connect(
+        &plan.net,
+        &plan.ros2,
+        &plan.robots,
+        &cfg,
+        args.ros2_wait_subscribers,
+    )
+    .await?;
     eprintln!("ros2: robots ready");
     // Say when a robot is lost or back (the runs' errors say which action it failed).
     for r in &plan.robots {
@@ -99,17 +136,64 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2B
             });
         }
     }
-    Ok(backend)
+    Ok(Ros2Run {
+        backend: Some(backend),
+        linger: Duration::from_secs_f64(args.ros2_linger.clamp(0.0, 60.0)),
+    })
 }
 
-/// After the run: let the publisher finish and linger.
-pub(crate) async fn finish(backend: Ros2Backend, args: &RunArgs) {
-    let linger = Duration::from_secs_f64(args.ros2_linger.clamp(0.0, 60.0));
-    let p = backend.finish(linger).await;
-    eprintln!(
-        "ros2: published {} firings ({} events lost, {} publish errors)",
-        p.firings, p.lagged, p.errors
-    );
+/// The ROS 2 side of `run` as a backend: registers the `ros2` action, publishes the run's
+/// firings and marking, and after the run lingers so subscribers get the last ones.
+#[derive(Debug)]
+pub(crate) struct Ros2Run {
+    backend: Option<Ros2Backend>,
+    linger: Duration,
+}
+
+impl Backend for Ros2Run {
+    fn name(&self) -> &'static str {
+        "ros2"
+    }
+
+    fn attach(&mut self, run: RuntimeBuilder) -> Result<RuntimeBuilder, BackendError> {
+        Ok(match &self.backend {
+            Some(b) => b.attach(run),
+            None => run,
+        })
+    }
+
+    fn observes_events(&self) -> bool {
+        true
+    }
+
+    fn started<'a>(
+        &'a mut self,
+        _run: &'a Arc<RuntimeHandle>,
+        events: Option<Events>,
+    ) -> BackendFuture<'a, Result<(), BackendError>> {
+        if let (Some(b), Some(events)) = (&mut self.backend, events) {
+            b.publish(events);
+        }
+        Box::pin(async { Ok(()) })
+    }
+
+    /// Tells the robots the run is over (why it stopped), lets the publisher finish and
+    /// lingers; the counts go to stderr.
+    fn finish<'a>(&'a mut self, summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
+        Box::pin(async move {
+            let backend = self.backend.take()?;
+            let stopped = serde_json::to_value(&summary.stopped)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default();
+            let p = backend.finish(self.linger, &stopped).await;
+            eprintln!(
+                "ros2: published {} firings ({} events lost, {} publish errors)",
+                p.firings, p.lagged, p.errors
+            );
+            None
+        })
+    }
 }
 
 /// Arguments of `robot`.
@@ -131,13 +215,17 @@ pub(crate) struct RobotArgs {
     /// Append `seq stamp_ns received_ns` for every firing received to this file.
     #[arg(long, value_name = "FILE")]
     latency_log: Option<PathBuf>,
+    /// Keep serving after the supervisor says its run is over (default: exit then).
+    #[arg(long)]
+    stay: bool,
     #[command(flatten)]
     dds: DdsArgs,
     #[command(flatten)]
     net: NetArgs,
 }
 
-/// `plan-runner robot`: serve until Ctrl-C or SIGTERM.
+/// `plan-runner robot`: serve until the supervisor's run is over (with `--stay`: until
+/// Ctrl-C or SIGTERM).
 pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
     let plan = read_plan(&args.plan, &args.net.read_options())?;
     if !wanted(&plan) {
@@ -167,6 +255,7 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         seed: args.seed.or(plan.seed).unwrap_or(0),
         time_scale: scale,
         latency_log: args.latency_log.clone(),
+        stay: args.stay,
     };
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -180,8 +269,14 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
             cfg.domain_id,
             plan.ros2.servers.len()
         );
-        serve(&plan, &cfg, opts, shutdown()).await
+        serve(&plan.net, &plan.ros2, &cfg, opts, shutdown()).await
     })?;
+    if let Some(over) = &stats.run_over {
+        eprintln!(
+            "robot {}: the supervisor's run is over ({over}): leaving",
+            args.id
+        );
+    }
     eprintln!(
         "robot {}: {} goals, {} cancelled, {} firings received",
         args.id, stats.goals, stats.cancelled, stats.firings

@@ -1,0 +1,128 @@
+//! The ROS 2 part of plan files (feature `ros2` uses it; plans parse it with or without the
+//! feature): the `[ros2]` table and the `server` key of `ros2` places (`docs/ros2.md`),
+//! resolved into the backend's [`Ros2Settings`].
+
+use std::collections::BTreeMap;
+use std::ops::Range;
+
+use schemars::JsonSchema;
+use serde::Deserialize;
+use toml::Spanned;
+
+use super::file::PlaceFile;
+use super::resolve::out_of_range;
+use crate::io::{LoadError, LoadErrorKind};
+use crate::net::Net;
+use crate::ros2::settings::{DEFAULT_SERVER, ROS2_ACTION, Ros2Settings};
+
+/// The `[ros2]` table: how the ROS 2 backend joins DDS and watches robots.
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Ros2File {
+    /// The DDS domain id (0–232; default 0).
+    #[schemars(with = "Option<u16>", range(max = 232))]
+    pub domain_id: Option<Spanned<u16>>,
+    /// Local IP addresses DDS may use (default `["127.0.0.1"]`: loopback only).
+    #[schemars(with = "Option<Vec<String>>")]
+    pub networks: Option<Vec<Spanned<String>>>,
+    /// Seconds between a robot's heartbeats (default 0.1).
+    #[schemars(with = "Option<f64>", range(min = 0.0))]
+    pub heartbeat: Option<Spanned<f64>>,
+    /// Seconds without a heartbeat after which a robot is lost (default 1.0).
+    #[schemars(with = "Option<f64>", range(min = 0.0))]
+    pub lost_after: Option<Spanned<f64>>,
+    /// Seconds the supervisor waits for every robot before it gives up (default 30).
+    #[schemars(with = "Option<f64>", range(min = 0.0))]
+    pub startup: Option<Spanned<f64>>,
+}
+
+/// The `[ros2]` table and the `server` keys of the places.
+pub(super) fn resolve_ros2(
+    net: &Net,
+    file: Option<&Ros2File>,
+    places: &BTreeMap<Spanned<String>, Spanned<PlaceFile>>,
+    at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+) -> Result<Ros2Settings, LoadError> {
+    let mut s = Ros2Settings::default();
+    if let Some(f) = file {
+        if let Some(d) = &f.domain_id {
+            if *d.get_ref() > 232 {
+                return Err(at(
+                    d.span(),
+                    out_of_range(
+                        "domain_id",
+                        "ros2",
+                        f64::from(*d.get_ref()),
+                        "must be in 0..=232",
+                    ),
+                ));
+            }
+            s.domain_id = Some(*d.get_ref());
+        }
+        for n in f.networks.iter().flatten() {
+            let ip = n.get_ref().trim().parse().map_err(|_| {
+                at(
+                    n.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "ros2.networks: `{}` is not an IP address",
+                        n.get_ref()
+                    )),
+                )
+            })?;
+            s.networks.push(ip);
+        }
+        for (key, v, slot) in [
+            ("heartbeat", &f.heartbeat, &mut s.heartbeat),
+            ("lost_after", &f.lost_after, &mut s.lost_after),
+            ("startup", &f.startup, &mut s.startup),
+        ] {
+            if let Some(v) = v {
+                let x = *v.get_ref();
+                if !(x.is_finite() && x > 0.0) {
+                    return Err(at(
+                        v.span(),
+                        out_of_range(key, "ros2", x, "must be a finite number > 0"),
+                    ));
+                }
+                *slot = Some(x);
+            }
+        }
+    }
+    for (name, role) in places {
+        let f = role.get_ref();
+        let is_ros2 = f.action.as_deref() == Some(ROS2_ACTION);
+        let server = match &f.server {
+            Some(srv) if !is_ros2 => {
+                return Err(at(
+                    srv.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "place `{}`: `server` applies to places with action = \"{ROS2_ACTION}\" only",
+                        name.get_ref()
+                    )),
+                ));
+            }
+            Some(srv) => {
+                let v = srv.get_ref();
+                let ok = v.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+                    && v.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                    && !v.contains("__");
+                if !ok {
+                    return Err(at(
+                        srv.span(),
+                        LoadErrorKind::Invalid(format!(
+                            "place `{}`: server `{v}` is not a ROS 2 name (letters, digits and single underscores, starting with a letter)",
+                            name.get_ref()
+                        )),
+                    ));
+                }
+                v.clone()
+            }
+            None => DEFAULT_SERVER.to_string(),
+        };
+        if is_ros2 && let Some(p) = net.place_by_name(name.get_ref()) {
+            s.servers.push((p, server));
+        }
+    }
+    s.servers.sort_by_key(|&(p, _)| p);
+    Ok(s)
+}

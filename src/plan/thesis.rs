@@ -1,0 +1,460 @@
+//! The thesis framework's execution inputs, turned into plans.
+//!
+//! The 2020 framework took a JSON file whose values are Python literals in strings:
+//!
+//! ```json
+//! { "gspn": "example_gspn.xml",
+//!   "place_to_client_mapping": "{'p1': ['ExecGSPN', 'action_server_1'], ...}",
+//!   "resources_list": "['p4']",
+//!   "places_tuple": "('p1','p2','p3','p4','p5','p6','p7')",
+//!   "policy_dictionary": "{('-','-','-','-','-','-',1): {'t5':1}, ...}" }
+//! ```
+//!
+//! [`read_input`] parses it, keeping the line and column of every name; [`import`] checks it
+//! against its net and writes a plan (`plan.toml`) next to a copy of the net:
+//!
+//! - `places_tuple` orders the places of each `policy_dictionary` key; `'-'` (free) places
+//!   make a partial pattern. A key with no `'-'` over every place of the net is an exact
+//!   marking (looked up through the hash index); any other key is a partial pattern, in the
+//!   order written. `'1'` (a string, which the thesis code never matched against the integer
+//!   1) is read as 1, with a warning.
+//! - `place_to_function_mapping` (`'p1': 'functions.work_p1'`) and `place_to_client_mapping`
+//!   (`'p1': ['ExecGSPN', 'action_server_1']`) give each place its action: the function or the
+//!   action server's name.
+//! - `resources_list` places get `role = "resource"`.
+//!
+//! A name that is not in the net (a place, or a transition such as the standalone example's
+//! `t4`) is a [`LoadError`] at its position in the JSON file. A policy entry for an
+//! exponential transition — which the thesis code never consulted — is dropped with a warning.
+
+mod input;
+mod json;
+mod pylit;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::{Plan, read_plan};
+use crate::io::{LoadError, LoadErrorKind, ReadOptions, Span, read_net};
+use crate::net::{Net, Timing};
+
+/// A name in the input and where it is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Named {
+    /// The name as written.
+    pub name: String,
+    /// Its position in the JSON file.
+    pub span: Span,
+}
+
+/// One element of a policy key: a token count or `'-'` (free).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KeyItem {
+    /// `'-'`: any count.
+    Free,
+    /// Exactly this many tokens.
+    Count(u32),
+}
+
+/// One `policy_dictionary` entry: a marking key and the transitions' probabilities.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PolicyEntry {
+    /// Where the key starts.
+    pub span: Span,
+    /// The key, one item per place of `places_tuple`.
+    pub key: Vec<KeyItem>,
+    /// Transitions and probabilities, in the order written.
+    pub choose: Vec<(Named, f64)>,
+}
+
+/// The action of a place.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ActionEntry {
+    /// The place.
+    pub place: Named,
+    /// The function (`place_to_function_mapping`) or action server (`place_to_client_mapping`).
+    pub action: String,
+    /// The ROS action type for a client mapping (`ExecGSPN`), `None` for a function.
+    pub action_type: Option<String>,
+}
+
+/// A thesis execution input, parsed but not yet checked against its net.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ThesisInput {
+    /// The JSON file.
+    pub path: PathBuf,
+    /// The `gspn` value: the net file as the thesis named it (often an absolute path on the
+    /// author's machine).
+    pub net: Named,
+    /// `places_tuple`.
+    pub places: Vec<Named>,
+    /// `policy_dictionary`, in the order written.
+    pub policy: Vec<PolicyEntry>,
+    /// `place_to_function_mapping` and `place_to_client_mapping` entries.
+    pub actions: Vec<ActionEntry>,
+    /// `resources_list`.
+    pub resources: Vec<Named>,
+    /// `full_synchronization`, when given.
+    pub full_synchronization: Option<bool>,
+    /// Remarks: ignored keys, values read leniently.
+    pub warnings: Vec<String>,
+}
+
+/// Options of [`import`].
+#[derive(Clone, Debug, Default)]
+pub struct ImportOptions {
+    /// Directory to write `plan.toml` and the net's copy into (created when missing).
+    pub out: PathBuf,
+    /// The net file, when the input's `gspn` path does not lead to it.
+    pub net: Option<PathBuf>,
+}
+
+/// The result of [`import`].
+#[derive(Debug)]
+pub struct Imported {
+    /// The plan written.
+    pub plan_path: PathBuf,
+    /// The copy of the net next to it.
+    pub net_path: PathBuf,
+    /// The plan, read back with [`read_plan`].
+    pub plan: Plan,
+    /// Remarks from reading the input and translating it.
+    pub warnings: Vec<String>,
+}
+
+/// Reads a thesis execution input (JSON with Python-literal values).
+pub fn read_input(path: &Path) -> Result<ThesisInput, LoadError> {
+    let bytes =
+        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+    parse_input(path, &bytes)
+}
+
+/// Reads the thesis execution input in `bytes`, the contents of `path` (named in errors).
+pub fn parse_input(path: &Path, bytes: &[u8]) -> Result<ThesisInput, LoadError> {
+    let bytes = bytes.to_vec();
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(LoadError::file(path, LoadErrorKind::Empty));
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let at = Span::locate(e.as_bytes(), e.utf8_error().valid_up_to());
+        LoadError::at(
+            path,
+            at,
+            LoadErrorKind::Invalid("the file is not UTF-8".into()),
+        )
+    })?;
+    input::Reader { path, text: &text }.input()
+}
+
+/// Reads the input at `path`, checks it against its net, and writes `plan.toml` and a copy of
+/// the net into `opts.out`. The plan is read back, so what is written always loads.
+pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, LoadError> {
+    let input = read_input(path)?;
+    let source = match &opts.net {
+        Some(n) => n.clone(),
+        None => locate_net(&input)?,
+    };
+    let loaded = read_net(&source, &ReadOptions::default())?;
+    let file_name = source
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "net.xml".into());
+    let (text, mut warnings) = plan_text(&input, &loaded.net, &file_name)?;
+    let io_err = |p: &Path, e: std::io::Error| LoadError::file(p, LoadErrorKind::Io(e.to_string()));
+    std::fs::create_dir_all(&opts.out).map_err(|e| io_err(&opts.out, e))?;
+    let net_path = opts.out.join(&file_name);
+    let same = match (source.canonicalize(), net_path.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if !same {
+        std::fs::copy(&source, &net_path).map_err(|e| io_err(&net_path, e))?;
+    }
+    let plan_path = opts.out.join("plan.toml");
+    std::fs::write(&plan_path, text).map_err(|e| io_err(&plan_path, e))?;
+    let plan = read_plan(&plan_path, &ReadOptions::default())?;
+    let mut all = input.warnings;
+    all.append(&mut warnings);
+    Ok(Imported {
+        plan_path,
+        net_path,
+        plan,
+        warnings: all,
+    })
+}
+
+/// Where the input's net is: its `gspn` path (relative to the JSON file), else a file of the
+/// same name beside the JSON file (the thesis inputs hold absolute paths from the author's
+/// machine).
+pub fn locate_net(input: &ThesisInput) -> Result<PathBuf, LoadError> {
+    let dir = input.path.parent().unwrap_or(Path::new(""));
+    let written = Path::new(&input.net.name);
+    let mut tried = vec![dir.join(written)];
+    if let Some(name) = written.file_name() {
+        tried.push(dir.join(name));
+    }
+    tried.dedup();
+    if let Some(found) = tried.iter().find(|p| p.is_file()) {
+        return Ok(found.clone());
+    }
+    let looked: Vec<String> = tried.iter().map(|p| p.display().to_string()).collect();
+    Err(LoadError::at(
+        &input.path,
+        input.net.span,
+        LoadErrorKind::Invalid(format!(
+            "net file `{}` not found (looked at {}); name it with --net",
+            input.net.name,
+            looked.join(" and ")
+        )),
+    ))
+}
+
+/// The plan (TOML text) for `input` over `net`, whose file will be `net_file` beside the
+/// plan; and the warnings of the translation.
+pub fn plan_text(
+    input: &ThesisInput,
+    net: &Net,
+    net_file: &str,
+) -> Result<(String, Vec<String>), LoadError> {
+    let err = |span: Span, kind| LoadError::at(&input.path, span, kind);
+    let unknown = |what: &'static str, n: &Named| {
+        err(
+            n.span,
+            LoadErrorKind::UnknownNode {
+                what,
+                name: n.name.clone(),
+            },
+        )
+    };
+    let mut warnings = Vec::new();
+    let mut order = Vec::with_capacity(input.places.len());
+    for (i, p) in input.places.iter().enumerate() {
+        if input.places[..i].iter().any(|q| q.name == p.name) {
+            return Err(err(
+                p.span,
+                LoadErrorKind::Duplicate {
+                    what: "place in places_tuple",
+                    name: p.name.clone(),
+                },
+            ));
+        }
+        order.push(
+            net.place_by_name(&p.name)
+                .ok_or_else(|| unknown("place", p))?,
+        );
+    }
+    let covers_net = order.len() == net.place_count();
+
+    let file_label = input
+        .path
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# Imported by `plan-runner import-thesis` from {file_label}\n# (the 2020 thesis framework's execution input; see docs/plans.md).\n"
+    );
+    let _ = writeln!(out, "net = {}", toml_str(net_file));
+    if let Some(sync) = input.full_synchronization {
+        let _ = writeln!(
+            out,
+            "# full_synchronization = {sync} (gspn always synchronises fully)"
+        );
+    }
+
+    // Roles.
+    let mut resources: Vec<&Named> = Vec::new();
+    for r in &input.resources {
+        net.place_by_name(&r.name)
+            .ok_or_else(|| unknown("place", r))?;
+        if !resources.iter().any(|q| q.name == r.name) {
+            resources.push(r);
+        }
+    }
+    let mut seen: Vec<&str> = Vec::new();
+    for a in &input.actions {
+        net.place_by_name(&a.place.name)
+            .ok_or_else(|| unknown("place", &a.place))?;
+        if seen.contains(&a.place.name.as_str()) {
+            warnings.push(format!(
+                "place `{}` is mapped twice; the first mapping is used",
+                a.place.name
+            ));
+            continue;
+        }
+        seen.push(&a.place.name);
+        if resources.iter().any(|r| r.name == a.place.name) {
+            warnings.push(format!(
+                "place `{}` is in resources_list and also has action `{}`: it is a resource",
+                a.place.name, a.action
+            ));
+            continue;
+        }
+        let _ = write!(
+            out,
+            "\n[places.{}]\naction = {}",
+            toml_key(&a.place.name),
+            toml_str(&a.action)
+        );
+        match &a.action_type {
+            Some(t) => {
+                let _ = writeln!(out, "   # {t} action server (place_to_client_mapping)");
+            }
+            None => {
+                let _ = writeln!(out, "   # place_to_function_mapping");
+            }
+        }
+    }
+    for r in &resources {
+        let _ = writeln!(out, "\n[places.{}]\nrole = \"resource\"", toml_key(&r.name));
+    }
+
+    // Policy: Python dicts keep the first position of a key and the last value.
+    let mut rules: Vec<(&PolicyEntry, Vec<(String, f64)>)> = Vec::new();
+    for (n, e) in input.policy.iter().enumerate() {
+        if e.key.len() != order.len() {
+            return Err(err(
+                e.span,
+                LoadErrorKind::Invalid(format!(
+                    "policy key has {} entries but places_tuple has {} places",
+                    e.key.len(),
+                    order.len()
+                )),
+            ));
+        }
+        let choose = resolve_choice(input, net, e, n + 1, &mut warnings)?;
+        if let Some(first) = rules.iter_mut().find(|(f, _)| f.key == e.key) {
+            warnings.push(format!(
+                "policy key at {} repeats the key at {}: the later value is used (as in Python)",
+                e.span, first.0.span
+            ));
+            first.1 = choose;
+        } else {
+            rules.push((e, choose));
+        }
+    }
+    for (e, choose) in rules {
+        if choose.is_empty() {
+            continue;
+        }
+        let exact = covers_net && e.key.iter().all(|k| matches!(k, KeyItem::Count(_)));
+        let key_text: Vec<String> = e
+            .key
+            .iter()
+            .map(|k| match k {
+                KeyItem::Free => "'-'".to_string(),
+                KeyItem::Count(c) => c.to_string(),
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "\n# policy_dictionary at line {}: ({})\n[[policy]]",
+            e.span.line,
+            key_text.join(",")
+        );
+        let cells: Vec<String> = e
+            .key
+            .iter()
+            .zip(&input.places)
+            .filter_map(|(k, p)| match k {
+                KeyItem::Count(c) => Some(format!("{} = {c}", toml_key(&p.name))),
+                KeyItem::Free => None,
+            })
+            .collect();
+        if cells.is_empty() {
+            let _ = writeln!(out, "marking = {{}}");
+        } else {
+            let _ = writeln!(out, "marking = {{ {} }}", cells.join(", "));
+        }
+        if !exact {
+            let _ = writeln!(out, "partial = true");
+        }
+        let probs: Vec<String> = choose
+            .iter()
+            .map(|(t, p)| format!("{} = {p:?}", toml_key(t)))
+            .collect();
+        let _ = writeln!(out, "choose = {{ {} }}", probs.join(", "));
+    }
+    Ok((out, warnings))
+}
+
+/// The transitions of one entry, checked against the net: unknown names are errors,
+/// exponential ones are dropped (the thesis only consulted the policy for immediate ones).
+fn resolve_choice(
+    input: &ThesisInput,
+    net: &Net,
+    e: &PolicyEntry,
+    n: usize,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<(String, f64)>, LoadError> {
+    let mut choose = Vec::new();
+    let mut dropped = false;
+    for (t, p) in &e.choose {
+        let id = net.transition_by_name(&t.name).ok_or_else(|| {
+            LoadError::at(
+                &input.path,
+                t.span,
+                LoadErrorKind::UnknownNode {
+                    what: "transition",
+                    name: t.name.clone(),
+                },
+            )
+        })?;
+        if !matches!(net.transition(id).timing, Timing::Immediate { .. }) {
+            warnings.push(format!(
+                "policy entry {n} (line {}) chooses `{}`, an exponential transition: a policy \
+                 chooses among immediate transitions, so the entry is dropped",
+                t.span.line, t.name
+            ));
+            dropped = true;
+            continue;
+        }
+        if !(p.is_finite() && (0.0..=1.0).contains(p)) {
+            return Err(LoadError::at(
+                &input.path,
+                t.span,
+                LoadErrorKind::OutOfRange {
+                    what: "probability",
+                    name: t.name.clone(),
+                    value: p.to_string(),
+                    expected: "must be in [0, 1]",
+                },
+            ));
+        }
+        choose.push((t.name.clone(), *p));
+    }
+    let sum: f64 = choose.iter().map(|(_, p)| p).sum();
+    if !choose.is_empty() && (sum - 1.0).abs() > crate::policy::SUM_TOLERANCE {
+        if dropped && sum > 0.0 {
+            for (_, p) in &mut choose {
+                *p /= sum;
+            }
+        } else {
+            return Err(LoadError::at(
+                &input.path,
+                e.span,
+                LoadErrorKind::Invalid(format!(
+                    "the probabilities of this policy entry sum to {sum}, not 1"
+                )),
+            ));
+        }
+    }
+    Ok(choose)
+}
+
+/// A TOML key: bare when it can be, else a quoted string.
+fn toml_key(s: &str) -> String {
+    if !s.is_empty()
+        && s.bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
+    {
+        s.to_string()
+    } else {
+        toml_str(s)
+    }
+}
+
+/// A TOML basic string (JSON's escapes are valid TOML escapes).
+fn toml_str(s: &str) -> String {
+    serde_json::to_string(s).unwrap_or_else(|_| format!("\"{s}\""))
+}
