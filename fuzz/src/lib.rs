@@ -11,9 +11,9 @@ use std::sync::OnceLock;
 
 use gspn::io::expr::Expr;
 use gspn::io::{ReadOptions, pipe, pnml, pnpro};
-use gspn::plan::{PlanFile, thesis};
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
+use gspn::plan::{PlanFile, thesis};
 
 /// Every target, by name (the directory of its corpus).
 pub const TARGETS: &[(&str, fn(&[u8]))] = &[
