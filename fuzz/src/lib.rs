@@ -15,8 +15,11 @@ use gspn::net::Net;
 use gspn::net::predicate::Predicate;
 use gspn::plan::{PlanFile, thesis};
 
+/// What a target does with its bytes.
+pub type Target = fn(&[u8]);
+
 /// Every target, by name (the directory of its corpus).
-pub const TARGETS: &[(&str, fn(&[u8]))] = &[
+pub const TARGETS: &[(&str, Target)] = &[
     ("pipe_xml", pipe_xml),
     ("pnml", pnml),
     ("pnpro", pnpro),
@@ -110,8 +113,5 @@ pub fn journal(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    #[cfg(feature = "web")]
-    let _ = gspn::web::replay::read_journal(text, cyc3());
-    #[cfg(not(feature = "web"))]
-    let _ = text;
+    let _ = gspn::runtime::journal::read_journal(text, cyc3());
 }
