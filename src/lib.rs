@@ -11,6 +11,7 @@
 //!   (feature `sim`): simulated robots in a rapier2d room, driven by built-in actions.
 //! - [`analysis`]: the tangible reachability graph, properties (bounds, deadlocks, liveness,
 //!   invariants), the CTMC (steady state, limiting, transient) and measures.
+//! - [`limits`]: the largest token count and duration a user may ask for.
 //! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.
 //! - [`check`]: summary and structural warnings (dead transitions, isolated places, policy
 //!   rules that can never apply) for `plan-runner check`.
@@ -29,6 +30,7 @@
 pub mod analysis;
 pub mod check;
 pub mod io;
+pub mod limits;
 pub mod net;
 pub mod policy;
 #[cfg(feature = "ros2")]

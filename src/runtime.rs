@@ -143,9 +143,25 @@ pub enum RuntimeError {
     /// `spawn` was called outside a tokio runtime.
     #[error("the runtime must be spawned inside a tokio runtime")]
     NoTokio,
-    /// A time scale that is negative or not finite.
-    #[error("time scale {0} must be finite and ≥ 0")]
+    /// A time scale that is negative, not finite, or above
+    /// [`MAX_SECONDS`](crate::limits::MAX_SECONDS).
+    #[error("time scale {0} must be finite, ≥ 0 and ≤ 315576000")]
     BadTimeScale(f64),
+    /// In real time, an exponential transition whose mean delay is longer than
+    /// [`MAX_SECONDS`](crate::limits::MAX_SECONDS) (10 years): the run would sit still.
+    #[error(
+        "transition `{transition}`: rate {rate} at time scale {scale} gives a mean delay of {seconds:e} s of real time, more than the maximum 315576000 s (10 years)"
+    )]
+    DelayTooLong {
+        /// The transition.
+        transition: String,
+        /// Its rate.
+        rate: f64,
+        /// The time scale.
+        scale: f64,
+        /// Its mean delay in real seconds.
+        seconds: f64,
+    },
     /// `bind` named a place the net does not have.
     #[error("no place named `{0}`")]
     UnknownPlace(String),

@@ -86,6 +86,15 @@ pub enum SimError {
     /// A time limit, run count or similar argument out of range.
     #[error("{0}")]
     BadArgument(String),
+    /// A firing would put more tokens in a place than a count can hold
+    /// ([`MAX_TOKENS`](crate::net::MAX_TOKENS)); the marking is left as it was.
+    #[error("at time {time}: {message}")]
+    TokenOverflow {
+        /// When.
+        time: f64,
+        /// Which transition and place, by name.
+        message: String,
+    },
 }
 
 /// One firing.
@@ -334,7 +343,7 @@ impl<'n> Simulator<'n> {
             }
             let t = self.choose_immediate();
             self.instant += 1;
-            self.fire(t);
+            self.fire(t)?;
             return Ok(Some(Step {
                 time: self.time,
                 transition: t,
@@ -356,7 +365,7 @@ impl<'n> Simulator<'n> {
         let t = self.exp_params[i].0;
         self.time = at;
         self.instant = 0;
-        self.fire(t);
+        self.fire(t)?;
         Ok(Some(Step {
             time: at,
             transition: t,
@@ -415,14 +424,20 @@ impl<'n> Simulator<'n> {
     }
 
     #[inline]
-    fn fire(&mut self, t: TransitionId) {
+    fn fire(&mut self, t: TransitionId) -> Result<(), SimError> {
         let net = self.net;
-        self.tally.fire(net, &mut self.marking, t, self.time);
+        self.tally
+            .fire(net, &mut self.marking, t, self.time)
+            .map_err(|o| SimError::TokenOverflow {
+                time: self.time,
+                message: net.describe_overflow(&o),
+            })?;
         self.firings += 1;
         self.last = Some(t);
         for &u in net.affected_by(t) {
             self.refresh(u);
         }
+        Ok(())
     }
 
     /// Re-evaluates the enabling of `t` in the current marking.

@@ -40,7 +40,7 @@ use thiserror::Error;
 use crate::analysis::coverability::{Coverability, karp_miller};
 use crate::analysis::invariants::structural_bounds;
 use crate::analysis::vanishing::eliminate;
-use crate::net::{Net, TransitionId};
+use crate::net::{MAX_TOKENS, Net, TransitionId};
 use packing::{Layout, MarkingStore};
 use table::MoveTable;
 
@@ -53,7 +53,13 @@ pub struct Options {
     pub progress: bool,
     /// Threads to use; 0 = all available cores.
     pub threads: usize,
+    /// Most bytes the search may hold (markings, their index and their moves), estimated
+    /// before each allocation (default 4 GiB).
+    pub max_memory: usize,
 }
+
+/// [`Options::max_memory`]'s default: 4 GiB.
+pub const DEFAULT_MAX_MEMORY: usize = 4 << 30;
 
 impl Default for Options {
     fn default() -> Self {
@@ -61,6 +67,7 @@ impl Default for Options {
             max_states: 10_000_000,
             progress: false,
             threads: 0,
+            max_memory: DEFAULT_MAX_MEMORY,
         }
     }
 }
@@ -94,6 +101,31 @@ pub enum AnalysisError {
     VanishingLoopTooLarge {
         /// Markings in the loop.
         markings: usize,
+    },
+    /// A place can hold more tokens than a count can ([`MAX_TOKENS`]): refused before the
+    /// search when a structural bound says so, or when the search first meets such a count.
+    #[error(
+        "place `{place}` can reach {tokens} tokens, which {}",
+        crate::net::TOO_MANY_TOKENS
+    )]
+    TooManyTokens {
+        /// The place.
+        place: String,
+        /// Its bound, or the count the search met.
+        tokens: u64,
+    },
+    /// The search would need more memory than `Options::max_memory`: refused before the
+    /// allocation, from the size of one packed marking and of its moves.
+    #[error(
+        "the state space needs more than {limit_mib} MiB: {markings} markings of {bytes_per_marking} bytes each so far (raise --max-memory or lower --max-states)"
+    )]
+    TooMuchMemory {
+        /// The memory limit, in MiB.
+        limit_mib: usize,
+        /// Markings stored when the estimate crossed the limit.
+        markings: usize,
+        /// Estimated bytes per marking (packed words, index, parent, moves).
+        bytes_per_marking: usize,
     },
     /// [`Monitor::cancel`] was called while the search ran.
     #[error("cancelled after {markings} markings")]
@@ -211,9 +243,11 @@ pub struct StateSpace {
 }
 
 /// Coverability nodes to try before searching a net that has places without a structural
-/// bound: scaled so the Karp–Miller tree stays around 20 MB.
+/// bound: scaled so the Karp–Miller tree (each node a marking, stored twice) stays around
+/// 40 MB whatever the number of places. A million-place net gets 5 nodes, not 1000 (which
+/// took 8 GB).
 fn km_limit(places: usize) -> usize {
-    (5_000_000 / places.max(1)).clamp(1000, 200_000)
+    (5_000_000 / places.max(1)).clamp(1, 200_000)
 }
 
 impl StateSpace {
@@ -249,6 +283,16 @@ impl StateSpace {
                 Coverability::Undecided => {}
             }
         }
+        if let Some((p, &Some(b))) = bounds
+            .iter()
+            .enumerate()
+            .find(|(_, b)| b.is_some_and(|b| b > MAX_TOKENS as u64))
+        {
+            return Err(AnalysisError::TooManyTokens {
+                place: net.places()[p].name.clone(),
+                tokens: b,
+            });
+        }
         let initial: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
         let layout = Layout::new(&bounds, &initial);
         let threads = match opts.threads {
@@ -258,7 +302,10 @@ impl StateSpace {
         let raw = explore::explore(
             net,
             layout,
-            opts.max_states,
+            explore::Limits {
+                states: opts.max_states,
+                memory: opts.max_memory,
+            },
             threads,
             opts.progress,
             monitor,

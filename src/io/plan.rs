@@ -168,7 +168,8 @@ pub struct PlanFile {
     /// Template parameters of the net (PNPRO `<template>`), overriding the file's
     /// `last-binding`; `--param NAME=VALUE` on the command line overrides these.
     #[serde(default)]
-    pub params: BTreeMap<String, ParamValue>,
+    #[schemars(with = "BTreeMap<String, ParamValue>")]
+    pub params: BTreeMap<Spanned<String>, ParamValue>,
     /// Seed for every random choice; the same seed repeats a run exactly.
     pub seed: Option<u64>,
     /// Scale of time: 0 = virtual time as fast as possible, 1 = real time, 0.5 = twice as fast.
@@ -289,8 +290,20 @@ pub fn json_schema() -> String {
 /// `--page`) overrides the plan's `page`; `opts.params` override the plan's `params` of the
 /// same name, and both go to the net reader.
 pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let bytes = e.as_bytes();
+        let at = e.utf8_error().valid_up_to();
+        LoadError::at(
+            path,
+            Span::locate(bytes, at),
+            LoadErrorKind::Invalid(format!(
+                "the file is not UTF-8: byte 0x{:02x} cannot start a character here",
+                bytes[at]
+            )),
+        )
+    })?;
     if text.trim().is_empty() {
         return Err(LoadError::file(path, LoadErrorKind::Empty));
     }
@@ -300,8 +313,8 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
     let mut params: Vec<(String, String)> = file
         .params
         .iter()
-        .filter(|(k, _)| !opts.params.iter().any(|(o, _)| o == *k))
-        .map(|(k, v)| (k.clone(), v.to_string()))
+        .filter(|(k, _)| !opts.params.iter().any(|(o, _)| o == k.get_ref()))
+        .map(|(k, v)| (k.get_ref().clone(), v.to_string()))
         .collect();
     params.extend(opts.params.iter().cloned());
     let net_opts = ReadOptions {
@@ -319,7 +332,18 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
             )),
         ));
     }
-    let loaded = read_net(&net_path, &net_opts)?;
+    let loaded = read_net(&net_path, &net_opts).map_err(|e| {
+        // A bad `[params]` entry is the plan's mistake: point at it, not at the net file.
+        let entry = e.template_parameter().and_then(|name| {
+            let from_cli = opts.params.iter().any(|(o, _)| o == name);
+            let key = file.params.keys().find(|k| k.get_ref() == name)?;
+            (!from_cli && e.span.is_none()).then(|| key.span())
+        });
+        match entry {
+            Some(span) => LoadError::at(path, locate(&text, span), e.kind),
+            None => e,
+        }
+    })?;
     let mut plan = file.resolve(path, &text, loaded.net)?;
     plan.net_path = net_path;
     plan.page = page;
@@ -361,10 +385,31 @@ impl PlanFile {
 
         if let Some(ts) = &self.time_scale {
             let v = *ts.get_ref();
-            if !(v.is_finite() && v >= 0.0) {
+            if !(v.is_finite() && (0.0..=crate::limits::MAX_SECONDS).contains(&v)) {
                 return Err(at(
                     ts.span(),
-                    out_of_range("time_scale", "plan", v, "must be a finite number ≥ 0"),
+                    out_of_range("time_scale", "plan", v, TIME_SCALE_EXPECTED),
+                ));
+            }
+            // In real time a rate is a wait on the clock: refuse one that would never end.
+            if v > 0.0
+                && let Some((t, rate)) = net.transitions().iter().find_map(|t| match t.timing {
+                    crate::net::Timing::Exponential { rate, .. }
+                        if v / rate > crate::limits::MAX_SECONDS =>
+                    {
+                        Some((t, rate))
+                    }
+                    _ => None,
+                })
+            {
+                return Err(at(
+                    ts.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "time_scale = {v}: transition `{}` (rate {rate}) would wait {:e} s of real time on average, more than the maximum {} s (10 years)",
+                        t.name,
+                        v / rate,
+                        crate::limits::MAX_SECONDS
+                    )),
                 ));
             }
         }
@@ -389,9 +434,10 @@ impl PlanFile {
 
         let mut rules = Vec::with_capacity(self.policy.len());
         let mut rule_spans = Vec::with_capacity(self.policy.len());
+        let lines = super::LineIndex::new(text.as_bytes());
         for rule in &self.policy {
             rules.push(resolve_rule(&net, rule.get_ref(), &at)?);
-            rule_spans.push(locate(text, rule.span()));
+            rule_spans.push(lines.locate(text.as_bytes(), rule.span().start));
         }
         let policy = Policy::new(&net, rules).map_err(|e| {
             let rule = self.policy[e.rule()].get_ref();
@@ -511,6 +557,10 @@ fn unknown(what: &'static str, name: &str) -> LoadErrorKind {
     }
 }
 
+/// What a time scale must be (seconds per unit of model time).
+pub const TIME_SCALE_EXPECTED: &str =
+    "must be a finite number ≥ 0 and ≤ 315576000 (seconds of real time per unit of model time)";
+
 fn out_of_range(what: &'static str, name: &str, v: f64, expected: &'static str) -> LoadErrorKind {
     LoadErrorKind::OutOfRange {
         what,
@@ -599,10 +649,10 @@ fn resolve_role(
         None => None,
         Some(t) => {
             let v = *t.get_ref();
-            if !(v.is_finite() && v > 0.0) {
+            if !crate::limits::valid_seconds(v) {
                 return Err(at(
                     t.span(),
-                    out_of_range("timeout", place, v, "must be a finite number > 0"),
+                    out_of_range("timeout", place, v, crate::limits::SECONDS_EXPECTED),
                 ));
             }
             Some(v)

@@ -19,7 +19,7 @@ use super::supervisor::{PlaceSetup, Supervisor, SupervisorArgs};
 use super::{RuntimeError, conservation};
 use crate::io::plan::{FailurePolicy, Plan, Role, StopConditions};
 use crate::net::predicate::Predicate;
-use crate::net::{Net, PlaceId};
+use crate::net::{Net, PlaceId, Timing};
 use crate::policy::Policy;
 
 /// Configures a run; [`RuntimeBuilder::spawn`] starts it inside the current tokio runtime.
@@ -187,8 +187,23 @@ impl RuntimeBuilder {
         if tokio::runtime::Handle::try_current().is_err() {
             return Err(RuntimeError::NoTokio);
         }
-        if !(self.time_scale.is_finite() && self.time_scale >= 0.0) {
-            return Err(RuntimeError::BadTimeScale(self.time_scale));
+        let scale = self.time_scale;
+        if !(scale.is_finite() && (0.0..=crate::limits::MAX_SECONDS).contains(&scale)) {
+            return Err(RuntimeError::BadTimeScale(scale));
+        }
+        if scale > 0.0 {
+            for t in self.net.transitions() {
+                if let Timing::Exponential { rate, .. } = t.timing
+                    && scale / rate > crate::limits::MAX_SECONDS
+                {
+                    return Err(RuntimeError::DelayTooLong {
+                        transition: t.name.clone(),
+                        rate,
+                        scale,
+                        seconds: scale / rate,
+                    });
+                }
+            }
         }
         let net = Arc::clone(&self.net);
         for (place, action) in std::mem::take(&mut self.binds) {

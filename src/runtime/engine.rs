@@ -10,7 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use rustc_hash::FxHashMap;
 
 use super::agent::{AgentId, AgentState};
-use crate::net::{Marking, Net, PlaceId, Timing, TransitionId};
+use crate::net::{Marking, Net, PlaceId, Timing, TokenOverflow, TransitionId};
 use crate::policy::Policy;
 use crate::sim::sum_tree::SumTree;
 
@@ -366,7 +366,17 @@ impl Engine {
     /// Fires `t` at model time `now`, moving agents by the identity rules: consumed agents
     /// continue in arc order into the produced action-place tokens, surplus ones end, extra
     /// tokens are new agents.
-    pub(crate) fn fire(&mut self, t: TransitionId, now: f64, out: &mut Firing) {
+    ///
+    /// A firing that would overflow a place's count changes nothing and is refused.
+    pub(crate) fn fire(
+        &mut self,
+        t: TransitionId,
+        now: f64,
+        out: &mut Firing,
+    ) -> Result<(), TokenOverflow> {
+        if let Some(o) = self.net.overflow(&self.m, t) {
+            return Err(o);
+        }
         out.transition = Some(t);
         out.consumed.clear();
         out.produced.clear();
@@ -405,7 +415,7 @@ impl Engine {
             self.integral[i] += self.m.as_slice()[i] as f64 * (now - self.last_change[i]);
             self.last_change[i] = now;
         }
-        net.fire(&mut self.m, t);
+        net.fire(&mut self.m, t)?;
         self.firings += 1;
         self.counts[t.index()] += 1;
         let mut next = 0;
@@ -439,6 +449,7 @@ impl Engine {
         for &u in net.affected_by(t) {
             self.update_race(u);
         }
+        Ok(())
     }
 
     /// Transitions some agent chose that cannot fire now (for the "never enabled" error).

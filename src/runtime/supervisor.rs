@@ -327,7 +327,7 @@ impl Supervisor {
                         action: Arc::clone(&setup.action),
                         timeout: setup
                             .timeout
-                            .map(|t| Duration::from_secs_f64(t * self.scale)),
+                            .map(|t| crate::limits::duration(t * self.scale)),
                     })
                     .try_send();
             }
@@ -347,7 +347,14 @@ impl Supervisor {
 
     fn fire_one(&mut self, t: TransitionId) {
         let mut buf = std::mem::take(&mut self.buf);
-        self.eng.fire(t, self.now, &mut buf);
+        if let Err(o) = self.eng.fire(t, self.now, &mut buf) {
+            self.buf = buf;
+            let msg = self.eng.net.describe_overflow(&o);
+            self.errors.push(msg.clone());
+            self.emit(EventKind::Error { message: msg });
+            self.begin_stop(StopReason::Failure);
+            return;
+        }
         self.progress
             .firings
             .store(self.eng.firings, Ordering::Relaxed);
@@ -458,7 +465,7 @@ impl Supervisor {
             let me = self.me().clone();
             let generation = self.generation;
             let h = tokio::spawn(async move {
-                tokio::time::sleep(Duration::from_secs_f64(wait)).await;
+                tokio::time::sleep(crate::limits::duration(wait)).await;
                 let _ = me
                     .tell(Timer {
                         generation,
@@ -585,7 +592,7 @@ impl Actor for Supervisor {
         sup.me = Some(me.clone());
         sup.clock_start = Instant::now();
         for s in &sup.setups {
-            let timeout = s.timeout.map(|t| Duration::from_secs_f64(t * sup.scale));
+            let timeout = s.timeout.map(|t| crate::limits::duration(t * sup.scale));
             let place = Place::spawn_with_mailbox(
                 Place {
                     action: Arc::clone(&s.action),

@@ -43,9 +43,44 @@ pub enum ReplayError {
     },
 }
 
+/// A journal read back by [`read_journal_tolerant`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Replay {
+    /// The initial marking, then the marking after each `fired` event.
+    pub frames: Vec<Frame>,
+    /// The last line, when it was cut short (a run killed mid-write) and skipped: its
+    /// 1-based number and why it does not parse.
+    pub torn: Option<ReplayError>,
+}
+
 /// Reads a journal (JSON Lines: a header, then one event per line) of a run of `net` into
-/// frames: the initial marking, then the marking after each `fired` event.
+/// frames: the initial marking, then the marking after each `fired` event. Every line must
+/// be whole (see [`read_journal_tolerant`] for a journal of a killed run).
 pub fn read_journal(text: &str, net: &Net) -> Result<Vec<Frame>, ReplayError> {
+    let r = read_journal_tolerant(text, net)?;
+    match r.torn {
+        Some(e) => Err(e),
+        None => Ok(r.frames),
+    }
+}
+
+/// Like [`read_journal`], but a last line cut short — no newline after it and not valid
+/// JSON, what a `SIGKILL` in the middle of a write leaves — is skipped and reported in
+/// [`Replay::torn`] instead of refusing the whole journal. Any other bad line is an error.
+pub fn read_journal_tolerant(text: &str, net: &Net) -> Result<Replay, ReplayError> {
+    let mut torn = None;
+    let mut text = text;
+    if !text.ends_with('\n')
+        && let Some(start) = text.rfind('\n').map(|i| i + 1)
+        && !text[start..].trim().is_empty()
+        && let Err(e) = serde_json::from_str::<Value>(&text[start..])
+    {
+        torn = Some(ReplayError::BadLine {
+            line: text.lines().count(),
+            reason: format!("cut short ({e})"),
+        });
+        text = &text[..start];
+    }
     let mut lines = text
         .lines()
         .enumerate()
@@ -101,5 +136,5 @@ pub fn read_journal(text: &str, net: &Net) -> Result<Vec<Frame>, ReplayError> {
             tokens,
         });
     }
-    Ok(frames)
+    Ok(Replay { frames, torn })
 }

@@ -163,7 +163,9 @@ impl Session {
         if !self.net.firable(&self.marking).contains(&t) {
             return Err(SessionError::NotFirable(name.to_string()));
         }
-        self.net.fire(&mut self.marking, t);
+        self.net
+            .fire(&mut self.marking, t)
+            .map_err(|o| SessionError::Net(self.net.describe_overflow(&o)))?;
         self.manual += 1;
         self.firings += 1;
         self.segment = Arc::new(

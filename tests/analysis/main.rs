@@ -6,6 +6,7 @@ mod support;
 mod ctmc;
 mod invariants;
 mod mcc_oracles;
+mod memory_is_bounded;
 mod properties;
 mod state_space;
 mod steady_state_from_columns;

@@ -4,7 +4,9 @@
 mod support;
 
 mod analyze;
+mod bad_limits;
 mod check;
+mod journal_survives_signals;
 mod readme;
 mod run;
 mod run_on_robots;

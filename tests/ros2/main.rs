@@ -7,5 +7,6 @@ mod support;
 #[path = "support.rs"]
 mod ros2_support;
 
+mod ctrl_c_while_waiting_for_robots;
 mod interop;
 mod multiprocess;

@@ -16,3 +16,4 @@ mod robot_tokens;
 mod robots_follow_agents;
 mod stop_leaves_complete_journal;
 mod thesis_nets_match_reference;
+mod token_counts_never_wrap;

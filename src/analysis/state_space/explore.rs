@@ -11,7 +11,7 @@ use std::sync::mpsc;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::packing::{Layout, MarkingStore};
+use super::packing::{Deltas, Layout, MarkingStore};
 use super::table::MoveTable;
 use super::{AnalysisError, Monitor, Move};
 use crate::net::{Net, Timing, TransitionId};
@@ -75,8 +75,24 @@ struct Block {
     overflow: Option<(usize, usize, u32)>,
 }
 
+/// How much the search may hold.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Limits {
+    /// Most markings.
+    pub(crate) states: usize,
+    /// Most bytes, estimated ([`Search::bytes_per_marking`]).
+    pub(crate) memory: usize,
+}
+
 /// Computes the successors of the states whose packed words are `frontier`.
-fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: usize) -> Block {
+fn generate(
+    net: &Net,
+    rules: &Rules,
+    layout: &Layout,
+    deltas: &Deltas,
+    frontier: &[u64],
+    first: usize,
+) -> Block {
     let w = layout.words();
     let n = frontier.len() / w;
     let mut b = Block {
@@ -90,7 +106,6 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
     let mut m = vec![0u32; net.place_count()];
     let mut key = vec![0u64; w];
     let mut fire: Vec<(TransitionId, f64)> = Vec::new();
-    let deltas = layout.transition_deltas(net);
     for i in 0..n {
         let base = &frontier[i * w..(i + 1) * w];
         layout.unpack(base, &mut m);
@@ -107,9 +122,10 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
                     return b;
                 }
             }
-            let d = &deltas[t.index() * w..(t.index() + 1) * w];
-            for ((k, &x), &y) in key.iter_mut().zip(base).zip(d) {
-                *k = x.wrapping_add(y);
+            key.copy_from_slice(base);
+            for &(word, add) in deltas.of(t.index()) {
+                let k = &mut key[word as usize];
+                *k = k.wrapping_add(add);
             }
             b.items.push((t.0, v, MarkingStore::hash(&key)));
             b.keys.extend_from_slice(&key);
@@ -156,11 +172,39 @@ struct Search<'m> {
     raw: Raw,
     monitor: &'m Monitor,
     max_states: usize,
+    max_memory: usize,
     group: Vec<Move>,
     bar: Option<ProgressBar>,
 }
 
 impl Search<'_> {
+    /// Estimated bytes one more marking costs: its packed words (stored, and copied once
+    /// into the frontier), its index entry (with the table's spare room), its parent, its
+    /// flag and its group's span.
+    fn bytes_per_marking(&self) -> usize {
+        self.raw.store.layout.words() * 8 * 2 + 32 + 8 + 1 + 12
+    }
+
+    /// Refuses to grow past [`Limits::memory`]: the estimate is made before the store, the
+    /// index and the move table take their next allocation.
+    fn check_memory(&self) -> Result<(), AnalysisError> {
+        let per = self.bytes_per_marking();
+        let bytes = self
+            .raw
+            .store
+            .len()
+            .saturating_mul(per)
+            .saturating_add(self.raw.moves.total() * std::mem::size_of::<Move>());
+        if bytes > self.max_memory {
+            return Err(AnalysisError::TooMuchMemory {
+                limit_mib: self.max_memory >> 20,
+                markings: self.raw.store.len(),
+                bytes_per_marking: per,
+            });
+        }
+        Ok(())
+    }
+
     /// Inserts a block's targets; `Some(overflow)` when the block stopped early.
     fn insert(&mut self, b: &Block) -> Result<Option<(usize, usize, u32)>, AnalysisError> {
         let w = self.raw.store.layout.words();
@@ -179,6 +223,7 @@ impl Search<'_> {
                             limit: self.max_states,
                         });
                     }
+                    self.check_memory()?;
                     self.raw.parent.push((src, t));
                 }
                 let (rate, prob) = if tangible { (v, 1.0) } else { (0.0, v) };
@@ -210,7 +255,7 @@ impl Search<'_> {
 pub(crate) fn explore(
     net: &Net,
     layout: Layout,
-    max_states: usize,
+    limits: Limits,
     threads: usize,
     progress: bool,
     monitor: &Monitor,
@@ -242,22 +287,25 @@ pub(crate) fn explore(
             parent: vec![(u32::MAX, u32::MAX)],
         },
         monitor,
-        max_states: max_states.max(1),
+        max_states: limits.states.max(1),
+        max_memory: limits.memory,
         group: Vec::new(),
         bar,
     };
+    s.check_memory()?;
     let mut cursor = 0;
     while cursor < s.raw.store.len() {
         let hi = s.raw.store.len();
         let w = s.raw.store.layout.words();
         let layout = s.raw.store.layout.clone();
+        let deltas = layout.transition_deltas(net);
         let frontier: Vec<u64> = (cursor..hi)
             .flat_map(|id| s.raw.store.packed(id).iter().copied())
             .collect();
         let overflow = if threads <= 1 || hi - cursor < PAR_MIN {
             let mut over = None;
             for (k, chunk) in frontier.chunks(BLOCK * w).enumerate() {
-                let b = generate(net, &rules, &layout, chunk, cursor + k * BLOCK);
+                let b = generate(net, &rules, &layout, &deltas, chunk, cursor + k * BLOCK);
                 over = s.insert(&b)?;
                 if over.is_some() {
                     break;
@@ -265,14 +313,16 @@ pub(crate) fn explore(
             }
             over
         } else {
-            expand_parallel(net, &rules, &layout, &frontier, cursor, threads, &mut s)?
+            let ctx = (net, &rules, &layout, &deltas);
+            expand_parallel(ctx, &frontier, cursor, threads, &mut s)?
         };
         match overflow {
             Some((state, p, value)) => {
                 if s.raw.store.layout.max_value(p) >= u32::MAX as u64 {
-                    // More than 2³² tokens: unbounded for every practical purpose.
-                    return Err(AnalysisError::Unbounded {
-                        places: vec![net.place(crate::net::PlaceId(p as u32)).name.clone()],
+                    // A count past the largest one a marking holds.
+                    return Err(AnalysisError::TooManyTokens {
+                        place: net.place(crate::net::PlaceId(p as u32)).name.clone(),
+                        tokens: u32::MAX as u64 + 1,
                     });
                 }
                 let wider = s.raw.store.layout.widened(p, value);
@@ -293,9 +343,7 @@ pub(crate) fn explore(
 /// Expands a large frontier: `threads - 1` workers compute blocks round-robin, the calling
 /// thread inserts them in order.
 fn expand_parallel(
-    net: &Net,
-    rules: &Rules,
-    layout: &Layout,
+    (net, rules, layout, deltas): (&Net, &Rules, &Layout, &Deltas),
     frontier: &[u64],
     first: usize,
     threads: usize,
@@ -312,7 +360,7 @@ fn expand_parallel(
             let chunks = &chunks;
             scope.spawn(move || {
                 for (j, chunk) in chunks.iter().enumerate().skip(k).step_by(workers) {
-                    let b = generate(net, rules, layout, chunk, first + j * BLOCK);
+                    let b = generate(net, rules, layout, deltas, chunk, first + j * BLOCK);
                     let stop = b.overflow.is_some();
                     if tx.send(b).is_err() || stop {
                         return;
@@ -343,6 +391,11 @@ mod tests {
     use super::*;
     use crate::net::{NetBuilder, Servers};
 
+    const BIG: Limits = Limits {
+        states: 1 << 20,
+        memory: 1 << 30,
+    };
+
     /// Two independent two-place cycles with `n` tokens each: (n+1)² markings.
     fn cycles(n: u32) -> Net {
         let mut b = NetBuilder::new("cycles");
@@ -366,8 +419,8 @@ mod tests {
         let narrow = Layout::new(&[Some(60), Some(1), Some(60), Some(1)], &[60, 0, 60, 0]);
         for threads in [1, 2] {
             let m = Monitor::new();
-            let a = explore(&net, exact.clone(), 1 << 20, threads, false, &m).unwrap();
-            let b = explore(&net, narrow.clone(), 1 << 20, threads, false, &m).unwrap();
+            let a = explore(&net, exact.clone(), BIG, threads, false, &m).unwrap();
+            let b = explore(&net, narrow.clone(), BIG, threads, false, &m).unwrap();
             assert_eq!(a.store.len(), 61 * 61);
             assert_eq!(b.store.len(), a.store.len());
             assert_eq!(b.moves.total(), a.moves.total());
@@ -386,12 +439,12 @@ mod tests {
         let net = cycles(60);
         let exact = Layout::new(&[Some(60); 4], &[60, 0, 60, 0]);
         let m = Monitor::new();
-        explore(&net, exact.clone(), 1 << 20, 1, false, &m).unwrap();
+        explore(&net, exact.clone(), BIG, 1, false, &m).unwrap();
         assert_eq!(m.markings(), 61 * 61);
         let c = Monitor::new();
         c.cancel();
         // The first block (the initial marking) is expanded, then the flag is seen.
-        match explore(&net, exact, 1 << 20, 1, false, &c) {
+        match explore(&net, exact, BIG, 1, false, &c) {
             Err(AnalysisError::Cancelled { markings }) => assert_eq!(markings, 3),
             other => panic!("expected a cancel, got {:?}", other.map(|r| r.store.len())),
         }

@@ -1,6 +1,7 @@
 //! `plan-runner`: check, analyse, simulate, run and convert GSPN plans.
 //!
-//! Exit codes: 0 ok, 1 failure, 2 bad input, 130 interrupted.
+//! Exit codes: 0 ok, 1 failure, 2 bad input, 130 interrupted (SIGINT), 143 terminated
+//! (SIGTERM), 129 hung up (SIGHUP); the last three stop a run cleanly (see docs/reliability.md).
 
 mod analyze;
 mod check;

@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use gspn::io::plan::read_plan;
-use gspn::web::replay::read_journal;
+use gspn::web::replay::read_journal_tolerant;
 use gspn::web::{WebState, serve};
 
 use crate::common::{BadInput, NetArgs, load_net};
@@ -42,8 +42,15 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     };
     let text = std::fs::read_to_string(&args.journal)
         .with_context(|| format!("cannot read {}", args.journal.display()))?;
-    let frames = read_journal(&text, &net)
+    let replay = read_journal_tolerant(&text, &net)
         .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
+    if let Some(torn) = &replay.torn {
+        eprintln!(
+            "warning: {}: {torn}: skipped (the run was killed while writing it)",
+            args.journal.display()
+        );
+    }
+    let frames = replay.frames;
     let Some(addr) = args.web else {
         for f in &frames {
             println!(

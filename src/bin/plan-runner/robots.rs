@@ -26,7 +26,7 @@ pub(crate) fn main(plan: Plan, args: &Args) -> anyhow::Result<ExitCode> {
             .build()
     }
     .context("starting tokio")?;
-    let (summary, metrics) = rt.block_on(async {
+    let ((summary, code), metrics) = rt.block_on(async {
         let fleet = Fleet::new(plan, args.robots).map_err(|e| BadInput(e.to_string()))?;
         #[cfg_attr(not(feature = "web"), allow(unused_mut))]
         let mut backends = Backends::default();
@@ -34,7 +34,8 @@ pub(crate) fn main(plan: Plan, args: &Args) -> anyhow::Result<ExitCode> {
         if args.web.is_some() {
             backends.world = Some(world_feed(fleet.world.view()));
         }
-        let run = execute_with(fleet.builder, args, backends).await;
+        let signals = crate::common::StopSignals::new()?;
+        let run = execute_with(fleet.builder, args, backends, signals).await;
         let metrics = fleet.world.metrics().await;
         fleet.world.stop();
         anyhow::Ok((run?, metrics))
@@ -49,7 +50,7 @@ pub(crate) fn main(plan: Plan, args: &Args) -> anyhow::Result<ExitCode> {
             print_metrics(m);
         }
     }
-    Ok(ExitCode::from(summary.exit_code()))
+    Ok(ExitCode::from(code))
 }
 
 fn print_metrics(m: &SimMetrics) {

@@ -3,7 +3,8 @@
 //! Places whose action is not registered in this binary run net-timed (the CLI has no user
 //! code); a live one-line progress display on a terminal; a summary at the end (`--json`:
 //! `stopped, firings, time, agents_spawned, agents_ended, final_marking, mean_tokens,
-//! throughput, errors`). Ctrl-C stops the run cleanly (journal flushed) with exit code 130.
+//! throughput, errors`). Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the run cleanly (actions
+//! cancelled, a final `stopped` event, journal flushed) with exit code 130, 143 and 129.
 //!
 //! A plan with a `[map]` runs on simulated robots (feature `sim`): `--robots N` scales the
 //! net's initial robot tokens to N; with time scale 0 the run uses tokio's paused clock, so the
@@ -17,9 +18,9 @@ use std::time::Duration;
 
 use anyhow::Context as _;
 use gspn::io::plan::{Plan, read_plan};
-use gspn::runtime::{Runtime, RuntimeBuilder, Summary};
+use gspn::runtime::{Runtime, RuntimeBuilder, StopReason, Summary};
 
-use crate::common::{BadInput, NetArgs, load_net};
+use crate::common::{BadInput, NetArgs, StopSignals, load_net};
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
@@ -78,8 +79,12 @@ fn load(args: &Args) -> anyhow::Result<Plan> {
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let mut plan = load(&args)?;
     if let Some(x) = args.time_scale {
-        if !(x.is_finite() && x >= 0.0) {
-            return Err(BadInput(format!("--time-scale {x}: must be ≥ 0")).into());
+        if !(x.is_finite() && (0.0..=gspn::limits::MAX_SECONDS).contains(&x)) {
+            return Err(BadInput(format!(
+                "--time-scale {x}: {}",
+                gspn::io::plan::TIME_SCALE_EXPECTED
+            ))
+            .into());
         }
         plan.time_scale = Some(x);
     }
@@ -108,19 +113,24 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         .enable_all()
         .build()
         .context("starting tokio")?;
-    let summary = rt.block_on(execute(plan, &args))?;
+    let (summary, code) = rt.block_on(execute(plan, &args))?;
     print_summary(&summary, args.json)?;
-    Ok(ExitCode::from(summary.exit_code()))
+    Ok(ExitCode::from(code))
 }
 
-async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
+async fn execute(plan: Plan, args: &Args) -> anyhow::Result<(Summary, u8)> {
+    #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
+    let mut signals = StopSignals::new()?;
     #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
     let mut backends = Backends::default();
     #[cfg(feature = "ros2")]
     if crate::ros2::wanted(&plan) {
-        backends.ros2 = Some(crate::ros2::connect(&plan, &args.ros2).await?);
+        let wait = crate::ros2::connect(&plan, &args.ros2);
+        let backend =
+            crate::common::unless_signalled(&mut signals, "waiting for the robots", wait).await?;
+        backends.ros2 = Some(backend);
     }
-    execute_with(Runtime::from_plan(plan), args, backends).await
+    execute_with(Runtime::from_plan(plan), args, backends, signals).await
 }
 
 /// What a run drives besides the runtime itself.
@@ -134,13 +144,16 @@ pub(crate) struct Backends {
     pub(crate) world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
 }
 
-/// Runs a configured builder: journal, viewer, backends, progress, Ctrl-C, summary.
+/// Runs a configured builder: journal, viewer, backends, progress, stop signals, summary.
+/// Returns the summary and the exit code: the summary's, or 128 + the signal's number when a
+/// stop signal (SIGINT, SIGTERM, SIGHUP) ended the run.
 pub(crate) async fn execute_with(
     b: RuntimeBuilder,
     args: &Args,
     #[cfg_attr(not(any(feature = "web", feature = "ros2")), allow(unused_variables))]
     backends: Backends,
-) -> anyhow::Result<Summary> {
+    mut signals: StopSignals,
+) -> anyhow::Result<(Summary, u8)> {
     #[cfg(feature = "web")]
     let watched = args.web.is_some();
     #[cfg(not(feature = "web"))]
@@ -178,15 +191,13 @@ pub(crate) async fn execute_with(
     let wait = handle.wait();
     tokio::pin!(wait);
     let mut ticker = tokio::time::interval(Duration::from_millis(200));
-    let mut interrupted = false;
+    let mut interrupted: Option<u8> = None;
     let summary = loop {
         tokio::select! {
             s = &mut wait => break s,
-            r = tokio::signal::ctrl_c(), if !interrupted => {
-                if r.is_ok() {
-                    interrupted = true;
-                    handle.interrupt();
-                }
+            (_, code) = signals.recv(), if interrupted.is_none() => {
+                interrupted = Some(code);
+                handle.interrupt();
             }
             _ = ticker.tick() => {
                 if let Some(bar) = &bar {
@@ -209,7 +220,11 @@ pub(crate) async fn execute_with(
     }
     #[cfg(feature = "web")]
     crate::serve::linger(viewer, &summary).await;
-    Ok(summary)
+    let code = match interrupted {
+        Some(code) if summary.stopped == StopReason::Interrupted => code,
+        _ => summary.exit_code(),
+    };
+    Ok((summary, code))
 }
 
 pub(crate) fn print_summary(s: &Summary, json: bool) -> anyhow::Result<()> {

@@ -435,7 +435,21 @@ impl MapFile {
             None => 20.0,
         };
         let stuck_after = match &self.stuck_after {
-            Some(s) => positive(Some(*s.get_ref()), 30.0, "stuck_after", s.span(), at)?,
+            Some(s) => {
+                let v = *s.get_ref();
+                if !crate::limits::valid_seconds(v) {
+                    return Err(at(
+                        s.span(),
+                        LoadErrorKind::OutOfRange {
+                            what: "stuck_after",
+                            name: "map".into(),
+                            value: v.to_string(),
+                            expected: crate::limits::SECONDS_EXPECTED,
+                        },
+                    ));
+                }
+                v
+            }
             None => 30.0,
         };
         Ok(Map {
@@ -480,8 +494,11 @@ impl Map {
                 match w {
                     None => Ok(None),
                     Some(s) => match s.parse::<f64>() {
-                        Ok(v) if v.is_finite() && v >= 0.0 => Ok(Some(v)),
-                        _ => Err(format!("`{part}`: `{s}` is not a number of seconds ≥ 0")),
+                        Ok(v) if v == 0.0 || crate::limits::valid_seconds(v) => Ok(Some(v)),
+                        _ => Err(format!(
+                            "`{part}`: `{s}` is not a number of seconds ≥ 0 and ≤ {} (10 years)",
+                            crate::limits::MAX_SECONDS
+                        )),
                     },
                 }
             };
@@ -566,7 +583,7 @@ mod tests {
         );
         assert_eq!(
             m.program("wait -1"),
-            Err("`wait -1`: `-1` is not a number of seconds ≥ 0".into())
+            Err("`wait -1`: `-1` is not a number of seconds ≥ 0 and ≤ 315576000 (10 years)".into())
         );
         assert!(m.program("goto A; beep").unwrap_err().contains("mixes"));
         assert_eq!(m.neighbours(0).collect::<Vec<_>>(), [1]);
