@@ -59,6 +59,7 @@ pub(crate) fn exit_code_for(e: &anyhow::Error) -> u8 {
 /// exit code 128 + the signal's number.
 #[derive(Debug, thiserror::Error)]
 #[error("{what}: interrupted by {signal}")]
+#[cfg_attr(not(feature = "ros2"), allow(dead_code))]
 pub(crate) struct Interrupted {
     /// What was under way.
     pub(crate) what: &'static str,
@@ -116,6 +117,7 @@ impl StopSignals {
 }
 
 /// Runs `work` unless a stop signal comes first: then the [`Interrupted`] error, at once.
+#[cfg(feature = "ros2")]
 pub(crate) async fn unless_signalled<T>(
     signals: &mut StopSignals,
     what: &'static str,
