@@ -405,8 +405,10 @@ impl PlanFile {
                 return Err(at(
                     ts.span(),
                     LoadErrorKind::Invalid(format!(
-                        "time_scale = {v}: transition `{}` (rate {rate}) would wait {:e} s of real time on average, more than the maximum {} s (10 years)",
+                        "time_scale = {}: transition `{}` (rate {}) would wait {:.1e} s of real time on average, more than the maximum {} s (10 years)",
+                        show(v),
                         t.name,
+                        show(rate),
                         v / rate,
                         crate::limits::MAX_SECONDS
                     )),
@@ -565,8 +567,17 @@ fn out_of_range(what: &'static str, name: &str, v: f64, expected: &'static str) 
     LoadErrorKind::OutOfRange {
         what,
         name: name.to_string(),
-        value: v.to_string(),
+        value: show(v),
         expected,
+    }
+}
+
+/// A number as a person writes it: `1e300`, not three hundred digits.
+fn show(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-6..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
     }
 }
 

@@ -99,7 +99,7 @@ fn a_rate_of_1e_minus_30_in_real_time_is_refused_at_the_time_scale() {
     let stderr = refused(&["check"], &path);
     assert!(
         stderr.contains(
-            "plan.toml:2:14: time_scale = 1: transition `T_A_done` (rate 0.000000000000000000000000000001) would wait 1e30 s of real time on average, more than the maximum 315576000 s (10 years)"
+            "plan.toml:2:14: time_scale = 1: transition `T_A_done` (rate 1e-30) would wait 1.0e30 s of real time on average, more than the maximum 315576000 s (10 years)"
         ),
         "{stderr}"
     );
