@@ -80,8 +80,13 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let mut plan = load(&args)?;
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && (0.0..=gspn::limits::MAX_SECONDS).contains(&x)) {
+            let shown = if x.abs() >= 1e15 {
+                format!("{x:e}")
+            } else {
+                x.to_string()
+            };
             return Err(BadInput(format!(
-                "--time-scale {x}: {}",
+                "--time-scale {shown}: {}",
                 gspn::io::plan::TIME_SCALE_EXPECTED
             ))
             .into());
