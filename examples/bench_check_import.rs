@@ -15,9 +15,9 @@
 use std::time::Instant;
 
 use gspn::check::Report;
-use gspn::io::thesis::{ImportOptions, import};
 use gspn::io::{Format, ReadOptions, read_net, write_net};
 use gspn::net::{Net, NetBuilder, Servers};
+use gspn::plan::thesis::{ImportOptions, import};
 
 fn chain(n: usize) -> Net {
     let mut b = NetBuilder::new("chain");

@@ -8,6 +8,9 @@
 //! - [`action`]: the [`Action`] trait and its [`Outcome`].
 //! - [`event`]: the broadcast bus of [`Event`]s; [`journal`]: the JSON Lines journal.
 //! - [`RuntimeBuilder`] / [`RuntimeHandle`]: embedding in an existing tokio runtime.
+//! - [`Role`] and [`FailurePolicy`] (what a place does), [`StopConditions`] (when a run ends).
+//! - [`Backend`]: what a run drives besides its actors (robot world, ROS 2, viewer), kept in
+//!   [`Backends`].
 //!
 //! Places without a registered action are *net-timed*: the supervisor samples their
 //! exponential transitions with the net's rates and server semantics, so a plan with no user
@@ -43,29 +46,40 @@
 
 pub mod action;
 pub mod agent;
+mod backend;
 mod builder;
+mod clock;
 mod conservation;
 mod engine;
 pub mod event;
 mod handle;
+mod id;
 pub mod journal;
 pub mod place;
+mod role;
+mod sink;
+mod snapshot;
+mod stop;
 pub mod supervisor;
 
 use std::path::PathBuf;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 pub use action::{Action, ActionContext, ActionFuture, CancelToken, FnAction, Outcome, action_fn};
-pub use agent::{AgentId, AgentMode, AgentState};
+pub use agent::{AgentMode, AgentState};
+pub use backend::{Backend, BackendError, BackendFuture, Backends, RunError, Section};
 pub use builder::RuntimeBuilder;
 pub use event::{Event, EventKind, Events, Received};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};
+pub use id::AgentId;
+pub use role::{FailurePolicy, Role};
+pub use stop::StopConditions;
 
-use crate::io::plan::Plan;
 use crate::net::Net;
 
-/// Entry point: `Runtime::builder(net)` or `Runtime::from_plan(plan)`.
+/// Entry point: `Runtime::builder(net)` (a plan file gives one with
+/// `gspn::plan::Plan::runtime_builder`).
 #[derive(Debug)]
 pub struct Runtime;
 
@@ -74,15 +88,10 @@ impl Runtime {
     pub fn builder(net: Net) -> RuntimeBuilder {
         RuntimeBuilder::new(net)
     }
-
-    /// A run of a plan: its roles, policy, stop conditions, seed and time scale.
-    pub fn from_plan(plan: Plan) -> RuntimeBuilder {
-        RuntimeBuilder::from_plan(plan)
-    }
 }
 
 /// Why a run stopped.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StopReason {
     /// Nothing can ever fire again.

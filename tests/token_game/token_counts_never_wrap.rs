@@ -29,7 +29,7 @@ fn the_token_game_refuses_a_firing_past_the_maximum_count() {
         "firing `t` would put 4294967296 tokens in place `full`, which exceeds the maximum token count 4294967295"
     );
 
-    let mut sim = Simulator::new(&net, 1);
+    let mut sim = Simulator::new(net.clone(), 1);
     match sim.step() {
         Err(SimError::TokenOverflow { message, .. }) => {
             assert!(message.contains("place `full`"), "{message}")

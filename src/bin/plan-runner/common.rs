@@ -59,7 +59,6 @@ pub(crate) fn exit_code_for(e: &anyhow::Error) -> u8 {
 /// exit code 128 + the signal's number.
 #[derive(Debug, thiserror::Error)]
 #[error("{what}: interrupted by {signal}")]
-#[cfg_attr(not(feature = "ros2"), allow(dead_code))]
 pub(crate) struct Interrupted {
     /// What was under way.
     pub(crate) what: &'static str,
@@ -113,18 +112,5 @@ impl StopSignals {
             let _ = tokio::signal::ctrl_c().await;
             ("Ctrl-C", 130)
         }
-    }
-}
-
-/// Runs `work` unless a stop signal comes first: then the [`Interrupted`] error, at once.
-#[cfg(feature = "ros2")]
-pub(crate) async fn unless_signalled<T>(
-    signals: &mut StopSignals,
-    what: &'static str,
-    work: impl std::future::Future<Output = anyhow::Result<T>>,
-) -> anyhow::Result<T> {
-    tokio::select! {
-        r = work => r,
-        (signal, code) = signals.recv() => Err(Interrupted { what, signal, code }.into()),
     }
 }

@@ -4,14 +4,12 @@
 //! (SIGTERM), 129 hung up (SIGHUP); the last three stop a run cleanly (see docs/reliability.md).
 
 mod analyze;
+mod backends;
 mod check;
 mod common;
 mod convert;
 mod import_thesis;
-#[cfg(feature = "web")]
 mod replay;
-#[cfg(feature = "sim")]
-mod robots;
 #[cfg(feature = "ros2")]
 mod ros2;
 mod run;
@@ -49,7 +47,6 @@ enum Command {
     #[cfg(feature = "web")]
     Serve(serve::Args),
     /// Play a run's journal back: print its firings, or show them with --web (feature `web`).
-    #[cfg(feature = "web")]
     Replay(replay::Args),
     /// Serve a plan's `ros2` places as one robot: ExecPlace action servers at /<ID>/<server>
     /// with net-timed local actions, a heartbeat, the firings (feature `ros2`).
@@ -69,7 +66,6 @@ fn main() -> ExitCode {
         Command::ImportThesis(a) => import_thesis::main(a),
         #[cfg(feature = "web")]
         Command::Serve(a) => serve::main(a),
-        #[cfg(feature = "web")]
         Command::Replay(a) => replay::main(a),
         #[cfg(feature = "ros2")]
         Command::Robot(a) => ros2::robot(a),

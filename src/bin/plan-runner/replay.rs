@@ -1,19 +1,18 @@
 //! `plan-runner replay JOURNAL --net FILE [--web [ADDR]]`: play a run's journal back.
 //!
 //! The journal names its net by hash; `--net` gives the net (or plan) file it was run from.
-//! Without `--web` the firings are printed (time, transition, marking); with it the viewer
-//! shows the run on the net with a time slider.
+//! Without `--web` the firings are printed (time, transition, marking) — no feature needed;
+//! with it (feature `web`) the viewer shows the run on the net with a time slider.
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context as _;
-use gspn::io::plan::read_plan;
-use gspn::web::replay::read_journal_tolerant;
-use gspn::web::{WebState, serve};
+use gspn::plan::open;
+use gspn::runtime::journal::{Frame, read_journal, split_torn};
 
-use crate::common::{BadInput, NetArgs, load_net};
+use crate::common::{BadInput, NetArgs};
 
 /// Arguments of `replay`.
 #[derive(clap::Args, Debug)]
@@ -31,37 +30,55 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let is_plan = args
-        .net
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    let net = if is_plan {
-        read_plan(&args.net, &args.net_args.read_options())?.net
-    } else {
-        load_net(&args.net, &args.net_args)?.net
-    };
+    let net = open(&args.net, &args.net_args.read_options())?
+        .into_plan()
+        .net;
     let text = std::fs::read_to_string(&args.journal)
         .with_context(|| format!("cannot read {}", args.journal.display()))?;
-    let replay = read_journal_tolerant(&text, &net)
+    let (text, torn) = split_torn(&text);
+    let frames = read_journal(text, &net)
         .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
-    if let Some(torn) = &replay.torn {
+    if let Some(torn) = &torn {
         eprintln!(
             "warning: {}: {torn}: skipped (the run was killed while writing it)",
             args.journal.display()
         );
     }
-    let frames = replay.frames;
-    let Some(addr) = args.web else {
-        for f in &frames {
-            println!(
-                "{:>14.6}  {:<24}  {}",
-                f.time,
-                f.transition.as_deref().unwrap_or("(initial)"),
-                net.format_marking(&f.tokens)
-            );
+    match args.web {
+        Some(addr) => viewer(addr, &args.journal, net, frames),
+        None => {
+            for f in &frames {
+                println!(
+                    "{:>14.6}  {:<24}  {}",
+                    f.time,
+                    f.transition.as_deref().unwrap_or("(initial)"),
+                    net.format_marking(&f.tokens)
+                );
+            }
+            Ok(ExitCode::SUCCESS)
         }
-        return Ok(ExitCode::SUCCESS);
-    };
+    }
+}
+
+/// Without the viewer compiled in, `--web` is refused (exit code 2).
+#[cfg(not(feature = "web"))]
+fn viewer(
+    _: SocketAddr,
+    _: &std::path::Path,
+    _: gspn::net::Net,
+    _: Vec<Frame>,
+) -> anyhow::Result<ExitCode> {
+    Err(BadInput("--web needs plan-runner built with the `web` feature".into()).into())
+}
+
+#[cfg(feature = "web")]
+fn viewer(
+    addr: SocketAddr,
+    journal: &std::path::Path,
+    net: gspn::net::Net,
+    frames: Vec<Frame>,
+) -> anyhow::Result<ExitCode> {
+    use gspn::web::{WebState, serve};
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -72,7 +89,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             .with_context(|| format!("cannot listen on {addr}"))?;
         println!(
             "replay of {} ({} firings) at http://{}/",
-            args.journal.display(),
+            journal.display(),
             frames.len() - 1,
             listener.local_addr()?
         );

@@ -6,10 +6,9 @@
 //! throughput, errors`). Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the run cleanly (actions
 //! cancelled, a final `stopped` event, journal flushed) with exit code 130, 143 and 129.
 //!
-//! A plan with a `[map]` runs on simulated robots (feature `sim`): `--robots N` scales the
-//! net's initial robot tokens to N; with time scale 0 the run uses tokio's paused clock, so the
-//! world runs faster than real time; `--json` adds the key `sim` (see
-//! `gspn::sim::world::SimMetrics`).
+//! The backends (simulated robots for a plan with a `[map]`, ROS 2 for `ros2` places, the
+//! viewer with `--web`) come from `backends.rs`; each adds its section to the summary (the
+//! simulated world: key `sim`, see `gspn::world::SimMetrics`).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -17,10 +16,11 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use gspn::io::plan::{Plan, read_plan};
-use gspn::runtime::{Runtime, RuntimeBuilder, StopReason, Summary};
+use gspn::plan::open;
+use gspn::runtime::{Backends, RuntimeBuilder, Section, StopReason, Summary};
 
-use crate::common::{BadInput, NetArgs, StopSignals, load_net};
+use crate::backends::{self, BackendArgs};
+use crate::common::{BadInput, Interrupted, NetArgs, StopSignals};
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
@@ -44,40 +44,15 @@ pub(crate) struct Args {
     journal: Option<PathBuf>,
     /// Print the summary as JSON.
     #[arg(long)]
-    pub(crate) json: bool,
-    /// Watch the run in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080]
-    /// (feature `web`); after the run it stays up until Ctrl-C.
-    #[cfg(feature = "web")]
-    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
-    pub(crate) web: Option<std::net::SocketAddr>,
-    /// Run the plan's map with N simulated robots (the net's initial robot tokens scaled to
-    /// N; feature `sim`).
-    #[cfg(feature = "sim")]
-    #[arg(long, value_name = "N")]
-    pub(crate) robots: Option<usize>,
+    json: bool,
+    #[command(flatten)]
+    backends: BackendArgs,
     #[command(flatten)]
     net: NetArgs,
-    /// ROS 2 flags, used when the plan has `ros2` places (feature `ros2`).
-    #[cfg(feature = "ros2")]
-    #[command(flatten)]
-    ros2: crate::ros2::RunArgs,
-}
-
-fn load(args: &Args) -> anyhow::Result<Plan> {
-    let is_plan = args
-        .file
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    if is_plan {
-        Ok(read_plan(&args.file, &args.net.read_options())?)
-    } else {
-        let loaded = load_net(&args.file, &args.net)?;
-        Ok(Plan::for_net(&args.file, loaded))
-    }
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let mut plan = load(&args)?;
+    let mut plan = open(&args.file, &args.net.read_options())?.into_plan();
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && (0.0..=gspn::limits::MAX_SECONDS).contains(&x)) {
             let shown = if x.abs() >= 1e15 {
@@ -87,7 +62,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             };
             return Err(BadInput(format!(
                 "--time-scale {shown}: {}",
-                gspn::io::plan::TIME_SCALE_EXPECTED
+                gspn::plan::resolve::TIME_SCALE_EXPECTED
             ))
             .into());
         }
@@ -105,84 +80,63 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     for w in &plan.warnings {
         eprintln!("warning: {w}");
     }
-    #[cfg(feature = "sim")]
-    if plan.map.is_some() {
-        return crate::robots::main(plan, &args);
-    } else if args.robots.is_some() {
-        return Err(
-            BadInput("--robots needs a plan with a [map] (see docs/plans.md)".into()).into(),
-        );
+    backends::check(&plan, &args.backends)?;
+    let rt = backends::tokio_runtime(&plan).context("starting tokio")?;
+    let (summary, sections, code) = rt.block_on(async {
+        // Registered before the backends start: a signal while ROS 2 waits for its robots
+        // ends the wait at once with the signal's exit code.
+        let mut signals = StopSignals::new()?;
+        let setup = backends::setup(plan, &args.backends);
+        let (run, mut backends) = tokio::select! {
+            r = setup => r?,
+            (signal, code) = signals.recv() => {
+                return Err(Interrupted { what: "waiting for the robots", signal, code }.into());
+            }
+        };
+        execute(run, &args, &mut backends, signals).await
+    })?;
+    if args.json {
+        if sections.is_empty() {
+            println!("{}", serde_json::to_string_pretty(&summary)?);
+        } else {
+            let mut v = serde_json::to_value(&summary)?;
+            for (name, s) in sections {
+                v[name] = s.json;
+            }
+            println!("{}", serde_json::to_string_pretty(&v)?);
+        }
+    } else {
+        print_summary(&summary)?;
+        for (_, s) in &sections {
+            if !s.text.is_empty() {
+                println!("{}", s.text);
+            }
+        }
     }
-    let rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .context("starting tokio")?;
-    let (summary, code) = rt.block_on(execute(plan, &args))?;
-    print_summary(&summary, args.json)?;
     Ok(ExitCode::from(code))
 }
 
-async fn execute(plan: Plan, args: &Args) -> anyhow::Result<(Summary, u8)> {
-    #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
-    let mut signals = StopSignals::new()?;
-    #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
-    let mut backends = Backends::default();
-    #[cfg(feature = "ros2")]
-    if crate::ros2::wanted(&plan) {
-        let wait = crate::ros2::connect(&plan, &args.ros2);
-        let backend =
-            crate::common::unless_signalled(&mut signals, "waiting for the robots", wait).await?;
-        backends.ros2 = Some(backend);
-    }
-    execute_with(Runtime::from_plan(plan), args, backends, signals).await
-}
-
-/// What a run drives besides the runtime itself.
-#[derive(Default)]
-pub(crate) struct Backends {
-    /// The ROS 2 connection (plans with `ros2` places).
-    #[cfg(feature = "ros2")]
-    pub(crate) ros2: Option<gspn::ros2::Ros2Backend>,
-    /// The simulated world's view, for the viewer's map (`run --web` on a plan with a map).
-    #[cfg(feature = "web")]
-    pub(crate) world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
-}
-
-/// Runs a configured builder: journal, viewer, backends, progress, stop signals, summary.
-/// Returns the summary and the exit code: the summary's, or 128 + the signal's number when a
-/// stop signal (SIGINT, SIGTERM, SIGHUP) ended the run.
-pub(crate) async fn execute_with(
-    b: RuntimeBuilder,
+/// Runs `run` with its backends: journal, progress, stop signals, then every backend's
+/// section. The exit code is the summary's, or 128 + the signal's number when SIGINT,
+/// SIGTERM or SIGHUP stopped the run.
+async fn execute(
+    run: RuntimeBuilder,
     args: &Args,
-    #[cfg_attr(not(any(feature = "web", feature = "ros2")), allow(unused_variables))]
-    backends: Backends,
+    backends: &mut Backends,
     mut signals: StopSignals,
-) -> anyhow::Result<(Summary, u8)> {
-    #[cfg(feature = "web")]
-    let watched = args.web.is_some();
-    #[cfg(not(feature = "web"))]
-    let watched = false;
-    #[cfg(feature = "ros2")]
-    let mut ros2 = backends.ros2;
-    #[cfg(feature = "ros2")]
-    let watched = watched || ros2.is_some();
-    let mut b = b.subscribe_at_start(watched);
-    #[cfg(feature = "ros2")]
-    if let Some(r) = &ros2 {
-        b = r.attach(b);
-    }
+) -> anyhow::Result<(Summary, Vec<(&'static str, Section)>, u8)> {
+    let mut b = backends.attach(run)?;
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
-    #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
-    let mut handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
-    #[cfg(feature = "ros2")]
-    if let Some(r) = &mut ros2 {
-        r.publish(handle.events());
-    }
-    #[cfg(feature = "web")]
-    let (handle, viewer) = crate::serve::follow(handle, args.web, backends.world).await?;
+    let handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    let handle = match backends.start(handle).await {
+        Ok(h) => h,
+        Err(e) => {
+            backends.stop();
+            return Err(e.into());
+        }
+    };
     for w in handle.warnings() {
         eprintln!("warning: {w}");
     }
@@ -219,24 +173,16 @@ pub(crate) async fn execute_with(
         bar.finish_and_clear();
     }
     eprintln!("seed {}", handle.seed());
-    #[cfg(feature = "ros2")]
-    if let Some(r) = ros2 {
-        crate::ros2::finish(r, &args.ros2).await;
-    }
-    #[cfg(feature = "web")]
-    crate::serve::linger(viewer, &summary).await;
+    let sections = backends.finish(&summary).await;
+    backends.stop();
     let code = match interrupted {
         Some(code) if summary.stopped == StopReason::Interrupted => code,
         _ => summary.exit_code(),
     };
-    Ok((summary, code))
+    Ok((summary, sections, code))
 }
 
-pub(crate) fn print_summary(s: &Summary, json: bool) -> anyhow::Result<()> {
-    if json {
-        println!("{}", serde_json::to_string_pretty(s)?);
-        return Ok(());
-    }
+fn print_summary(s: &Summary) -> anyhow::Result<()> {
     println!(
         "stopped: {} after {} firings at time {:.4}",
         s.stopped, s.firings, s.time
