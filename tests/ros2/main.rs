@@ -7,6 +7,11 @@ mod support;
 #[path = "support.rs"]
 mod ros2_support;
 
+#[path = "rtps.rs"]
+mod ros2_rtps;
+
 mod ctrl_c_while_waiting_for_robots;
 mod interop;
+mod lifecycle;
 mod multiprocess;
+mod security;
