@@ -14,6 +14,8 @@
 //! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.
 //! - [`check`]: summary and structural warnings (dead transitions, isolated places, policy
 //!   rules that can never apply) for `plan-runner check`.
+//! - `actions` (unix): actions as programs in any language — a command per action or a
+//!   long-lived JSON Lines worker — registered on the runtime like any other action.
 //! - [`runtime`]: the actor runtime — supervisor, agents, places, actions, events, journal;
 //!   `Runtime::builder(net)…spawn()` embeds a running plan in a tokio service.
 //! - `web` (feature `web`): the viewer — an axum server with embedded assets that draws a
@@ -26,6 +28,8 @@
 #![warn(missing_docs, missing_debug_implementations, unreachable_pub)]
 #![deny(unused_must_use)]
 
+#[cfg(unix)]
+pub mod actions;
 pub mod analysis;
 pub mod check;
 pub mod io;

@@ -82,6 +82,8 @@ pub struct Plan {
     pub map: Option<map::Map>,
     /// The ROS 2 backend's settings and the places it serves (feature `ros2`).
     pub ros2: Ros2Settings,
+    /// Actions run as programs (`action = { command = … }` / `{ worker = … }`).
+    pub programs: Vec<ProgramAction>,
 }
 
 /// What a place does when tokens enter it.
@@ -145,6 +147,7 @@ impl Plan {
             warnings: loaded.warnings,
             map: None,
             ros2: Ros2Settings::default(),
+            programs: Vec::new(),
         }
     }
 
@@ -226,8 +229,10 @@ impl std::fmt::Display for ParamValue {
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PlaceFile {
-    /// The action each token entering the place runs (a name registered with the runtime).
-    pub action: Option<String>,
+    /// The action each token entering the place runs: a name (a built-in `wait [S]`,
+    /// `log MSG`, `fire T [after S]`; a robot program with a `[map]`; `ros2`; or an action a
+    /// library user registers), or a program: `{ command = [...] }`, `{ worker = [...], name }`.
+    pub action: Option<ActionFile>,
     /// `"resource"`: the tokens are counters, not agents. (`"action"` is implied by `action`.)
     #[schemars(with = "Option<String>")]
     pub role: Option<Spanned<String>>,
@@ -244,6 +249,70 @@ pub struct PlaceFile {
     /// `/<robot>/<server>` (default `"exec_place"`).
     #[schemars(with = "Option<String>")]
     pub server: Option<Spanned<String>>,
+}
+
+/// A place's `action`: a name, or a program (see `docs/actions.md`).
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum ActionFile {
+    /// A built-in, a robot program, `ros2`, or a name registered through the library.
+    Name(String),
+    /// A command or a worker.
+    Program(ProgramFile),
+}
+
+impl ActionFile {
+    /// The name, when the action is one.
+    pub fn name(&self) -> Option<&str> {
+        match self {
+            ActionFile::Name(n) => Some(n),
+            ActionFile::Program(_) => None,
+        }
+    }
+}
+
+/// `action = { command = [...] }` (a program per action) or `{ worker = [...], name = "…" }`
+/// (requests to one long-lived program).
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ProgramFile {
+    /// Program and arguments, run once per action; `{place}`, `{agent}`, `{robot}`,
+    /// `{transition_choices}` are replaced.
+    pub command: Option<Vec<String>>,
+    /// Program and arguments of a worker, started once and sent JSON Lines requests.
+    pub worker: Option<Vec<String>>,
+    /// With `worker`: the action name the requests carry.
+    pub name: Option<String>,
+    /// Working directory, relative to the plan's directory.
+    pub cwd: Option<String>,
+    /// Extra environment variables.
+    #[serde(default)]
+    pub env: BTreeMap<String, String>,
+    /// With `command`: seconds before the program is stopped and the action fails.
+    #[schemars(range(min = 0.0))]
+    pub timeout: Option<f64>,
+    /// Seconds between SIGTERM and SIGKILL when the program must stop (default 2).
+    #[schemars(range(min = 0.0))]
+    pub kill_grace: Option<f64>,
+}
+
+/// An action the plan runs as a program; the runtime registers it under `name`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProgramAction {
+    /// The name the place's [`Role::Action`] refers to.
+    pub name: String,
+    /// Program and arguments.
+    pub argv: Vec<String>,
+    /// `Some(action)`: a worker answering requests for `action`; `None`: a command.
+    pub worker_action: Option<String>,
+    /// Working directory, resolved against the plan's directory.
+    pub cwd: Option<PathBuf>,
+    /// Extra environment variables.
+    pub env: Vec<(String, String)>,
+    /// Seconds a command may run (commands only).
+    pub timeout: Option<f64>,
+    /// Seconds between SIGTERM and SIGKILL.
+    pub kill_grace: Option<f64>,
 }
 
 /// One policy rule.
@@ -370,11 +439,12 @@ impl PlanFile {
         }
 
         let mut roles: Vec<Option<Role>> = vec![None; net.place_count()];
+        let mut programs = Vec::new();
         for (name, role) in &self.places {
             let p = net
                 .place_by_name(name.get_ref())
                 .ok_or_else(|| at(name.span(), unknown("place", name.get_ref())))?;
-            roles[p.index()] = Some(resolve_role(&net, p, role, &at)?);
+            roles[p.index()] = Some(resolve_role(&net, p, role, &at, &mut programs, path)?);
             if matches!(roles[p.index()], Some(Role::Action { .. }))
                 && net_outputs(&net, p).is_empty()
             {
@@ -462,7 +532,7 @@ impl PlanFile {
         if let Some(m) = &map {
             // Built-in robot actions (`goto L2; measure`) name locations: check them now.
             for (name, role) in &self.places {
-                if let Some(a) = &role.get_ref().action {
+                if let Some(a) = role.get_ref().action.as_ref().and_then(ActionFile::name) {
                     m.program(a).map_err(|e| {
                         at(
                             role.span(),
@@ -488,6 +558,7 @@ impl PlanFile {
             warnings,
             map,
             ros2,
+            programs,
         })
     }
 }
@@ -531,6 +602,8 @@ fn resolve_role(
     p: PlaceId,
     role: &Spanned<PlaceFile>,
     at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+    programs: &mut Vec<ProgramAction>,
+    plan_path: &Path,
 ) -> Result<Role, LoadError> {
     let place = &net.place(p).name;
     let f = role.get_ref();
@@ -549,11 +622,11 @@ fn resolve_role(
         }
     };
     if resource {
-        if let Some(a) = &f.action {
+        if f.action.is_some() {
             return Err(at(
                 role.span(),
                 LoadErrorKind::Invalid(format!(
-                    "place `{place}` is a resource and also has action `{a}`: choose one"
+                    "place `{place}` is a resource and also has an action: choose one"
                 )),
             ));
         }
@@ -580,7 +653,23 @@ fn resolve_role(
         }
         return Ok(Role::Resource);
     }
-    let Some(name) = f.action.clone() else {
+    let name = match &f.action {
+        Some(ActionFile::Program(prog)) => Some(
+            program_action(place, prog, plan_path, programs).map_err(|k| at(role.span(), k))?,
+        ),
+        Some(ActionFile::Name(n)) => {
+            // A built-in written wrongly is refused here, with its line.
+            if let Some(Err(reason)) = crate::runtime::Builtin::parse(n, net, p) {
+                return Err(at(
+                    role.span(),
+                    LoadErrorKind::Invalid(format!("place `{place}`: {reason}")),
+                ));
+            }
+            Some(n.clone())
+        }
+        None => None,
+    };
+    let Some(name) = name else {
         return Err(at(
             role.span(),
             LoadErrorKind::Missing {
@@ -618,6 +707,73 @@ fn resolve_role(
         on_failure,
         robot: f.robot.clone(),
     })
+}
+
+/// Checks a program action and records it; the name its role refers to.
+fn program_action(
+    place: &str,
+    f: &ProgramFile,
+    plan_path: &Path,
+    programs: &mut Vec<ProgramAction>,
+) -> Result<String, LoadErrorKind> {
+    let bad = |m: String| LoadErrorKind::Invalid(format!("action of `{place}`: {m}"));
+    let (argv, worker_action) = match (&f.command, &f.worker) {
+        (Some(c), None) => {
+            if f.name.is_some() {
+                return Err(bad("`name` goes with `worker`, not `command`".into()));
+            }
+            (c.clone(), None)
+        }
+        (None, Some(w)) => {
+            if f.timeout.is_some() {
+                return Err(bad(
+                    "`timeout` goes with `command`; a worker's actions use the place's `timeout`"
+                        .into(),
+                ));
+            }
+            match &f.name {
+                Some(n) if !n.trim().is_empty() => (w.clone(), Some(n.clone())),
+                _ => return Err(bad("a `worker` needs the `name` of its action".into())),
+            }
+        }
+        _ => return Err(bad("expected exactly one of `command` and `worker`".into())),
+    };
+    if argv.first().is_none_or(|a| a.trim().is_empty()) {
+        return Err(bad("the program is empty".into()));
+    }
+    for (key, v) in [("timeout", f.timeout), ("kill_grace", f.kill_grace)] {
+        if let Some(v) = v
+            && !(v.is_finite() && v >= 0.0)
+        {
+            return Err(bad(format!("`{key}` = {v} must be a finite number ≥ 0")));
+        }
+    }
+    let dir = plan_path.parent().unwrap_or(Path::new(""));
+    let cwd = f.cwd.as_ref().map(|c| dir.join(c));
+    let env: Vec<(String, String)> = f.env.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+    let name = match &worker_action {
+        Some(a) => format!("worker `{}` action `{a}`", argv.join(" ")),
+        None => format!("command `{}`", argv.join(" ")),
+    };
+    let action = ProgramAction {
+        name: name.clone(),
+        argv,
+        worker_action,
+        cwd,
+        env,
+        timeout: f.timeout,
+        kill_grace: f.kill_grace,
+    };
+    match programs.iter().find(|p| p.name == name) {
+        Some(same) if *same == action => {}
+        Some(_) => {
+            return Err(bad(format!(
+                "{name} appears twice with different settings (cwd, env, timeout, kill_grace)"
+            )));
+        }
+        None => programs.push(action),
+    }
+    Ok(name)
 }
 
 /// Parses `stop`, `retry N` or `fire T` for place `p`.

@@ -21,7 +21,7 @@ use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
 use super::StopReason;
-use super::action::{ActionContext, CancelSource, CancelToken};
+use super::action::{ActionContext, CancelSource, CancelToken, OutputLine, OutputSink};
 use super::agent::{Agent, AgentId, AgentMode, AgentState, Run, Update};
 use super::engine::{Engine, Firing, Ready};
 use super::event::{Event, EventKind};
@@ -87,7 +87,10 @@ pub struct Supervisor {
     snapshot_pool: Vec<Arc<Marking>>,
     reports_tx: mpsc::UnboundedSender<ActionDone>,
     reports_rx: Option<mpsc::UnboundedReceiver<ActionDone>>,
+    output_tx: mpsc::UnboundedSender<OutputLine>,
+    output_rx: Option<mpsc::UnboundedReceiver<OutputLine>>,
     robots: Vec<Arc<str>>,
+    seed: u64,
 }
 
 impl std::fmt::Debug for Supervisor {
@@ -114,6 +117,8 @@ pub(crate) struct SupervisorArgs {
     pub(crate) agent_mode: AgentMode,
     /// Robots for the initial agents, in agent order (empty: none).
     pub(crate) robots: Vec<Arc<str>>,
+    /// The seed of the run (actions see it).
+    pub(crate) seed: u64,
 }
 
 impl Supervisor {
@@ -121,6 +126,7 @@ impl Supervisor {
     pub(crate) fn start(args: SupervisorArgs) -> ActorRef<Supervisor> {
         let (cancel, cancel_token) = CancelSource::new();
         let (reports_tx, reports_rx) = mpsc::unbounded_channel();
+        let (output_tx, output_rx) = mpsc::unbounded_channel();
         let virtual_time = args.time_scale <= 0.0;
         let sup = Supervisor {
             eng: args.eng,
@@ -154,7 +160,10 @@ impl Supervisor {
             snapshot_pool: Vec::new(),
             reports_tx,
             reports_rx: Some(reports_rx),
+            output_tx,
+            output_rx: Some(output_rx),
             robots: args.robots,
+            seed: args.seed,
         };
         Supervisor::spawn_with_mailbox(sup, mailbox::unbounded())
     }
@@ -316,6 +325,9 @@ impl Supervisor {
             attempt,
             cancel: self.cancel_token.clone(),
             net: Arc::clone(&self.eng.net),
+            seed: self.seed,
+            time: self.now,
+            output: OutputSink::new(self.output_tx.clone()),
         };
         match self.agent_actors.get(&id) {
             Some(agent) => {
@@ -341,6 +353,25 @@ impl Supervisor {
                 agent: id,
                 place,
                 attempt,
+            });
+        }
+    }
+
+    /// Records the output lines waiting in the channel (before the reports that follow them,
+    /// so a journal shows an action's output before its end).
+    fn drain_output(&mut self, rx: &mut mpsc::UnboundedReceiver<OutputLine>) {
+        while let Ok(o) = rx.try_recv() {
+            self.action_output(o);
+        }
+    }
+
+    fn action_output(&mut self, o: OutputLine) {
+        if self.observed() {
+            self.emit(EventKind::ActionOutput {
+                agent: o.agent,
+                place: o.place,
+                stream: o.stream,
+                line: o.line,
             });
         }
     }
@@ -661,28 +692,42 @@ impl Actor for Supervisor {
             if self.finished {
                 return Ok(None);
             }
-            let Some(mut rx) = self.reports_rx.take() else {
+            let (Some(mut rx), Some(mut out)) = (self.reports_rx.take(), self.output_rx.take())
+            else {
                 return Ok(mailbox_rx.recv().await);
             };
             let got = tokio::select! {
                 biased;
                 sig = mailbox_rx.recv() => {
                     self.reports_rx = Some(rx);
+                    self.output_rx = Some(out);
                     return Ok(sig);
+                }
+                Some(o) = out.recv() => {
+                    self.action_output(o);
+                    self.drain_output(&mut out);
+                    self.reports_rx = Some(rx);
+                    self.output_rx = Some(out);
+                    continue;
                 }
                 r = rx.recv() => r,
             };
             let mut settle = false;
             if let Some(first) = got {
+                self.drain_output(&mut out);
                 settle |= self.action_done(first);
                 for _ in 0..BATCH {
                     match rx.try_recv() {
-                        Ok(d) => settle |= self.action_done(d),
+                        Ok(d) => {
+                            self.drain_output(&mut out);
+                            settle |= self.action_done(d)
+                        }
                         Err(_) => break,
                     }
                 }
             }
             self.reports_rx = Some(rx);
+            self.output_rx = Some(out);
             if settle {
                 self.settle();
                 self.schedule();

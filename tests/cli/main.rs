@@ -5,6 +5,7 @@ mod support;
 
 mod analyze;
 mod check;
+mod program_actions;
 mod readme;
 mod run;
 mod run_on_robots;

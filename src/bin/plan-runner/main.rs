@@ -73,6 +73,10 @@ fn main() -> ExitCode {
         #[cfg(feature = "ros2")]
         Command::Robot(a) => ros2::robot(a),
     };
+    // No program an action started outlives plan-runner (a stop already ended them; this
+    // catches the ones a runtime dropped mid-run).
+    #[cfg(unix)]
+    gspn::actions::terminate_all();
     match result {
         Ok(code) => code,
         Err(e) => {

@@ -120,7 +120,15 @@ async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
     if crate::ros2::wanted(&plan) {
         backends.ros2 = Some(crate::ros2::connect(&plan, &args.ros2).await?);
     }
-    execute_with(Runtime::from_plan(plan), args, backends).await
+    let programs = plan.programs.clone();
+    let b = Runtime::from_plan(plan);
+    #[cfg(unix)]
+    let b = gspn::actions::register(b, &programs);
+    #[cfg(not(unix))]
+    if !programs.is_empty() {
+        return Err(BadInput("program actions (`command`, `worker`) need a unix system".into()).into());
+    }
+    execute_with(b, args, backends).await
 }
 
 /// What a run drives besides the runtime itself.

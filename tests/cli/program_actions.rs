@@ -1,0 +1,180 @@
+//! `plan-runner run` with program actions from the plan file: `action = { command = … }`
+//! runs a process per action and records its output; Ctrl-C (SIGINT) leaves no child
+//! process alive; the quickstart spawns agents running built-in actions.
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use serde_json::Value;
+
+use crate::support as common;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_plan-runner"))
+}
+
+fn repo(p: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
+}
+
+/// The quickstart's two-robot patrol with `Patrol_A` and `Patrol_B` running `command`.
+fn patrol_plan(dir: &Path, command: &str, extra: &str) -> std::path::PathBuf {
+    let net = repo("plans/nets/two_robot_patrol.xml");
+    let plan = dir.join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "net = {net:?}\nseed = 4\n\n[places.Patrol_A]\naction = {{ command = [\"sh\", \"-c\", {command:?}]{extra} }}\n\
+             [places.Patrol_B]\naction = {{ command = [\"sh\", \"-c\", {command:?}]{extra} }}\n\
+             [places.Decide]\naction = \"wait\"\n[places.Charging]\naction = \"wait\"\n\
+             [places.Charger]\nrole = \"resource\"\n\n[stop]\nmax_firings = 12\n",
+            net = net.display().to_string()
+        ),
+    )
+    .unwrap();
+    let _ = common::fixture; // the shared fixture root is not needed here
+    plan
+}
+
+fn journal(path: &Path) -> Vec<Value> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn command_actions_from_a_plan_run_per_agent_and_their_output_is_journalled() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = patrol_plan(
+        dir.path(),
+        "echo \"robot $GSPN_AGENT patrols $GSPN_PLACE\"; echo $GSPN_OUTPUTS",
+        "",
+    );
+    let j = dir.path().join("run.jsonl");
+    let out = bin()
+        .args(["run", plan.to_str().unwrap(), "--json", "--journal"])
+        .arg(&j)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["stopped"], "max_firings");
+    assert_eq!(summary["agents_spawned"], 2);
+    let lines = journal(&j);
+    let places = lines[0]["places"].as_array().unwrap().clone();
+    let said: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["event"] == "action_output")
+        .collect();
+    assert!(said.len() >= 4, "{said:?}");
+    for l in said {
+        let place = places[l["place"].as_u64().unwrap() as usize].as_str().unwrap();
+        assert_eq!(
+            l["line"],
+            format!("robot {} patrols {place}", l["agent"]),
+            "{l}"
+        );
+    }
+    // Each patrol ended by firing the transition the program printed.
+    let fires = lines
+        .iter()
+        .filter(|l| l["event"] == "action_ended" && l["outcome"]["kind"] == "fire")
+        .count();
+    assert!(fires >= 4, "{fires}");
+}
+
+fn alive(pid: i32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Ok(s) => !s.rsplit(')').next().unwrap_or("").trim_start().starts_with('Z'),
+        Err(_) => false,
+    }
+}
+
+#[test]
+fn ctrl_c_leaves_no_action_process_alive() {
+    let dir = tempfile::tempdir().unwrap();
+    let pids = dir.path().join("pids");
+    // Each action: a shell whose child ignores SIGTERM, both hanging.
+    let command = format!(
+        "sh -c 'trap \"\" TERM; sleep 60' & echo $! >> {p}; echo $$ >> {p}; wait",
+        p = pids.display()
+    );
+    let plan = patrol_plan(dir.path(), &command, ", kill_grace = 0.3");
+    let child = bin()
+        .args(["run", plan.to_str().unwrap(), "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut n = 0;
+    for _ in 0..400 {
+        std::thread::sleep(Duration::from_millis(25));
+        n = std::fs::read_to_string(&pids).map_or(0, |s| s.lines().count());
+        if n >= 4 {
+            break;
+        }
+    }
+    assert_eq!(n, 4, "both robots' actions started");
+    let all: Vec<i32> = std::fs::read_to_string(&pids)
+        .unwrap()
+        .lines()
+        .map(|l| l.trim().parse().unwrap())
+        .collect();
+    assert!(all.iter().all(|&p| alive(p)));
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["stopped"], "interrupted");
+    // Every process of the actions' groups is gone, the TERM-ignoring one included.
+    let mut left = all.clone();
+    for _ in 0..100 {
+        left.retain(|&p| alive(p));
+        if left.is_empty() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(left.is_empty(), "still alive: {left:?} of {all:?}");
+}
+
+#[test]
+fn the_quickstart_spawns_agents_running_built_in_actions() {
+    let out = bin()
+        .args(["run", repo("plans/quickstart.toml").to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["agents_spawned"], 2);
+    assert_eq!(summary["stopped"], "max_firings");
+    assert_eq!(summary["firings"], 500);
+    assert_eq!(
+        summary["final_marking"]
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|v| v.as_u64().unwrap())
+            .sum::<u64>(),
+        3
+    );
+}
