@@ -196,20 +196,15 @@ async fn capture(
     let mut lines = BufReader::new(r).lines();
     let mut tail = VecDeque::with_capacity(keep + 1);
     let mut n = 0usize;
-    loop {
-        match lines.next_line().await {
-            Ok(Some(line)) => {
-                n += 1;
-                if n <= MAX_OUTPUT_LINES {
-                    ctx.output_line(stream, line.clone());
-                }
-                tail.push_back(line);
-                if tail.len() > keep {
-                    tail.pop_front();
-                }
-            }
-            // Not UTF-8, or the pipe failed: what was read is what there is.
-            Ok(None) | Err(_) => break,
+    // Not UTF-8, or the pipe failed: what was read is what there is.
+    while let Ok(Some(line)) = lines.next_line().await {
+        n += 1;
+        if n <= MAX_OUTPUT_LINES {
+            ctx.output_line(stream, line.clone());
+        }
+        tail.push_back(line);
+        if tail.len() > keep {
+            tail.pop_front();
         }
     }
     if n > MAX_OUTPUT_LINES {

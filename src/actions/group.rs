@@ -122,7 +122,10 @@ fn signal_group(pgid: i32, sig: i32) -> bool {
 /// program about to exit: `plan-runner` calls it last, so no action program outlives it.
 pub fn terminate_all() {
     let groups: Vec<i32> = match LIVE.lock() {
-        Ok(mut live) => live.take().map(|s| s.into_iter().collect()).unwrap_or_default(),
+        Ok(mut live) => live
+            .take()
+            .map(|s| s.into_iter().collect())
+            .unwrap_or_default(),
         Err(_) => Vec::new(),
     };
     for g in groups {

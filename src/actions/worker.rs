@@ -428,7 +428,10 @@ impl Proc {
 
     /// Closes stdin (a worker's cue to exit), then SIGTERM and SIGKILL to its group.
     async fn stop(mut self) {
-        drop(std::mem::replace(&mut self.stdin, mpsc::unbounded_channel().0));
+        drop(std::mem::replace(
+            &mut self.stdin,
+            mpsc::unbounded_channel().0,
+        ));
         if tokio::time::timeout(self.kill_grace, self.child.wait())
             .await
             .is_ok()

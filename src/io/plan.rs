@@ -654,9 +654,9 @@ fn resolve_role(
         return Ok(Role::Resource);
     }
     let name = match &f.action {
-        Some(ActionFile::Program(prog)) => Some(
-            program_action(place, prog, plan_path, programs).map_err(|k| at(role.span(), k))?,
-        ),
+        Some(ActionFile::Program(prog)) => {
+            Some(program_action(place, prog, plan_path, programs).map_err(|k| at(role.span(), k))?)
+        }
         Some(ActionFile::Name(n)) => {
             // A built-in written wrongly is refused here, with its line.
             if let Some(Err(reason)) = crate::runtime::Builtin::parse(n, net, p) {

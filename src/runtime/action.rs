@@ -135,7 +135,8 @@ impl ActionContext {
     /// [`ActionOutput`](super::EventKind::ActionOutput) event of this agent and place. Lines
     /// longer than [`MAX_OUTPUT_LINE`] bytes are cut.
     pub fn output_line(&self, stream: OutputStream, line: impl Into<String>) {
-        self.output.send(self.agent, self.place, stream, line.into());
+        self.output
+            .send(self.agent, self.place, stream, line.into());
     }
 
     /// `Fire(name)`, or `Failed` when the net has no such transition.

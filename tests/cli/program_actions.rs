@@ -76,7 +76,9 @@ fn command_actions_from_a_plan_run_per_agent_and_their_output_is_journalled() {
         .collect();
     assert!(said.len() >= 4, "{said:?}");
     for l in said {
-        let place = places[l["place"].as_u64().unwrap() as usize].as_str().unwrap();
+        let place = places[l["place"].as_u64().unwrap() as usize]
+            .as_str()
+            .unwrap();
         assert_eq!(
             l["line"],
             format!("robot {} patrols {place}", l["agent"]),
@@ -93,7 +95,12 @@ fn command_actions_from_a_plan_run_per_agent_and_their_output_is_journalled() {
 
 fn alive(pid: i32) -> bool {
     match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
-        Ok(s) => !s.rsplit(')').next().unwrap_or("").trim_start().starts_with('Z'),
+        Ok(s) => !s
+            .rsplit(')')
+            .next()
+            .unwrap_or("")
+            .trim_start()
+            .starts_with('Z'),
         Err(_) => false,
     }
 }
@@ -160,7 +167,11 @@ fn ctrl_c_leaves_no_action_process_alive() {
 #[test]
 fn the_quickstart_spawns_agents_running_built_in_actions() {
     let out = bin()
-        .args(["run", repo("plans/quickstart.toml").to_str().unwrap(), "--json"])
+        .args([
+            "run",
+            repo("plans/quickstart.toml").to_str().unwrap(),
+            "--json",
+        ])
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(0));

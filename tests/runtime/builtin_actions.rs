@@ -125,7 +125,10 @@ async fn a_malformed_builtin_is_refused_naming_the_place_and_the_text() {
     ] {
         let net = loop_net();
         let look = net.place_by_name("look").unwrap();
-        let err = Runtime::builder(net).role(look, role(text)).spawn().unwrap_err();
+        let err = Runtime::builder(net)
+            .role(look, role(text))
+            .spawn()
+            .unwrap_err();
         assert!(matches!(err, RuntimeError::BadBuiltin { .. }));
         assert_eq!(err.to_string(), why);
     }

@@ -97,14 +97,17 @@ async fn fork_join_and_many_to_many_keep_agent_identities() {
     assert!(summary.errors.is_empty(), "{:?}", summary.errors);
     // Every line names the agent and the place of its event: the process ran for that agent.
     let lines = outputs(&events);
-    let said: Vec<_> = lines.iter().filter(|(_, _, l)| l.starts_with("I am")).collect();
+    let said: Vec<_> = lines
+        .iter()
+        .filter(|(_, _, l)| l.starts_with("I am"))
+        .collect();
     // 2 in start, 2 in a, 2 in b, 2 in c, 2 in d, 2 in e, 2 in f; none in `end` (no outputs).
     assert_eq!(said.len(), 14, "{lines:?}");
     for (agent, place, line) in &said {
         let pname = &names[place.parse::<usize>().unwrap()];
         assert_eq!(
-            *line,
-            &format!("I am {agent} in {pname} ({agent} {pname})"),
+            line.as_str(),
+            format!("I am {agent} in {pname} ({agent} {pname})"),
             "{lines:?}"
         );
     }
@@ -157,7 +160,12 @@ fn pids(file: &Path) -> Vec<i32> {
 /// Alive: the process exists and is not a zombie.
 fn alive(pid: i32) -> bool {
     match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
-        Ok(s) => !s.rsplit(')').next().unwrap_or("").trim_start().starts_with('Z'),
+        Ok(s) => !s
+            .rsplit(')')
+            .next()
+            .unwrap_or("")
+            .trim_start()
+            .starts_with('Z'),
         Err(_) => false,
     }
 }
@@ -213,8 +221,19 @@ async fn a_hanging_command_is_killed_at_its_timeout_and_retried_once() {
         })
         .collect();
     assert_eq!(failed.len(), 2, "{failed:?}");
-    assert!(failed.iter().all(|r| r.starts_with("timed out after 500ms")));
-    assert_eq!(summary.errors, ["agent 0 in `hang`: gave up after 1 retries"]);
+    assert!(
+        failed
+            .iter()
+            .all(|r| r.starts_with("timed out after 500ms"))
+    );
+    assert_eq!(
+        summary.errors,
+        [
+            "agent 0 in `hang` failed: timed out after 500ms",
+            "agent 0 in `hang` failed: timed out after 500ms",
+            "agent 0 in `hang`: gave up after 1 retries"
+        ]
+    );
     assert_eq!(
         outputs(&events).iter().filter(|o| o.2 == "started").count(),
         2
@@ -341,7 +360,8 @@ async fn a_crashing_worker_fails_its_in_flight_actions_and_is_restarted() {
     b.output(t, q, 1);
     let net = b.build().unwrap();
     let mut spec = WorkerSpec::new(["python3", script.to_str().unwrap()]);
-    spec.env.push(("MARKER".into(), marker.display().to_string()));
+    spec.env
+        .push(("MARKER".into(), marker.display().to_string()));
     let worker = Worker::start(spec);
     let mut h = Runtime::builder(net)
         .action("work", worker.action("work"))
@@ -370,7 +390,11 @@ async fn a_crashing_worker_fails_its_in_flight_actions_and_is_restarted() {
     );
     assert_eq!(
         failed,
-        [(0, reason.clone()), (1, reason.clone()), (2, reason.clone())]
+        [
+            (0, reason.clone()),
+            (1, reason.clone()),
+            (2, reason.clone())
+        ]
     );
     fired.sort();
     assert_eq!(fired, [0, 1, 2]);

@@ -126,7 +126,9 @@ async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
     let b = gspn::actions::register(b, &programs);
     #[cfg(not(unix))]
     if !programs.is_empty() {
-        return Err(BadInput("program actions (`command`, `worker`) need a unix system".into()).into());
+        return Err(
+            BadInput("program actions (`command`, `worker`) need a unix system".into()).into(),
+        );
     }
     execute_with(b, args, backends).await
 }
