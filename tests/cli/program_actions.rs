@@ -72,7 +72,9 @@ fn command_actions_from_a_plan_run_per_agent_and_their_output_is_journalled() {
     let places = lines[0]["places"].as_array().unwrap().clone();
     let said: Vec<&Value> = lines
         .iter()
-        .filter(|l| l["event"] == "action_output")
+        .filter(|l| {
+            l["event"] == "action_output" && l["line"].as_str().unwrap().starts_with("robot")
+        })
         .collect();
     assert!(said.len() >= 4, "{said:?}");
     for l in said {
