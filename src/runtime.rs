@@ -9,6 +9,9 @@
 //!   `fire`, the actions every plan has.
 //! - [`event`]: the broadcast bus of [`Event`]s; [`journal`]: the JSON Lines journal.
 //! - [`RuntimeBuilder`] / [`RuntimeHandle`]: embedding in an existing tokio runtime.
+//! - [`Role`] and [`FailurePolicy`] (what a place does), [`StopConditions`] (when a run ends).
+//! - [`Backend`]: what a run drives besides its actors (robot world, ROS 2, viewer), kept in
+//!   [`Backends`].
 //!
 //! Places without a registered action are *net-timed*: the supervisor samples their
 //! exponential transitions with the net's rates and server semantics, so a plan with no user
@@ -44,6 +47,7 @@
 
 pub mod action;
 pub mod agent;
+mod backend;
 mod builder;
 pub mod builtin;
 mod conservation;
@@ -52,6 +56,8 @@ pub mod event;
 mod handle;
 pub mod journal;
 pub mod place;
+mod role;
+mod stop;
 pub mod supervisor;
 
 use std::path::PathBuf;
@@ -63,15 +69,18 @@ pub use action::{
     OutputSink, OutputStream, action_fn,
 };
 pub use agent::{AgentId, AgentMode, AgentState};
+pub use backend::{Backend, BackendError, BackendFuture, Backends, RunError, Section};
 pub use builder::RuntimeBuilder;
 pub use builtin::{BUILTIN_WORDS, Builtin};
 pub use event::{Event, EventKind, Events, Received};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};
+pub use role::{FailurePolicy, Role};
+pub use stop::StopConditions;
 
-use crate::io::plan::Plan;
 use crate::net::Net;
 
-/// Entry point: `Runtime::builder(net)` or `Runtime::from_plan(plan)`.
+/// Entry point: `Runtime::builder(net)` (a plan file gives one with
+/// `gspn::plan::Plan::runtime_builder`).
 #[derive(Debug)]
 pub struct Runtime;
 
@@ -79,11 +88,6 @@ impl Runtime {
     /// A run of `net` where every place is net-timed until roles and actions say otherwise.
     pub fn builder(net: Net) -> RuntimeBuilder {
         RuntimeBuilder::new(net)
-    }
-
-    /// A run of a plan: its roles, policy, stop conditions, seed and time scale.
-    pub fn from_plan(plan: Plan) -> RuntimeBuilder {
-        RuntimeBuilder::from_plan(plan)
     }
 }
 

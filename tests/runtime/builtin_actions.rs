@@ -1,9 +1,9 @@
 //! Built-in actions without a map: `wait [S]`, `log MSG`, `fire T [after S]` run agents in
 //! every plan; a malformed one is refused at spawn, naming the place and the text.
 
-use gspn::io::plan::{FailurePolicy, Role};
 use gspn::net::{Net, NetBuilder, Servers};
 use gspn::runtime::{EventKind, Outcome, Runtime, RuntimeError, StopReason};
+use gspn::runtime::{FailurePolicy, Role};
 
 /// look → t1 | t2 → rest → back → look
 fn loop_net() -> Net {

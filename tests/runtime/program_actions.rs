@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use gspn::actions::{CommandAction, CommandSpec, Worker, WorkerSpec};
-use gspn::io::plan::{FailurePolicy, Role};
 use gspn::net::{Net, NetBuilder, Servers};
 use gspn::runtime::{Event, EventKind, Outcome, OutputStream, Runtime, StopReason};
+use gspn::runtime::{FailurePolicy, Role};
 
 fn sh(script: &str) -> CommandSpec {
     CommandSpec::new(["sh", "-c", script])
