@@ -17,8 +17,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use futures::StreamExt;
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::SeedableRng;
 use ros2_client::action::{
     ActionServerQosPolicies, AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId,
     NewGoalHandle,
@@ -30,10 +29,13 @@ use tokio::sync::oneshot;
 
 use super::config::DdsConfig;
 use super::firings::FiringListener;
-use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, Time, exec_place_type};
+use super::msgs::{
+    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RUN_OVER, Time, exec_place_type,
+};
 use super::settings::Ros2Settings;
 use super::{Ros2Error, heartbeat};
 use crate::net::{Net, PlaceId, Timing};
+use crate::sample::{self, Rng};
 
 type Server = AsyncActionServer<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>;
 
@@ -48,10 +50,12 @@ pub struct RobotOptions {
     pub time_scale: f64,
     /// Appends `seq stamp_ns received_ns` for each firing received to this file.
     pub latency_log: Option<PathBuf>,
+    /// Keep serving when the supervisor's run is over (else [`serve`] returns then).
+    pub stay: bool,
 }
 
 /// What a robot did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RobotStats {
     /// Goals received.
     pub goals: u64,
@@ -59,6 +63,9 @@ pub struct RobotStats {
     pub cancelled: u64,
     /// Firings received on `/gspn/firings`.
     pub firings: u64,
+    /// The supervisor said its run is over: why it stopped and after how many firings
+    /// (`max_firings after 100 firings`); `None` when the robot was stopped otherwise.
+    pub run_over: Option<String>,
 }
 
 /// The local decision for one goal: wait this long, then answer this transition.
@@ -72,7 +79,7 @@ pub struct Decision {
 
 /// The net-timed decision for place `p`: the race of its exponential outputs, or at once
 /// with no transition when it has an immediate output (or none at all).
-pub fn decide(net: &Net, p: PlaceId, time_scale: f64, rng: &mut ChaCha8Rng) -> Decision {
+pub fn decide(net: &Net, p: PlaceId, time_scale: f64, rng: &mut Rng) -> Decision {
     let outputs: Vec<_> = net
         .transition_ids()
         .filter(|&t| net.inputs(t).iter().any(|&(q, _)| q == p))
@@ -96,17 +103,8 @@ pub fn decide(net: &Net, p: PlaceId, time_scale: f64, rng: &mut ChaCha8Rng) -> D
             transition: String::new(),
         };
     }
-    let u: f64 = rng.random::<f64>();
-    let delay = -(1.0 - u).ln() / total * time_scale;
-    let mut pick = rng.random::<f64>() * total;
-    let mut chosen = rates[rates.len() - 1].0;
-    for &(t, r) in &rates {
-        if pick < r {
-            chosen = t;
-            break;
-        }
-        pick -= r;
-    }
+    let delay = sample::exponential(rng, total) * time_scale;
+    let chosen = sample::pick_weighted(rng, &rates).unwrap_or(rates[rates.len() - 1].0);
     Decision {
         delay,
         transition: net.transition(chosen).name.clone(),
@@ -139,7 +137,7 @@ fn id_hash(id: &str) -> u64 {
 
 struct Shared {
     net: Arc<Net>,
-    rng: Mutex<ChaCha8Rng>,
+    rng: Mutex<Rng>,
     time_scale: f64,
     stats: Mutex<RobotStats>,
     /// Running goals and how to cancel them.
@@ -161,7 +159,7 @@ pub async fn serve(
     let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;
     let shared = Arc::new(Shared {
         net: Arc::new(net.clone()),
-        rng: Mutex::new(ChaCha8Rng::seed_from_u64(opts.seed ^ id_hash(&opts.id))),
+        rng: Mutex::new(Rng::seed_from_u64(opts.seed ^ id_hash(&opts.id))),
         time_scale: opts.time_scale,
         stats: Mutex::new(RobotStats::default()),
         running: Mutex::new(BTreeMap::new()),
@@ -185,20 +183,46 @@ pub async fn serve(
     }
     let listener = FiringListener::new(&mut node)?;
     let listen = listen(&listener, opts.latency_log.clone(), Arc::clone(&shared));
+    let over = run_over(&listener, &opts);
+    let mut run_over = None;
     tokio::select! {
         _ = stop => {}
         r = listen => r?,
+        o = over => run_over = Some(o),
     }
     beat.abort();
     for t in tasks {
         t.abort();
     }
     spin.abort();
-    let stats = *shared
+    let mut stats = shared
         .stats
         .lock()
-        .map_err(|_| Ros2Error::Other("poisoned".into()))?;
+        .map_err(|_| Ros2Error::Other("poisoned".into()))?
+        .clone();
+    stats.run_over = run_over;
     Ok(stats)
+}
+
+/// Completes when the supervisor says its run is over (never with `opts.stay`, which says
+/// once that the robot stays, idle).
+async fn run_over(listener: &FiringListener, opts: &RobotOptions) -> String {
+    let states = listener.run_states();
+    futures::pin_mut!(states);
+    while let Some(s) = states.next().await {
+        if s.state != RUN_OVER {
+            continue;
+        }
+        let why = format!("{} after {} firings", s.stopped, s.firings);
+        if !opts.stay {
+            return why;
+        }
+        tracing::info!(
+            "robot {}: the supervisor's run is over ({why}); idle, serving until stopped (--stay)",
+            opts.id
+        );
+    }
+    std::future::pending().await
 }
 
 /// A robot id as part of a node name (letters, digits, underscores).
@@ -372,7 +396,7 @@ mod tests {
         b.input(q, now, 1);
         b.output(now, p, 1);
         let net = b.build().unwrap();
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let mut rng = Rng::seed_from_u64(1);
         let n = 20_000;
         let (mut fasts, mut delay) = (0, 0.0);
         for _ in 0..n {

@@ -1,4 +1,5 @@
-//! Breadth-first search of the reachability graph, tangible and vanishing markings alike.
+//! Breadth-first search of the reachability graph, tangible and vanishing markings alike:
+//! the exhaustive chooser of [`crate::firing`] (every move of [`firing::moves`] is taken).
 //!
 //! Markings get ids in discovery order, so processing ids in order *is* the breadth-first
 //! queue, and the parent recorded at discovery gives a shortest firing sequence. Successors
@@ -14,7 +15,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::packing::{Layout, MarkingStore};
 use super::table::MoveTable;
 use super::{AnalysisError, Monitor, Move};
-use crate::net::{Net, Timing, TransitionId};
+use crate::firing::{self, Rules};
+use crate::net::{Net, TransitionId};
 
 /// States per block handed between threads.
 const BLOCK: usize = 1024;
@@ -33,32 +35,6 @@ pub(crate) struct Raw {
     /// Per id: the marking it was first reached from and the transition fired (`u32::MAX`
     /// for the initial marking).
     pub(crate) parent: Vec<(u32, u32)>,
-}
-
-/// Which transitions may fire, precomputed from the net.
-#[derive(Debug)]
-struct Rules {
-    /// Immediate transitions by decreasing priority: (transition, weight, priority).
-    immediates: Vec<(TransitionId, f64, u32)>,
-    exponentials: Vec<TransitionId>,
-}
-
-impl Rules {
-    fn new(net: &Net) -> Rules {
-        let mut immediates = Vec::new();
-        let mut exponentials = Vec::new();
-        for t in net.transition_ids() {
-            match net.transition(t).timing {
-                Timing::Immediate { weight, priority } => immediates.push((t, weight, priority)),
-                Timing::Exponential { .. } => exponentials.push(t),
-            }
-        }
-        immediates.sort_by_key(|&(t, _, p)| (std::cmp::Reverse(p), t));
-        Rules {
-            immediates,
-            exponentials,
-        }
-    }
 }
 
 /// Successors of consecutive states `first..first + count.len()`.
@@ -94,7 +70,7 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
     for i in 0..n {
         let base = &frontier[i * w..(i + 1) * w];
         layout.unpack(base, &mut m);
-        let tangible = firable(net, rules, &m, &mut fire);
+        let tangible = firing::moves(net, rules, &m, &mut fire);
         let (items_len, keys_len) = (b.items.len(), b.keys.len());
         for &(t, v) in &fire {
             for &(p, d) in net.delta(t) {
@@ -118,37 +94,6 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
         b.tangible.push(tangible);
     }
     b
-}
-
-/// Fills `out` with what may fire in `m` and its rate (tangible) or probability (vanishing);
-/// returns whether `m` is tangible.
-fn firable(net: &Net, rules: &Rules, m: &[u32], out: &mut Vec<(TransitionId, f64)>) -> bool {
-    out.clear();
-    let mut level = None;
-    for &(t, w, pr) in &rules.immediates {
-        if level.is_some_and(|l| pr < l) {
-            break;
-        }
-        if net.is_enabled(m, t) {
-            level = Some(pr);
-            out.push((t, w));
-        }
-    }
-    if level.is_some() {
-        let sum: f64 = out.iter().map(|&(_, w)| w).sum();
-        let k = out.len() as f64;
-        for (_, w) in out.iter_mut() {
-            *w = if sum > 0.0 { *w / sum } else { 1.0 / k };
-        }
-        return false;
-    }
-    for &t in &rules.exponentials {
-        let r = net.exp_rate(m, t);
-        if r > 0.0 {
-            out.push((t, r));
-        }
-    }
-    true
 }
 
 /// The search's mutable state, owned by the inserting thread.

@@ -8,7 +8,6 @@ mod check;
 mod common;
 mod convert;
 mod import_thesis;
-#[cfg(feature = "web")]
 mod replay;
 #[cfg(feature = "ros2")]
 mod ros2;
@@ -47,7 +46,6 @@ enum Command {
     #[cfg(feature = "web")]
     Serve(serve::Args),
     /// Play a run's journal back: print its firings, or show them with --web (feature `web`).
-    #[cfg(feature = "web")]
     Replay(replay::Args),
     /// Serve a plan's `ros2` places as one robot: ExecPlace action servers at /<ID>/<server>
     /// with net-timed local actions, a heartbeat, the firings (feature `ros2`).
@@ -57,6 +55,7 @@ enum Command {
 
 fn main() -> ExitCode {
     restore_sigpipe();
+    init_logging();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check(a) => check::main(a),
@@ -67,7 +66,6 @@ fn main() -> ExitCode {
         Command::ImportThesis(a) => import_thesis::main(a),
         #[cfg(feature = "web")]
         Command::Serve(a) => serve::main(a),
-        #[cfg(feature = "web")]
         Command::Replay(a) => replay::main(a),
         #[cfg(feature = "ros2")]
         Command::Robot(a) => ros2::robot(a),
@@ -83,6 +81,27 @@ fn main() -> ExitCode {
             ExitCode::from(common::exit_code_for(&e))
         }
     }
+}
+
+/// The default log filter. RustDDS's writer warns "No locators" for every same-host reader
+/// reached over loopback (it does reach it), and ros2-client that `ROS_DISTRO` is unset:
+/// both would flood stderr, so only their errors show.
+const DEFAULT_LOG: &str =
+    "warn,gspn=info,rustdds::rtps::writer=error,ros2_client::distributions=error";
+
+/// Warnings and errors of the library and of its dependencies (RustDDS and ros2-client log
+/// through `log`, bridged) go to stderr; `RUST_LOG` overrides the default filter
+/// (`DEFAULT_LOG`: the library's notices, everyone's warnings but two noisy ones).
+fn init_logging() {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(DEFAULT_LOG));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        .with_target(true)
+        .without_time()
+        .try_init();
 }
 
 /// Rust ignores SIGPIPE, so printing to a closed pipe (`plan-runner … | head`) would panic;
