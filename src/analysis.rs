@@ -37,6 +37,7 @@
 
 pub mod coverability;
 pub mod ctmc;
+pub mod decision;
 pub mod invariants;
 pub mod measures;
 pub mod properties;

@@ -41,10 +41,13 @@ struct Rules {
     /// Immediate transitions by decreasing priority: (transition, weight, priority).
     immediates: Vec<(TransitionId, f64, u32)>,
     exponentials: Vec<TransitionId>,
+    /// Decision models with WAIT: vanishing markings also list their enabled exponential
+    /// transitions (what a WAIT copy of the marking would race).
+    wait: bool,
 }
 
 impl Rules {
-    fn new(net: &Net) -> Rules {
+    fn new(net: &Net, wait: bool) -> Rules {
         let mut immediates = Vec::new();
         let mut exponentials = Vec::new();
         for t in net.transition_ids() {
@@ -57,6 +60,7 @@ impl Rules {
         Rules {
             immediates,
             exponentials,
+            wait,
         }
     }
 }
@@ -95,6 +99,15 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
         let base = &frontier[i * w..(i + 1) * w];
         layout.unpack(base, &mut m);
         let tangible = firable(net, rules, &m, &mut fire);
+        if rules.wait && !tangible {
+            // Negative: an exponential rate out of a vanishing marking (see `Search::insert`).
+            for &t in &rules.exponentials {
+                let r = net.exp_rate(&m, t);
+                if r > 0.0 {
+                    fire.push((t, -r));
+                }
+            }
+        }
         let (items_len, keys_len) = (b.items.len(), b.keys.len());
         for &(t, v) in &fire {
             for &(p, d) in net.delta(t) {
@@ -181,7 +194,12 @@ impl Search<'_> {
                     }
                     self.raw.parent.push((src, t));
                 }
-                let (rate, prob) = if tangible { (v, 1.0) } else { (0.0, v) };
+                let (rate, prob) = match (tangible, v < 0.0) {
+                    (true, _) => (v, 1.0),
+                    // An exponential transition enabled in a vanishing marking (WAIT).
+                    (false, true) => (-v, 0.0),
+                    (false, false) => (0.0, v),
+                };
                 self.group.push(Move {
                     transition: TransitionId(t),
                     rate,
@@ -207,6 +225,7 @@ impl Search<'_> {
 }
 
 /// Searches the whole reachability graph from the initial marking.
+#[cfg(test)]
 pub(crate) fn explore(
     net: &Net,
     layout: Layout,
@@ -215,7 +234,22 @@ pub(crate) fn explore(
     progress: bool,
     monitor: &Monitor,
 ) -> Result<Raw, AnalysisError> {
-    let rules = Rules::new(net);
+    explore_with(net, layout, max_states, threads, progress, monitor, false)
+}
+
+/// As [`explore`]; with `wait`, a vanishing marking's group also holds its enabled
+/// exponential transitions (`rate > 0`, `prob == 0`) and their targets are searched too: the
+/// markings a WAIT choice reaches.
+pub(crate) fn explore_with(
+    net: &Net,
+    layout: Layout,
+    max_states: usize,
+    threads: usize,
+    progress: bool,
+    monitor: &Monitor,
+    wait: bool,
+) -> Result<Raw, AnalysisError> {
+    let rules = Rules::new(net, wait);
     let mut store = MarkingStore::new(layout, net.place_count());
     let mut m0 = net.initial_marking().into_vec();
     let mut key = vec![0u64; store.layout.words()];
