@@ -42,11 +42,15 @@ use toml::Spanned;
 
 use super::{LoadError, LoadErrorKind, Loaded, ReadOptions, Span, read_net};
 
+mod rewards;
 mod ros2;
 
+use crate::analysis::decision::{Controls, RewardSpec};
 use crate::net::predicate::Predicate;
 use crate::net::{Net, PlaceId, Timing, TransitionId};
 use crate::policy::{Pattern, Policy, PolicyError, Rule};
+pub use rewards::RewardFile;
+use rewards::{resolve_controls, resolve_rewards};
 use ros2::resolve_ros2;
 pub use ros2::{DEFAULT_SERVER, ROS2_ACTION, Ros2File, Ros2Settings};
 
@@ -82,6 +86,10 @@ pub struct Plan {
     pub map: Option<map::Map>,
     /// The ROS 2 backend's settings and the places it serves (feature `ros2`).
     pub ros2: Ros2Settings,
+    /// Reward structures (`[rewards.NAME]`), in name order.
+    pub rewards: Vec<RewardSpec>,
+    /// What a policy controls: `controllable` transitions and `wait`.
+    pub controls: Controls,
 }
 
 /// What a place does when tokens enter it.
@@ -130,6 +138,7 @@ impl Plan {
     /// condition. `plan-runner run NET` uses it.
     pub fn for_net(net_path: &Path, loaded: Loaded) -> Plan {
         let n = loaded.net.place_count();
+        let controls = Controls::zero_weight(&loaded.net);
         Plan {
             path: net_path.to_path_buf(),
             net_path: net_path.to_path_buf(),
@@ -145,6 +154,8 @@ impl Plan {
             warnings: loaded.warnings,
             map: None,
             ros2: Ros2Settings::default(),
+            rewards: Vec::new(),
+            controls,
         }
     }
 
@@ -198,6 +209,17 @@ pub struct PlanFile {
     pub map: Option<Spanned<map::MapFile>>,
     /// ROS 2 backend settings (feature `ros2`; see `docs/ros2.md`).
     pub ros2: Option<Ros2File>,
+    /// Reward structures for policy synthesis and evaluation, by name (see
+    /// `docs/synthesis.md`).
+    #[serde(default)]
+    #[schemars(with = "BTreeMap<String, RewardFile>")]
+    pub rewards: BTreeMap<Spanned<String>, Spanned<RewardFile>>,
+    /// The immediate transitions a policy controls (default: the net's zero-weight ones).
+    #[schemars(with = "Option<Vec<String>>")]
+    pub controllable: Option<Vec<Spanned<String>>>,
+    /// Let a policy WAIT in markings where exponential transitions are enabled besides the
+    /// controllable ones (the GSPNR toolbox's `toMDP`); default false.
+    pub wait: Option<bool>,
 }
 
 /// The value of a net parameter: a number or an expression the net reader evaluates.
@@ -473,6 +495,9 @@ impl PlanFile {
             }
         }
 
+        let rewards = resolve_rewards(&net, &self.rewards, &at)?;
+        let controls = resolve_controls(&net, self.controllable.as_ref(), self.wait, &at)?;
+
         Ok(Plan {
             path: path.to_path_buf(),
             net_path: self.net_path(path),
@@ -488,6 +513,8 @@ impl PlanFile {
             warnings,
             map,
             ros2,
+            rewards,
+            controls,
         })
     }
 }

@@ -13,5 +13,6 @@ mod state_space;
 mod steady_state_from_columns;
 mod steady_state_random_nets;
 mod storm_cross_check;
+mod synthesised_policy;
 mod thesis_reference;
 mod vanishing_elimination;

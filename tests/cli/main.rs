@@ -9,3 +9,4 @@ mod readme;
 mod run;
 mod run_on_robots;
 mod simulate;
+mod synthesize;

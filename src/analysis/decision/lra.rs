@@ -170,6 +170,11 @@ fn mec_value(
         }
         iterations += 1;
         // Instant states from the current Markovian values.
+        let tiny = 1e-15
+            * (1.0
+                + markov
+                    .iter()
+                    .fold(0.0f64, |m, &s| m.max(x[s as usize].abs())));
         for comp in &order {
             let rounds = if comp.len() == 1 { 1 } else { 10_000 };
             for _ in 0..rounds {
@@ -195,7 +200,7 @@ fn mec_value(
                     change = change.max((val - x[s]).abs());
                     x[s] = val;
                 }
-                if change <= 1e-15 * (1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs()))) {
+                if change <= tiny {
                     break;
                 }
             }

@@ -19,6 +19,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use super::lra;
 use super::{DecisionError, DecisionModel, Kind, Objective, Rewards};
 
+/// Relative slack of the bound checks: floating-point sums of probabilities are off by a
+/// few ulps.
+const ROUNDING: f64 = 16.0 * f64::EPSILON;
+
 /// How to solve.
 #[derive(Clone, Debug)]
 pub struct SolveOptions {
@@ -403,14 +407,15 @@ impl Equations {
                     continue;
                 }
                 let (v, _) = self.update(model, r, &up, s);
-                if v > up[s] {
+                // Probabilities that sum to 1 give sums off by a few ulps: tolerate those.
+                if v > up[s] + ROUNDING * up[s].abs() {
                     ok = false;
                     break;
                 }
                 up2[s] = v;
                 if contraction {
                     let (w, _) = self.update(model, r, &down, s);
-                    if w < down[s] {
+                    if w < down[s] - ROUNDING * down[s].abs() {
                         ok = false;
                         break;
                     }

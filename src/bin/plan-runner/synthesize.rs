@@ -15,8 +15,8 @@ use gspn::analysis::decision::{
     Solution, SolveOptions, compress, solve,
 };
 use gspn::io::drn;
-use gspn::net::predicate::Predicate;
 use gspn::net::Net;
+use gspn::net::predicate::Predicate;
 use gspn::policy::{Pattern, Rule};
 use serde_json::json;
 
@@ -25,8 +25,12 @@ use crate::common::{BadInput, NetArgs, load_net};
 /// Arguments of `synthesize`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct Args {
-    /// A net (.xml, .pnml, .PNPRO).
+    /// A plan (.toml: its `[rewards.NAME]`, `controllable` and `wait` apply) or a net
+    /// (.xml, .pnml, .PNPRO; rewards from --rewards).
     file: PathBuf,
+    /// The plan's reward structure to use (default: its only one).
+    #[arg(long, value_name = "NAME")]
+    reward: Option<String>,
     /// lra-max, lra-min, reach-max, reach-min, total-max, total-min, time-max, time-min,
     /// discounted-max, discounted-min (with --discount RATE), discounted-per-step-max,
     /// discounted-per-step-min (with --gamma G).
@@ -101,7 +105,9 @@ fn parse_objective(args: &Args, net: &Net) -> anyhow::Result<(Goal, bool)> {
     };
     let goal = || -> anyhow::Result<Predicate> {
         let text = args.goal.as_deref().ok_or_else(|| {
-            BadInput(format!("--objective {o} needs --goal EXPR (e.g. 'P_done == 3')"))
+            BadInput(format!(
+                "--objective {o} needs --goal EXPR (e.g. 'P_done == 3')"
+            ))
         })?;
         Ok(Predicate::parse(net, text).map_err(|e| BadInput(format!("--goal `{text}`: {e}")))?)
     };
@@ -120,9 +126,9 @@ fn parse_objective(args: &Args, net: &Net) -> anyhow::Result<(Goal, bool)> {
             Goal::Discounted(r)
         }
         "discounted-per-step" => {
-            let g = args
-                .gamma
-                .ok_or_else(|| BadInput("--objective discounted-per-step-… needs --gamma G".into()))?;
+            let g = args.gamma.ok_or_else(|| {
+                BadInput("--objective discounted-per-step-… needs --gamma G".into())
+            })?;
             if !(g > 0.0 && g < 1.0) {
                 return Err(BadInput(format!("--gamma {g}: must be in (0, 1)")).into());
             }
@@ -166,7 +172,8 @@ fn read_rewards(path: &Path, net: &Net) -> anyhow::Result<(RewardSpec, Option<Co
             let t = net
                 .transition_by_name(name)
                 .ok_or_else(|| bad(format!("[transitions]: unknown transition `{name}`")))?;
-            let r = number(v).ok_or_else(|| bad(format!("[transitions] `{name}`: not a number")))?;
+            let r =
+                number(v).ok_or_else(|| bad(format!("[transitions] `{name}`: not a number")))?;
             spec.transitions.push((t, r));
         }
     }
@@ -233,15 +240,24 @@ fn synthesize(
         Goal::Lra => (model.rewards(spec), Objective::Lra { max }),
         Goal::Reach(p) => (
             model.rewards(spec),
-            Objective::Reach { max, goal: flags(p) },
+            Objective::Reach {
+                max,
+                goal: flags(p),
+            },
         ),
         Goal::Total(p) => (
             model.rewards(spec),
-            Objective::Total { max, goal: flags(p) },
+            Objective::Total {
+                max,
+                goal: flags(p),
+            },
         ),
         Goal::Time(p) => (
             model.time_rewards(),
-            Objective::Total { max, goal: flags(p) },
+            Objective::Total {
+                max,
+                goal: flags(p),
+            },
         ),
         Goal::Discounted(rate) => (
             model.rewards(spec),
@@ -365,16 +381,43 @@ fn relative_to(target: &Path, dir: &Path) -> PathBuf {
 /// Without the robot world (feature `sim`) there is no robot scaling.
 #[cfg(not(feature = "sim"))]
 fn scaled(_: &Net, _: usize) -> anyhow::Result<Net> {
-    Err(BadInput("--sweep scales robots like `run --robots`: build with feature `sim`".into()).into())
+    Err(
+        BadInput("--sweep scales robots like `run --robots`: build with feature `sim`".into())
+            .into(),
+    )
+}
+
+/// The plan's text with its `net` path made relative to `dir` (where the output goes).
+fn rebase_plan(plan: &Path, text: &str, dir: &Path) -> anyhow::Result<String> {
+    let file = gspn::io::plan::PlanFile::parse(plan, text)?;
+    let net_path = file.net_path(plan);
+    let span = file.net.span();
+    let rel = relative_to(&net_path, dir);
+    let mut out = String::with_capacity(text.len() + 64);
+    out.push_str(&text[..span.start]);
+    out.push_str(&format!("{:?}", rel.to_string_lossy()));
+    out.push_str(&text[span.end..]);
+    if !out.ends_with('\n') {
+        out.push('\n');
+    }
+    Ok(out)
 }
 
 /// Parses `robots=A..B`.
 fn parse_sweep(s: &str) -> anyhow::Result<std::ops::RangeInclusive<usize>> {
-    let bad = || BadInput(format!("--sweep `{s}`: expected robots=A..B, e.g. robots=1..10"));
+    let bad = || {
+        BadInput(format!(
+            "--sweep `{s}`: expected robots=A..B, e.g. robots=1..10"
+        ))
+    };
     let range = s.strip_prefix("robots=").ok_or_else(bad)?;
     let (a, b) = range.split_once("..").ok_or_else(bad)?;
     let a: usize = a.trim().parse().map_err(|_| bad())?;
-    let b: usize = b.trim_start_matches('=').trim().parse().map_err(|_| bad())?;
+    let b: usize = b
+        .trim_start_matches('=')
+        .trim()
+        .parse()
+        .map_err(|_| bad())?;
     if a == 0 || b < a {
         return Err(bad().into());
     }
@@ -391,15 +434,99 @@ fn scaled(net: &Net, n: usize) -> anyhow::Result<Net> {
         .map_err(|e| anyhow::anyhow!("scaling the initial marking: {e}"))
 }
 
-pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let loaded = load_net(&args.file, &args.net)?;
-    let net = &loaded.net;
-    let (goal, max) = parse_objective(&args, net)?;
-    let (spec, file_controls) = match &args.rewards {
-        Some(p) => read_rewards(p, net)?,
-        None => (RewardSpec::default(), None),
+/// What the input gave: the net, the rewards and controls, and a plan's path and text.
+struct Input {
+    net: Net,
+    spec: RewardSpec,
+    controls: Controls,
+    plan: Option<String>,
+}
+
+fn read_input(args: &Args) -> anyhow::Result<Input> {
+    let is_plan = args
+        .file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if !is_plan {
+        if args.reward.is_some() {
+            return Err(BadInput(
+                "--reward NAME picks a plan's [rewards.NAME]; give a plan".into(),
+            )
+            .into());
+        }
+        let net = load_net(&args.file, &args.net)?.net;
+        let (spec, file_controls) = match &args.rewards {
+            Some(p) => read_rewards(p, &net)?,
+            None => (RewardSpec::default(), None),
+        };
+        let controls = file_controls.unwrap_or_else(|| Controls::zero_weight(&net));
+        return Ok(Input {
+            net,
+            spec,
+            controls,
+            plan: None,
+        });
+    }
+    if args.rewards.is_some() {
+        return Err(BadInput(
+            "--rewards is for a bare net; a plan has its own [rewards.NAME]".into(),
+        )
+        .into());
+    }
+    let plan = gspn::io::plan::read_plan(&args.file, &args.net.read_options())?;
+    let spec = match &args.reward {
+        Some(name) => plan
+            .rewards
+            .iter()
+            .find(|r| &r.name == name)
+            .cloned()
+            .ok_or_else(|| {
+                let names: Vec<&str> = plan.rewards.iter().map(|r| r.name.as_str()).collect();
+                BadInput(format!(
+                    "--reward {name}: the plan has no [rewards.{name}] (it has: {})",
+                    if names.is_empty() {
+                        "none".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                ))
+            })?,
+        None => match plan.rewards.len() {
+            0 => RewardSpec::default(),
+            1 => plan.rewards[0].clone(),
+            _ => {
+                let names: Vec<&str> = plan.rewards.iter().map(|r| r.name.as_str()).collect();
+                return Err(BadInput(format!(
+                    "the plan has several reward structures ({}): pick one with --reward NAME",
+                    names.join(", ")
+                ))
+                .into());
+            }
+        },
     };
-    let mut controls = file_controls.unwrap_or_else(|| Controls::zero_weight(net));
+    if !plan.policy.is_empty() {
+        return Err(BadInput(format!(
+            "{}: the plan already has [[policy]] rules; synthesize from a plan without them",
+            args.file.display()
+        ))
+        .into());
+    }
+    let text = std::fs::read_to_string(&args.file)
+        .with_context(|| format!("reading {}", args.file.display()))?;
+    Ok(Input {
+        net: plan.net,
+        spec,
+        controls: plan.controls,
+        plan: Some(text),
+    })
+}
+
+pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    let input = read_input(&args)?;
+    let net = &input.net;
+    let (goal, max) = parse_objective(&args, net)?;
+    let spec = input.spec.clone();
+    let mut controls = input.controls.clone();
     if let Some(w) = args.wait {
         controls.wait = w;
     }
@@ -409,7 +536,15 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     }
     let progress = !args.json && std::io::stderr().is_terminal();
     if let Some(sweep) = &args.sweep {
-        return run_sweep(&args, net, &controls, &spec, &goal, max, parse_sweep(sweep)?);
+        return run_sweep(
+            &args,
+            net,
+            &controls,
+            &spec,
+            &goal,
+            max,
+            parse_sweep(sweep)?,
+        );
     }
     let s = synthesize(net, &controls, &spec, &goal, max, &args, progress)?;
     if let Some(path) = &args.export_drn {
@@ -427,8 +562,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let compressed = compress(&table);
     let sol = &s.solution;
     if let Some(out) = &args.out {
-        let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        let net_rel = relative_to(&args.file, dir);
+        let dir = out
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
         let mut text = String::new();
         let _ = writeln!(text, "# policy synthesised by plan-runner synthesize");
         let _ = writeln!(text, "# net: {} (hash {})", net.name(), net_hash(net));
@@ -451,7 +588,13 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
                 "# {waits} markings choose WAIT: no rule (run fires an immediate transition at once)"
             );
         }
-        let _ = writeln!(text, "net = {:?}", net_rel.to_string_lossy());
+        match &input.plan {
+            None => {
+                let net_rel = relative_to(&args.file, dir);
+                let _ = writeln!(text, "net = {:?}", net_rel.to_string_lossy());
+            }
+            Some(plan_text) => text.push_str(&rebase_plan(&args.file, plan_text, dir)?),
+        }
         text.push_str(&rules_toml(
             net,
             if args.compact { &compressed } else { &exact },
@@ -516,7 +659,11 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
 }
 
 fn finite(v: f64) -> serde_json::Value {
-    if v.is_finite() { json!(v) } else { json!(format!("{v}")) }
+    if v.is_finite() {
+        json!(v)
+    } else {
+        json!(format!("{v}"))
+    }
 }
 
 fn run_sweep(
