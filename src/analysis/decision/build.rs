@@ -225,12 +225,9 @@ pub(super) fn build(
     };
     // Keep the markings of kept states only, in the order of their first use.
     let Raw { store, .. } = raw;
-    let mut words = Vec::new();
-    for g in 0..n {
-        if class[g] != Class::Eliminated {
-            words.push(g as u32);
-        }
-    }
+    let words: Vec<u32> = (0..n as u32)
+        .filter(|&g| class[g as usize] != Class::Eliminated)
+        .collect();
     let mut new_store = model.store;
     for (k, &g) in words.iter().enumerate() {
         new_store.insert(store.packed(g as usize));

@@ -31,12 +31,12 @@ pub fn evaluate_lra(
     let n = model.state_count();
     let mut index = vec![u32::MAX; n];
     let (mut markov, mut instant) = (Vec::new(), Vec::new());
-    for s in 0..n {
+    for (s, slot) in index.iter_mut().enumerate() {
         if model.kind(s) == Kind::Instant {
-            index[s] = instant.len() as u32;
+            *slot = instant.len() as u32;
             instant.push(s);
         } else {
-            index[s] = markov.len() as u32;
+            *slot = markov.len() as u32;
             markov.push(s);
         }
     }

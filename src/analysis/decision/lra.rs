@@ -11,7 +11,7 @@
 //! iteration with a stop option per MEC state; a MEC whose best is to leave steers each of
 //! its states to the leaving state (an attractor), so the policy never cycles inside.
 
-use super::solve::{Equations, Method, Solution, SolveOptions, initial_value};
+use super::solve::{Equations, Method, Solution, SolveOptions};
 use super::{DecisionError, DecisionModel, Kind, Rewards};
 use crate::analysis::scc::tarjan;
 
@@ -328,18 +328,17 @@ pub(super) fn solve(
     if let Some(a) = &sol_lo {
         let y = &a.values;
         let mut leave_best: Vec<Option<(f64, u32)>> = vec![None; mecs.count];
-        for s in 0..n {
+        for (s, slot) in policy.iter_mut().enumerate() {
             let m = mecs.of[s];
-            let (v, c) = eq_lo.update(model, &zero, y, s);
             if m == u32::MAX {
-                policy[s] = if c == u32::MAX {
+                let c = eq_lo.update(model, &zero, y, s).1;
+                *slot = if c == u32::MAX {
                     model.choices(s).start as u32
                 } else {
                     c
                 };
                 continue;
             }
-            let _ = v;
             for c in model.choices(s) {
                 if mecs.inside[c] {
                     continue;
@@ -358,12 +357,11 @@ pub(super) fn solve(
             attract(model, &mecs, &members[m], c as usize, &mut policy);
         }
     }
-    for s in 0..n {
-        if policy[s] == u32::MAX {
-            policy[s] = model.choices(s).start as u32;
+    for (s, slot) in policy.iter_mut().enumerate() {
+        if *slot == u32::MAX {
+            *slot = model.choices(s).start as u32;
         }
     }
-    let _ = initial_value;
     let value = match (&sol_lo, &sol_hi) {
         (Some(_), Some(_)) => {
             let v: f64 = model

@@ -431,11 +431,11 @@ impl Equations {
                     .map(|s| (lower_vec[s] + up2[s]) / 2.0)
                     .map(|v| if v.is_nan() { f64::INFINITY } else { v })
                     .collect();
-                for s in 0..n {
-                    if policy[s] == u32::MAX {
-                        policy[s] = self.update(model, r, &lo, s).1;
-                        if policy[s] == u32::MAX {
-                            policy[s] = model.choices(s).start as u32;
+                for (s, slot) in policy.iter_mut().enumerate() {
+                    if *slot == u32::MAX {
+                        *slot = self.update(model, r, &lo, s).1;
+                        if *slot == u32::MAX {
+                            *slot = model.choices(s).start as u32;
                         }
                     }
                 }
