@@ -57,7 +57,7 @@ pub fn to_string(
 ) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "// exported by gspn from net {}", net.name());
-    out.push_str("@type: MA\n@value_type: double\n@parameters\n\n@reward_models\n");
+    out.push_str("@type: Markov Automaton\n@value_type: double\n@parameters\n\n@reward_models\n");
     let names: Vec<String> = rewards
         .iter()
         .map(|(n, _)| n.replace(char::is_whitespace, "_"))

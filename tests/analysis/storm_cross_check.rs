@@ -12,7 +12,6 @@ use super::decision_model::{fixture_rewards, gspnr};
 const SCRIPT: &str = r#"
 import sys, stormpy
 env = stormpy.Environment()
-env.solver_environment.minmax_solver_environment.precision = stormpy.Rational("1/10000000000")
 prop = stormpy.parse_properties('R{"r"}max=? [LRA]')[0]
 for path in sys.argv[1:]:
     m = stormpy.build_model_from_drn(path)

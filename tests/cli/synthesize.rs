@@ -115,7 +115,7 @@ fn drn_export_names_the_model_type_and_every_state() {
     let j: Value = serde_json::from_str(&stdout).unwrap();
     assert!((j["value"].as_f64().unwrap() - 6.0).abs() < 1e-9, "{j}");
     let text = std::fs::read_to_string(&drn).unwrap();
-    assert!(text.contains("@type: MA"));
+    assert!(text.contains("@type: Markov Automaton"));
     assert_eq!(text.matches("\nstate ").count(), 3);
 }
 
