@@ -8,10 +8,10 @@
 use std::time::Instant;
 
 use gspn::io::ReadOptions;
-use gspn::io::plan::map::{Map, QueueSpec, RobotSpec};
-use gspn::io::plan::read_plan;
-use gspn::sim::world::Fleet;
-use gspn::sim::world::room::{Room, Vec2};
+use gspn::plan::read_plan;
+use gspn::world::Fleet;
+use gspn::world::map::{Map, QueueSpec, RobotSpec};
+use gspn::world::room::{Room, Vec2};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);

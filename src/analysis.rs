@@ -11,6 +11,8 @@
 //!   Gauss–Seidel, limiting distribution of non-ergodic chains, transient by uniformization);
 //!   [`measures`] turns a distribution into mean tokens, throughputs, waiting times and
 //!   predicate probabilities ([`Solver`](measures::Solver)).
+//! - [`report`]: the typed report of all this — what `plan-runner analyze --json` prints and
+//!   what the viewer's analysis panel shows.
 //!
 //! ```
 //! use gspn::analysis::measures::{Solver, SolverOptions};
@@ -41,6 +43,7 @@ pub mod decision;
 pub mod invariants;
 pub mod measures;
 pub mod properties;
+pub mod report;
 pub mod scc;
 pub mod state_space;
 pub mod vanishing;

@@ -33,8 +33,8 @@ use serde::Serialize;
 
 pub use self::structure::Structure;
 use crate::io::Format;
-use crate::io::plan::Plan;
 use crate::net::{ArcKind, Net, PlaceId, Timing};
+use crate::plan::Plan;
 use crate::policy::{Pattern, Rule};
 
 /// What `check` reports. Serialised as JSON with exactly these keys.

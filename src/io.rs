@@ -1,5 +1,6 @@
-//! Readers and writers: PIPE XML (the thesis format), PNML (ISO P/T plus the `<timed>` /
-//! `<rate>` extension), GreatSPN PNPRO, plan files (TOML), and exports (DOT).
+//! Net formats: PIPE XML (the thesis format), PNML (ISO P/T plus the `<timed>` / `<rate>`
+//! extension), GreatSPN PNPRO, and exports (DOT, PRISM). Plan files are read by
+//! [`crate::plan`].
 //!
 //! Every reader streams the file through quick-xml (no DOM) and reports bad input as a
 //! [`LoadError`] carrying the file, the line and column, and the offending name.
@@ -8,11 +9,9 @@ pub mod dot;
 pub mod drn;
 pub mod expr;
 pub mod pipe;
-pub mod plan;
 pub mod pnml;
 pub mod pnpro;
 pub mod prism;
-pub mod thesis;
 mod xml;
 
 use std::fmt;

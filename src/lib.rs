@@ -5,21 +5,31 @@
 //!
 //! # Layout
 //!
+//! Layers point one way: the model at the bottom, the runtime driving it, backends plugging
+//! into the runtime, and [`plan`] on top wiring them together. Nothing below [`plan`]
+//! imports it or [`io`].
+//!
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
-//! - [`io`]: readers and writers — PIPE XML, PNML, GreatSPN PNPRO, DOT, plan files.
-//! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded; `sim::world`
-//!   (feature `sim`): simulated robots in a rapier2d room, driven by built-in actions.
+//! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.
 //! - [`analysis`]: the tangible reachability graph, properties (bounds, deadlocks, liveness,
 //!   invariants), the CTMC (steady state, limiting, transient) and measures.
-//! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.
-//! - [`check`]: summary and structural warnings (dead transitions, isolated places, policy
-//!   rules that can never apply) for `plan-runner check`.
-//! - [`runtime`]: the actor runtime — supervisor, agents, places, actions, events, journal;
-//!   `Runtime::builder(net)…spawn()` embeds a running plan in a tokio service.
+//! - [`io`]: net formats only — PIPE XML, PNML, GreatSPN PNPRO, DOT, PRISM.
+//! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded — and
+//!   Monte-Carlo estimates.
+//! - [`runtime`]: the actor runtime — supervisor, agents, places, actions, events, journal,
+//!   roles and stop conditions; `Runtime::builder(net)…spawn()` embeds a running plan in a
+//!   tokio service.
+//! - [`world`]: the robot world — the room a plan describes (`world::map`), built-in robot
+//!   programs (`goto L2; measure`), and (feature `sim`) simulated robots in a rapier2d room.
+//! - [`ros2`]: the ROS 2 backend (feature `ros2`) — robots as ExecPlace action servers,
+//!   firings and the marking on topics, over DDS (`plan-runner robot`, `docs/ros2.md`);
+//!   `ros2::settings` (what a plan tells it) is compiled without the feature too.
 //! - `web` (feature `web`): the viewer — an axum server with embedded assets that draws a
 //!   net, plays its token game and shows its analysis (`plan-runner serve`).
-//! - `ros2` (feature `ros2`): the ROS 2 backend — robots as ExecPlace action servers,
-//!   firings and the marking on topics, over DDS (`plan-runner robot`, `docs/ros2.md`).
+//! - [`plan`]: the composition root — the plan file (TOML) read and resolved, import-thesis,
+//!   and `Plan::runtime_builder()` wiring net, roles, policy and stop conditions into a run.
+//! - [`check`]: summary and structural warnings (dead transitions, isolated places, policy
+//!   rules that can never apply) for `plan-runner check`.
 //!
 //! The everyday types are in [`prelude`].
 
@@ -30,13 +40,14 @@ pub mod analysis;
 pub mod check;
 pub mod io;
 pub mod net;
+pub mod plan;
 pub mod policy;
-#[cfg(feature = "ros2")]
 pub mod ros2;
 pub mod runtime;
 pub mod sim;
 #[cfg(feature = "web")]
 pub mod web;
+pub mod world;
 
 /// The everyday types, for `use gspn::prelude::*`.
 pub mod prelude {
@@ -44,6 +55,7 @@ pub mod prelude {
     pub use crate::net::{
         ArcKind, Marking, Net, NetBuilder, PlaceId, Servers, Timing, TransitionId,
     };
+    pub use crate::plan::{Plan, read_plan};
     pub use crate::runtime::{
         Action, ActionContext, AgentId, Outcome, Runtime, RuntimeHandle, StopReason, action_fn,
     };

@@ -32,149 +32,15 @@
 //! ```
 
 mod builder;
+mod element;
+mod id;
 mod marking;
 pub mod predicate;
 
 pub use builder::{NetBuilder, NetError};
+pub use element::{Arc, ArcKind, Place, Position, Servers, Timing, Transition};
+pub use id::{PlaceId, TransitionId};
 pub use marking::Marking;
-
-use serde::{Deserialize, Serialize};
-
-/// Dense index of a place in its [`Net`].
-#[repr(transparent)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-pub struct PlaceId(pub u32);
-
-/// Dense index of a transition in its [`Net`].
-#[repr(transparent)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-pub struct TransitionId(pub u32);
-
-impl PlaceId {
-    /// The index into per-place arrays.
-    #[inline]
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
-
-impl TransitionId {
-    /// The index into per-transition arrays.
-    #[inline]
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
-
-/// A point on the drawing canvas, in the unit of the file it came from.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Position {
-    /// Horizontal coordinate.
-    pub x: f64,
-    /// Vertical coordinate (grows downwards, as in every editor we read).
-    pub y: f64,
-}
-
-/// A place: a name, an initial marking and an optional capacity.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Place {
-    /// Name shown to users; unique in the net.
-    pub name: String,
-    /// Tokens in the initial marking.
-    pub initial: u32,
-    /// Most tokens the place may hold; `None` for unbounded.
-    pub capacity: Option<u32>,
-    /// Position on the canvas, when the file gave one.
-    pub position: Option<Position>,
-}
-
-/// How many firings of an exponential transition run concurrently.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Servers {
-    /// One server: the rate does not grow with the enabling degree.
-    Single,
-    /// As many servers as the enabling degree.
-    Infinite,
-    /// `k` servers (k ≥ 1).
-    K(u32),
-}
-
-impl Servers {
-    /// How many servers work when the enabling degree is `degree`.
-    #[inline]
-    pub fn active(self, degree: u32) -> u32 {
-        match self {
-            Servers::Single => degree.min(1),
-            Servers::Infinite => degree,
-            Servers::K(k) => degree.min(k),
-        }
-    }
-}
-
-/// Whether a transition fires at once (immediate) or after an exponential delay.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub enum Timing {
-    /// Fires in zero time; among enabled immediate transitions only those of the highest
-    /// priority may fire, chosen with probability ∝ weight.
-    Immediate {
-        /// Relative weight (≥ 0; 0 = a decision left to the policy).
-        weight: f64,
-        /// Priority level (≥ 1).
-        priority: u32,
-    },
-    /// Fires after an exponentially distributed delay.
-    Exponential {
-        /// Rate per server (> 0, finite).
-        rate: f64,
-        /// Server semantics.
-        servers: Servers,
-    },
-}
-
-/// A transition: a name and its timing.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Transition {
-    /// Name shown to users; unique in the net.
-    pub name: String,
-    /// Immediate or exponential, with its parameters.
-    pub timing: Timing,
-    /// Position on the canvas, when the file gave one.
-    pub position: Option<Position>,
-}
-
-impl Transition {
-    /// True for immediate transitions.
-    #[inline]
-    pub fn is_immediate(&self) -> bool {
-        matches!(self.timing, Timing::Immediate { .. })
-    }
-}
-
-/// What an arc does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum ArcKind {
-    /// Place → transition: needs and consumes `weight` tokens.
-    Input,
-    /// Transition → place: produces `weight` tokens.
-    Output,
-    /// Place —o transition: the transition needs fewer than `weight` tokens.
-    Inhibitor,
-}
-
-/// An arc between a place and a transition, as drawn in the file.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Arc {
-    /// Input, output or inhibitor.
-    pub kind: ArcKind,
-    /// The place end.
-    pub place: PlaceId,
-    /// The transition end.
-    pub transition: TransitionId,
-    /// Multiplicity (≥ 1).
-    pub weight: u32,
-    /// Bend points, in drawing order from source to target.
-    pub points: Vec<Position>,
-}
 
 /// A validated, immutable Petri net with the indices that make firing cheap.
 #[derive(Clone, Debug)]

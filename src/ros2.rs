@@ -11,21 +11,36 @@
 //! - [`heartbeat`]: robots' heartbeats and the supervisor's [`heartbeat::RobotWatch`], which
 //!   turns a silent robot into a failed action.
 //! - [`config`]: domain, networks (loopback by default), timings.
+//! - [`settings`]: what a plan tells the backend ([`Ros2Settings`]); compiled without the
+//!   feature too, so plans read the same everywhere.
 //!
 //! See `docs/ros2.md` for the topics, the plan keys and the DDS settings.
 
+pub mod settings;
+
+#[cfg(feature = "ros2")]
 pub mod backend;
+#[cfg(feature = "ros2")]
 pub mod config;
+#[cfg(feature = "ros2")]
 pub mod firings;
+#[cfg(feature = "ros2")]
 pub mod heartbeat;
+#[cfg(feature = "ros2")]
 pub mod msgs;
+#[cfg(feature = "ros2")]
 pub mod remote_place;
+#[cfg(feature = "ros2")]
 pub mod robot;
 
+#[cfg(feature = "ros2")]
 pub use backend::Ros2Backend;
+#[cfg(feature = "ros2")]
 pub use config::DdsConfig;
+pub use settings::{DEFAULT_SERVER, ROS2_ACTION, Ros2Settings};
 
 /// What went wrong in the ROS 2 backend.
+#[cfg(feature = "ros2")]
 #[derive(Debug, thiserror::Error)]
 pub enum Ros2Error {
     /// Creating or using a DDS entity failed.
@@ -42,6 +57,7 @@ pub enum Ros2Error {
     Other(String),
 }
 
+#[cfg(feature = "ros2")]
 impl Ros2Error {
     /// A DDS error from ros2-client or RustDDS (their errors only implement `Debug`).
     pub fn dds(e: impl std::fmt::Debug) -> Ros2Error {

@@ -8,6 +8,9 @@
 //! - [`action`]: the [`Action`] trait and its [`Outcome`].
 //! - [`event`]: the broadcast bus of [`Event`]s; [`journal`]: the JSON Lines journal.
 //! - [`RuntimeBuilder`] / [`RuntimeHandle`]: embedding in an existing tokio runtime.
+//! - [`Role`] and [`FailurePolicy`] (what a place does), [`StopConditions`] (when a run ends).
+//! - [`Backend`]: what a run drives besides its actors (robot world, ROS 2, viewer), kept in
+//!   [`Backends`].
 //!
 //! Places without a registered action are *net-timed*: the supervisor samples their
 //! exponential transitions with the net's rates and server semantics, so a plan with no user
@@ -43,6 +46,7 @@
 
 pub mod action;
 pub mod agent;
+mod backend;
 mod builder;
 mod conservation;
 mod engine;
@@ -50,6 +54,8 @@ pub mod event;
 mod handle;
 pub mod journal;
 pub mod place;
+mod role;
+mod stop;
 pub mod supervisor;
 
 use std::path::PathBuf;
@@ -58,14 +64,17 @@ use serde::Serialize;
 
 pub use action::{Action, ActionContext, ActionFuture, CancelToken, FnAction, Outcome, action_fn};
 pub use agent::{AgentId, AgentMode, AgentState};
+pub use backend::{Backend, BackendError, BackendFuture, Backends, RunError, Section};
 pub use builder::RuntimeBuilder;
 pub use event::{Event, EventKind, Events, Received};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};
+pub use role::{FailurePolicy, Role};
+pub use stop::StopConditions;
 
-use crate::io::plan::Plan;
 use crate::net::Net;
 
-/// Entry point: `Runtime::builder(net)` or `Runtime::from_plan(plan)`.
+/// Entry point: `Runtime::builder(net)` (a plan file gives one with
+/// `gspn::plan::Plan::runtime_builder`).
 #[derive(Debug)]
 pub struct Runtime;
 
@@ -73,11 +82,6 @@ impl Runtime {
     /// A run of `net` where every place is net-timed until roles and actions say otherwise.
     pub fn builder(net: Net) -> RuntimeBuilder {
         RuntimeBuilder::new(net)
-    }
-
-    /// A run of a plan: its roles, policy, stop conditions, seed and time scale.
-    pub fn from_plan(plan: Plan) -> RuntimeBuilder {
-        RuntimeBuilder::from_plan(plan)
     }
 }
 

@@ -51,8 +51,6 @@ mod monte_carlo;
 mod sample;
 mod statistics;
 pub(crate) mod sum_tree;
-#[cfg(feature = "sim")]
-pub mod world;
 
 pub use monte_carlo::{Estimate, Estimates, Horizon, MonteCarlo, monte_carlo, t_quantile_975};
 pub use statistics::Statistics;

@@ -215,7 +215,7 @@ impl WebState {
             "seed": s.seed(),
             "time": s.time(),
             "firings": s.firings(),
-            "marking": api::by_place(&net, m),
+            "marking": crate::analysis::report::by_place(&net, m),
             "tokens": m,
             "text": net.format_marking(m),
             "enabled": enabled,

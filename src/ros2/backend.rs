@@ -25,7 +25,8 @@ use super::firings::{FiringPublisher, Published};
 use super::heartbeat::RobotWatch;
 use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, exec_place_type};
 use super::remote_place::{RemotePlaces, RobotLink};
-use crate::io::plan::{Plan, ROS2_ACTION};
+use super::settings::{ROS2_ACTION, Ros2Settings};
+use crate::net::Net;
 use crate::runtime::{Events, RuntimeBuilder};
 
 /// The supervisor's ROS 2 side: links to the robots and the firing publisher.
@@ -64,11 +65,12 @@ fn client_qos() -> ActionClientQosPolicies {
 }
 
 impl Ros2Backend {
-    /// Joins DDS and links to every robot of `robots` for the plan's `ros2` places; waits
-    /// (at most `cfg.startup`) until each robot's heartbeat and servers are seen and
-    /// `/gspn/firings` has at least `subscribers` matched subscriptions.
+    /// Joins DDS and links to every robot of `robots` for the `ros2` places of `settings`
+    /// (places of `net`); waits (at most `cfg.startup`) until each robot's heartbeat and
+    /// servers are seen and `/gspn/firings` has at least `subscribers` matched subscriptions.
     pub async fn connect(
-        plan: &Plan,
+        net: &Net,
+        settings: &Ros2Settings,
         robots: &[String],
         cfg: &DdsConfig,
         subscribers: usize,
@@ -81,8 +83,8 @@ impl Ros2Backend {
             }
         });
         let watch = RobotWatch::start(&mut node, robots, cfg.lost_after)?;
-        let publisher = FiringPublisher::new(&mut node, Arc::new(plan.net.clone()))?;
-        let mut servers: Vec<&str> = plan.ros2.servers.iter().map(|(_, s)| s.as_str()).collect();
+        let publisher = FiringPublisher::new(&mut node, Arc::new(net.clone()))?;
+        let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
         servers.sort_unstable();
         servers.dedup();
         let mut links = Vec::new();
@@ -137,7 +139,7 @@ impl Ros2Backend {
                 publisher.firing_subscribers(&node)
             ))
         })?;
-        let servers: HashMap<_, _> = plan.ros2.servers.iter().cloned().collect();
+        let servers: HashMap<_, _> = settings.servers.iter().cloned().collect();
         Ok(Ros2Backend {
             node,
             spin,

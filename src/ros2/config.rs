@@ -10,7 +10,7 @@ use std::time::Duration;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::{Context, NodeName, NodeOptions};
 
-use crate::io::plan::Ros2Settings;
+use super::settings::Ros2Settings;
 
 /// How a process joins DDS and how the supervisor watches robots.
 #[derive(Clone, Debug, PartialEq)]

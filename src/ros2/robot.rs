@@ -31,8 +31,8 @@ use tokio::sync::oneshot;
 use super::config::DdsConfig;
 use super::firings::FiringListener;
 use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, Time, exec_place_type};
+use super::settings::Ros2Settings;
 use super::{Ros2Error, heartbeat};
-use crate::io::plan::Plan;
 use crate::net::{Net, PlaceId, Timing};
 
 type Server = AsyncActionServer<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>;
@@ -148,7 +148,8 @@ struct Shared {
 
 /// Serves the plan's `ros2` places as robot `opts.id` until `stop` completes.
 pub async fn serve(
-    plan: &Plan,
+    net: &Net,
+    settings: &Ros2Settings,
     cfg: &DdsConfig,
     opts: RobotOptions,
     stop: impl Future<Output = ()>,
@@ -159,13 +160,13 @@ pub async fn serve(
     let spin = tokio::spawn(spinner.spin());
     let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;
     let shared = Arc::new(Shared {
-        net: Arc::new(plan.net.clone()),
+        net: Arc::new(net.clone()),
         rng: Mutex::new(ChaCha8Rng::seed_from_u64(opts.seed ^ id_hash(&opts.id))),
         time_scale: opts.time_scale,
         stats: Mutex::new(RobotStats::default()),
         running: Mutex::new(BTreeMap::new()),
     });
-    let mut servers: Vec<&str> = plan.ros2.servers.iter().map(|(_, s)| s.as_str()).collect();
+    let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
     servers.sort_unstable();
     servers.dedup();
     let mut tasks = Vec::new();

@@ -16,10 +16,9 @@ use super::event::Events;
 use super::handle::{Progress, RuntimeHandle};
 use super::journal::Journal;
 use super::supervisor::{PlaceSetup, Supervisor, SupervisorArgs};
-use super::{RuntimeError, conservation};
-use crate::io::plan::{FailurePolicy, Plan, Role, StopConditions};
+use super::{FailurePolicy, Role, RuntimeError, StopConditions, conservation};
 use crate::net::predicate::Predicate;
-use crate::net::{Net, PlaceId};
+use crate::net::{Net, NetError, PlaceId};
 use crate::policy::Policy;
 
 /// Configures a run; [`RuntimeBuilder::spawn`] starts it inside the current tokio runtime.
@@ -72,15 +71,42 @@ impl RuntimeBuilder {
         }
     }
 
-    pub(crate) fn from_plan(plan: Plan) -> Self {
-        let mut b = RuntimeBuilder::new(plan.net);
-        b.roles = plan.roles;
-        b.policy = plan.policy;
-        b.stop = plan.stop;
-        b.seed = plan.seed;
-        b.time_scale = plan.time_scale.unwrap_or(0.0);
-        b.robots = plan.robots.iter().map(|r| Arc::from(r.as_str())).collect();
-        b
+    /// The net this run will execute.
+    pub fn net(&self) -> &Net {
+        &self.net
+    }
+
+    /// The role of place `p`, when it has one.
+    pub fn role_of(&self, p: PlaceId) -> Option<&Role> {
+        self.roles.get(p.index()).and_then(Option::as_ref)
+    }
+
+    /// The robots bound to the initial agents, in agent order.
+    pub fn robot_names(&self) -> &[Arc<str>] {
+        &self.robots
+    }
+
+    /// The seed set so far (`None`: the clock picks one at spawn).
+    pub fn seed_value(&self) -> Option<u64> {
+        self.seed
+    }
+
+    /// The time scale set so far.
+    pub fn time_scale_value(&self) -> f64 {
+        self.time_scale
+    }
+
+    /// Replaces the net's initial marking (same places, same order); roles and the policy
+    /// are kept.
+    pub fn initial_marking(mut self, m: &[u32]) -> Result<Self, NetError> {
+        self.net = Arc::new(self.net.with_initial_marking(m)?);
+        Ok(self)
+    }
+
+    /// Replaces every stop condition (a plan file's `[stop]`).
+    pub fn stop_conditions(mut self, stop: StopConditions) -> Self {
+        self.stop = stop;
+        self
     }
 
     /// The policy over immediate transitions (checked against the net by [`Policy::new`]).

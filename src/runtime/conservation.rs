@@ -2,9 +2,9 @@
 //! destroy tokens — a structural P-invariant with weight 1 on every non-resource place,
 //! checked by [`conserves_tokens`] in one pass over the arcs (milliseconds for large nets).
 
+use super::Role;
 use super::RuntimeError;
 use crate::analysis::invariants::conserves_tokens;
-use crate::io::plan::Role;
 use crate::net::{Net, PlaceId};
 
 /// Refuses a net whose transitions change the number of tokens outside resource places,

@@ -28,7 +28,7 @@ use super::event::{Event, EventKind};
 use super::handle::{Progress, Summary};
 use super::journal::Journal;
 use super::place::{Place, Start};
-use crate::io::plan::{FailurePolicy, StopConditions};
+use super::{FailurePolicy, StopConditions};
 use crate::net::{Marking, PlaceId, TransitionId};
 
 mod messages;

@@ -5,7 +5,7 @@ use axum::extract::{Query, State};
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
-use serde_json::{Map, Value, json};
+use serde_json::{Value, json};
 
 use crate::net::{ArcKind, Net, Servers, Timing};
 use crate::web::WebState;
@@ -178,28 +178,6 @@ fn session_error(e: SessionError) -> Response {
         SessionError::Sim(_) | SessionError::Net(_) => StatusCode::UNPROCESSABLE_ENTITY,
     };
     error(status, e.to_string())
-}
-
-/// `{name: value}` over the places.
-pub(crate) fn by_place<T: serde::Serialize>(net: &Net, values: &[T]) -> Value {
-    Value::Object(
-        net.places()
-            .iter()
-            .zip(values)
-            .map(|(p, v)| (p.name.clone(), json!(v)))
-            .collect::<Map<_, _>>(),
-    )
-}
-
-/// `{name: value}` over the transitions.
-pub(crate) fn by_transition<T: serde::Serialize>(net: &Net, values: &[T]) -> Value {
-    Value::Object(
-        net.transitions()
-            .iter()
-            .zip(values)
-            .map(|(t, v)| (t.name.clone(), json!(v)))
-            .collect::<Map<_, _>>(),
-    )
 }
 
 /// `GET /api/analysis`: starts the analysis if needed (on a blocking thread) and waits for

@@ -198,7 +198,7 @@ impl LiveRun {
             "type": "state",
             "firable": firable,
             "tokens": s.tokens,
-            "marking": crate::web::api::by_place(net, &s.tokens),
+            "marking": crate::analysis::report::by_place(net, &s.tokens),
             "text": net.format_marking(&s.tokens),
             "time": s.time,
             "firings": s.firings,

@@ -6,10 +6,10 @@ use serde_json::{Value, json};
 use crate::analysis::ctmc::SolveError;
 use crate::analysis::measures::{Solver, SolverOptions};
 use crate::analysis::properties::Properties;
+use crate::analysis::report::{MeasuresReport, Panel};
 use crate::analysis::state_space::{AnalysisError, Options, StateSpace};
 use crate::net::Net;
 use crate::web::analysis_job::{Phase, Progress};
-use crate::web::api::{by_place, by_transition};
 
 /// Everything the panel shows, as JSON; `{"error", "kind"}` when the state space cannot be
 /// built (unbounded net, too many states, timeless trap) or the job was cancelled (`kind`
@@ -46,38 +46,11 @@ pub(crate) fn analyse(net: &Net, max_states: usize, progress: &Progress) -> Valu
         return cancelled();
     }
     let props = Properties::compute(net, &ss);
-    let dead: Vec<Value> = props
-        .dead_markings
-        .iter()
-        .map(|d| {
-            let path: Vec<&str> = d
-                .path
-                .iter()
-                .map(|&t| net.transition(t).name.as_str())
-                .collect();
-            json!({
-                "marking": by_place(net, &d.marking),
-                "text": net.format_marking(&d.marking),
-                "path": path,
-            })
-        })
-        .collect();
-    let mut v = json!({
-        "name": net.name(),
-        "reachable": props.reachable,
-        "tangible": props.tangible,
-        "vanishing": props.vanishing,
-        "edges": props.edges,
-        "safe": props.safe,
-        "reversible": props.reversible,
-        "deadlock_free": props.deadlock_free,
-        "place_bounds": by_place(net, &props.place_bounds),
-        "liveness": by_transition(net, &props.liveness),
-        "dead_markings": dead,
-    });
+    let mut panel = Panel::new(net, &props);
+    let to_json = |p: &Panel| serde_json::to_value(p).unwrap_or(Value::Null);
     if ss.tangible_count() == 0 {
-        v["steady_error"] = json!("no tangible marking: time never passes");
-        return v;
+        panel.steady_error = Some("no tangible marking: time never passes".into());
+        return to_json(&panel);
     }
     if !progress.enter(Phase::SteadyState) {
         return cancelled();
@@ -90,14 +63,10 @@ pub(crate) fn analyse(net: &Net, max_states: usize, progress: &Progress) -> Valu
     match solver.steady_state(&opts) {
         Ok(lim) => {
             let m = solver.measures(&lim.pi);
-            v["steady"] = json!({
-                "ergodic": lim.ergodic,
-                "mean_tokens": by_place(net, &m.mean_tokens),
-                "throughput": by_transition(net, &m.throughput),
-            });
+            panel.steady = Some(MeasuresReport::panel(net, lim.ergodic, &m));
         }
         Err(SolveError::Cancelled { .. }) => return cancelled(),
-        Err(e) => v["steady_error"] = json!(e.to_string()),
+        Err(e) => panel.steady_error = Some(e.to_string()),
     }
-    v
+    to_json(&panel)
 }

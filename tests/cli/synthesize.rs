@@ -60,7 +60,7 @@ fn the_home_plan_gives_an_optimal_policy_that_loads_back_as_a_plan() {
         "{text}"
     );
     assert_eq!(text.matches("[[policy]]").count(), rules.len());
-    let plan = gspn::io::plan::read_plan(&out, &Default::default()).unwrap();
+    let plan = gspn::plan::read_plan(&out, &Default::default()).unwrap();
     assert_eq!(plan.policy.rules().len(), rules.len());
 }
 
@@ -70,7 +70,7 @@ fn compact_rules_are_fewer_and_load() {
     let out = dir.path().join("compact.toml");
     let (code, _, err) = synthesize(&[&home_plan(), "--compact", "--out", out.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
-    let plan = gspn::io::plan::read_plan(&out, &Default::default()).unwrap();
+    let plan = gspn::plan::read_plan(&out, &Default::default()).unwrap();
     assert!(!plan.policy.rules().is_empty());
     assert!(
         plan.policy.rules().len() < 150,

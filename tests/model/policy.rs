@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
-use gspn::io::plan::{Plan, PlanFile};
 use gspn::net::{Net, NetBuilder, Servers, TransitionId};
+use gspn::plan::{Plan, PlanFile};
 
 /// `Decide` (1 token) feeds immediate `a` (weight 1), `b` (weight 3), `c` (weight 0, needs
 /// `Key` too); `Busy` and `Key` are side places; `E` is exponential.

@@ -6,10 +6,11 @@ use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
 use gspn::io::LoadErrorKind;
-use gspn::io::plan::{Plan, Role};
-use gspn::io::thesis::{ImportOptions, KeyItem, import, plan_text, read_input};
 use gspn::net::{NetBuilder, Servers};
+use gspn::plan::Plan;
+use gspn::plan::thesis::{ImportOptions, KeyItem, import, plan_text, read_input};
 use gspn::policy::Pattern;
+use gspn::runtime::Role;
 
 fn fixtures() -> PathBuf {
     crate::support::fixtures::root()
@@ -125,7 +126,7 @@ fn translation_to_toml_on_a_built_net() {
     );
     // The plan resolves against the same net: one exact rule, one partial.
     let plan_path = dir.path().join("plan.toml");
-    let file = gspn::io::plan::PlanFile::parse(&plan_path, &text).unwrap();
+    let file = gspn::plan::PlanFile::parse(&plan_path, &text).unwrap();
     let plan = file.resolve(&plan_path, &text, net).unwrap();
     assert_eq!(plan.policy.rules()[0].pattern, Pattern::Exact(vec![1, 0]));
     assert_eq!(

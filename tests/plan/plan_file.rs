@@ -6,9 +6,10 @@
 
 use std::path::{Path, PathBuf};
 
-use gspn::io::plan::{FailurePolicy, Role, json_schema, read_plan};
 use gspn::io::{LoadError, LoadErrorKind, ReadOptions};
+use gspn::plan::{json_schema, read_plan};
 use gspn::policy::Pattern;
+use gspn::runtime::{FailurePolicy, Role};
 
 fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
@@ -27,7 +28,7 @@ fn with_plan(text: &str) -> (tempfile::TempDir, PathBuf) {
     (dir, path)
 }
 
-fn load(text: &str) -> Result<gspn::io::plan::Plan, LoadError> {
+fn load(text: &str) -> Result<gspn::plan::Plan, LoadError> {
     let (_dir, path) = with_plan(text);
     read_plan(&path, &ReadOptions::default())
 }

@@ -5,9 +5,9 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use gspn::io::plan::{FailurePolicy, Role};
 use gspn::net::{Net, NetBuilder, Servers};
 use gspn::runtime::{AgentMode, EventKind, Outcome, Runtime, StopReason, action_fn};
+use gspn::runtime::{FailurePolicy, Role};
 
 in_both_agent_modes!(
     a_panicking_action_does_not_take_the_plan_down,

@@ -1,8 +1,8 @@
 //! Robot plans refuse, at load, a net that can create or destroy robot tokens once resource
 //! places are set aside — a structural check, one pass over the transitions.
 
-use gspn::io::plan::{FailurePolicy, Role};
 use gspn::net::{NetBuilder, Servers};
+use gspn::runtime::{FailurePolicy, Role};
 use gspn::runtime::{Outcome, Runtime, RuntimeError, action_fn};
 
 fn robot(name: &str) -> Role {

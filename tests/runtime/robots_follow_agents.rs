@@ -4,8 +4,8 @@
 
 use std::sync::{Arc, Mutex};
 
-use gspn::io::plan::PlanFile;
 use gspn::net::{Net, NetBuilder, Servers};
+use gspn::plan::PlanFile;
 use gspn::runtime::{EventKind, Outcome, Runtime, RuntimeError, action_fn};
 
 /// A three-place ring a → b → c → a with two tokens in `a` and one in `b`.

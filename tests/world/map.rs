@@ -6,10 +6,10 @@
 use std::path::{Path, PathBuf};
 
 use gspn::io::ReadOptions;
-use gspn::io::plan::read_plan;
 use gspn::net::{NetBuilder, Servers};
+use gspn::plan::read_plan;
 use gspn::runtime::{EventKind, Received, StopReason};
-use gspn::sim::world::{Fleet, FleetError};
+use gspn::world::{Fleet, FleetError};
 use serde_json::{Value, json};
 
 fn repo(rel: &str) -> PathBuf {
@@ -69,8 +69,8 @@ fn the_patrol_plan_loads_with_its_map() {
     assert_eq!(
         map.program("goto L2; measure"),
         Ok(Some(vec![
-            gspn::io::plan::map::Step::Goto(5),
-            gspn::io::plan::map::Step::Measure(None),
+            gspn::world::program::Step::Goto(5),
+            gspn::world::program::Step::Measure(None),
         ]))
     );
 }
@@ -297,7 +297,7 @@ fn robot_tokens_are_scaled_largest_remainder_first() {
     )
     .unwrap();
     let robot: Vec<bool> = vec![true; plan.net.place_count()];
-    let m = |n| gspn::sim::world::fleet::scaled_marking(&plan.net, &robot, n);
+    let m = |n| gspn::world::fleet::scaled_marking(&plan.net, &robot, n);
     // The net starts with one token in each of Check_Temperature_L1, L2, L3 (places 0, 4, 8).
     let at = |m: Vec<u32>| (m[0], m[4], m[8], m.iter().sum::<u32>());
     assert_eq!(at(m(1)), (1, 0, 0, 1));

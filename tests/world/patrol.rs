@@ -9,9 +9,9 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use gspn::io::ReadOptions;
-use gspn::io::plan::{Plan, read_plan};
+use gspn::plan::{Plan, read_plan};
 use gspn::runtime::{StopReason, Summary};
-use gspn::sim::world::{Fleet, SimMetrics, WorldView};
+use gspn::world::{Fleet, SimMetrics, WorldView};
 
 fn repo(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)

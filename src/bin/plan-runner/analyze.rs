@@ -10,11 +10,11 @@ use anyhow::Context;
 use gspn::analysis::invariants::{Invariants, p_invariants, t_invariants};
 use gspn::analysis::measures::{Measures, Solver, SolverOptions};
 use gspn::analysis::properties::Properties;
+use gspn::analysis::report::{MeasuresReport, Report, StateSpaceReport, transition_names};
 use gspn::analysis::state_space::{AnalysisError, Options, StateSpace};
 use gspn::io::prism::Explicit;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
-use serde_json::{Map, Value, json};
 
 use crate::common::{BadInput, NetArgs, load_net};
 
@@ -113,47 +113,19 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         })
         .collect();
     if args.json {
-        let mut out = Map::new();
-        out.insert(
-            "state_space".into(),
-            state_space_json(net, &props, &pinv, &tinv),
-        );
-        out.insert(
-            "steady_state".into(),
-            match &steady {
-                Some((ergodic, m, probs)) => {
-                    let mut v = json!({
-                        "ergodic": ergodic,
-                        "mean_tokens": per_place(net, &m.mean_tokens),
-                        "prob_nonempty": per_place(net, &m.prob_nonempty),
-                        "throughput": per_transition(net, &m.throughput),
-                        "mean_wait": net.places().iter().zip(&m.mean_wait)
-                            .map(|(p, w)| (p.name.clone(), json!(w))).collect::<Map<_, _>>(),
-                    });
-                    if !predicates.is_empty() {
-                        v["probability"] = prob_json(&args.prob, probs);
-                    }
-                    v
-                }
-                None => Value::Null,
-            },
-        );
-        let tr: Vec<Value> = transient
-            .iter()
-            .map(|(t, m, probs)| {
-                let mut v = json!({
-                    "t": t,
-                    "mean_tokens": per_place(net, &m.mean_tokens),
-                    "throughput": per_transition(net, &m.throughput),
-                });
-                if !predicates.is_empty() {
-                    v["probability"] = prob_json(&args.prob, probs);
-                }
-                v
-            })
-            .collect();
-        out.insert("transient".into(), Value::Array(tr));
-        println!("{}", serde_json::to_string_pretty(&Value::Object(out))?);
+        let report = Report {
+            state_space: StateSpaceReport::new(net, &props, &pinv, &tinv),
+            steady_state: steady.as_ref().map(|(ergodic, m, probs)| {
+                MeasuresReport::steady(net, *ergodic, m).with_probabilities(&args.prob, probs)
+            }),
+            transient: transient
+                .iter()
+                .map(|(t, m, probs)| {
+                    MeasuresReport::transient(net, *t, m).with_probabilities(&args.prob, probs)
+                })
+                .collect(),
+        };
+        print_json(&report)?;
         return Ok(ExitCode::SUCCESS);
     }
     print_state_space(&args, net, &props, &pinv, &tinv);
@@ -184,96 +156,21 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn per_place(net: &Net, v: &[f64]) -> Value {
-    Value::Object(
-        net.places()
-            .iter()
-            .zip(v)
-            .map(|(p, x)| (p.name.clone(), json!(x)))
-            .collect(),
-    )
-}
-
-fn per_transition(net: &Net, v: &[f64]) -> Value {
-    Value::Object(
-        net.transitions()
-            .iter()
-            .zip(v)
-            .map(|(t, x)| (t.name.clone(), json!(x)))
-            .collect(),
-    )
-}
-
-fn prob_json(exprs: &[String], probs: &[f64]) -> Value {
-    Value::Object(
-        exprs
-            .iter()
-            .zip(probs)
-            .map(|(e, p)| (e.clone(), json!(p)))
-            .collect(),
-    )
-}
-
-fn invariants_json(inv: &Invariants, names: &[&str]) -> Value {
-    Value::Array(
-        inv.vectors
-            .iter()
-            .map(|v| {
-                Value::Object(
-                    v.iter()
-                        .zip(names)
-                        .filter(|(w, _)| **w != 0)
-                        .map(|(w, n)| (n.to_string(), json!(w)))
-                        .collect(),
-                )
-            })
-            .collect(),
-    )
-}
-
-fn names_of(net: &Net, ts: &[gspn::net::TransitionId]) -> Vec<String> {
-    ts.iter().map(|&t| net.transition(t).name.clone()).collect()
-}
-
-fn state_space_json(net: &Net, p: &Properties, pinv: &Invariants, tinv: &Invariants) -> Value {
-    let places: Vec<&str> = net.places().iter().map(|p| p.name.as_str()).collect();
-    let transitions: Vec<&str> = net.transitions().iter().map(|t| t.name.as_str()).collect();
-    json!({
-        "reachable": p.reachable,
-        "tangible": p.tangible,
-        "vanishing": p.vanishing,
-        "edges": p.edges,
-        "dead_markings": p.dead_markings.iter().map(|d| net.format_marking(&d.marking)).collect::<Vec<_>>(),
-        "bounded": true,
-        "unbounded_places": Vec::<String>::new(),
-        "place_bounds": places.iter().zip(&p.place_bounds).map(|(n, b)| (n.to_string(), json!(b))).collect::<Map<_, _>>(),
-        "max_tokens_in_place": p.max_tokens_in_place,
-        "max_tokens_per_marking": p.max_tokens_per_marking,
-        "safe": p.safe,
-        "reversible": p.reversible,
-        "deadlock_free": p.deadlock_free,
-        "live_transitions": names_of(net, &p.live_transitions()),
-        "dead_transitions": names_of(net, &p.dead_transitions()),
-        "p_invariants": invariants_json(pinv, &places),
-        "t_invariants": invariants_json(tinv, &transitions),
-    })
+/// Prints a report as the CLI always has: a JSON value, so keys come out sorted.
+fn print_json(report: &Report) -> anyhow::Result<()> {
+    let v = serde_json::to_value(report)?;
+    println!("{}", serde_json::to_string_pretty(&v)?);
+    Ok(())
 }
 
 fn report_unbounded(args: &Args, places: &[String]) {
     if args.json {
-        let v = json!({
-            "state_space": {
-                "reachable": null, "tangible": null, "vanishing": null, "edges": null,
-                "dead_markings": null, "bounded": false, "unbounded_places": places,
-                "place_bounds": null, "max_tokens_in_place": null,
-                "max_tokens_per_marking": null, "safe": false, "reversible": null,
-                "deadlock_free": null, "live_transitions": null, "dead_transitions": null,
-                "p_invariants": null, "t_invariants": null,
-            },
-            "steady_state": null,
-            "transient": [],
-        });
-        println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+        let report = Report {
+            state_space: StateSpaceReport::unbounded(places),
+            steady_state: None,
+            transient: Vec::new(),
+        };
+        let _ = print_json(&report);
     } else {
         println!(
             "{}: unbounded — these places can grow without limit: {}",
@@ -336,8 +233,8 @@ fn print_state_space(args: &Args, net: &Net, p: &Properties, pinv: &Invariants, 
             println!("  … and {} more", p.dead_markings.len() - 10);
         }
     }
-    let live = names_of(net, &p.live_transitions());
-    let dead = names_of(net, &p.dead_transitions());
+    let live = transition_names(net, &p.live_transitions());
+    let dead = transition_names(net, &p.dead_transitions());
     println!(
         "live transitions: {}/{}",
         live.len(),

@@ -4,10 +4,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use gspn::check::Report;
-use gspn::io::Format;
-use gspn::io::plan::read_plan;
+use gspn::plan::{Opened, open};
 
-use crate::common::{NetArgs, load_net};
+use crate::common::NetArgs;
 
 /// Arguments of `check`.
 #[derive(clap::Args, Debug)]
@@ -30,21 +29,20 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let (report, extra) = if Format::from_extension(&args.file) == Some(Format::Plan) {
-        let plan = read_plan(&args.file, &args.net.read_options())?;
-        let roles = plan.roles.iter().flatten().count();
-        let extra = format!(
-            "net {}; {} policy rule(s), {roles} place role(s)",
-            plan.net_path.display(),
-            plan.policy.rules().len()
-        );
-        (Report::for_plan(&plan), Some(extra))
-    } else {
-        let loaded = load_net(&args.file, &args.net)?;
-        (
+    let (report, extra) = match open(&args.file, &args.net.read_options())? {
+        Opened::Plan(plan) => {
+            let roles = plan.roles.iter().flatten().count();
+            let extra = format!(
+                "net {}; {} policy rule(s), {roles} place role(s)",
+                plan.net_path.display(),
+                plan.policy.rules().len()
+            );
+            (Report::for_plan(&plan), Some(extra))
+        }
+        Opened::Net { loaded, .. } => (
             Report::for_net(&loaded.net, loaded.format, &loaded.warnings),
             None,
-        )
+        ),
     };
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use gspn::io::thesis::{ImportOptions, import};
+use gspn::plan::thesis::{ImportOptions, import};
 
 /// Arguments of `import-thesis`.
 #[derive(clap::Args, Debug)]

@@ -3,14 +3,13 @@
 //! Exit codes: 0 ok, 1 failure, 2 bad input, 130 interrupted.
 
 mod analyze;
+mod backends;
 mod check;
 mod common;
 mod convert;
 mod import_thesis;
 #[cfg(feature = "web")]
 mod replay;
-#[cfg(feature = "sim")]
-mod robots;
 #[cfg(feature = "ros2")]
 mod ros2;
 mod run;

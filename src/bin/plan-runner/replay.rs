@@ -9,11 +9,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context as _;
-use gspn::io::plan::read_plan;
+use gspn::plan::open;
 use gspn::web::replay::read_journal;
 use gspn::web::{WebState, serve};
 
-use crate::common::{BadInput, NetArgs, load_net};
+use crate::common::{BadInput, NetArgs};
 
 /// Arguments of `replay`.
 #[derive(clap::Args, Debug)]
@@ -31,15 +31,9 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let is_plan = args
-        .net
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    let net = if is_plan {
-        read_plan(&args.net, &args.net_args.read_options())?.net
-    } else {
-        load_net(&args.net, &args.net_args)?.net
-    };
+    let net = open(&args.net, &args.net_args.read_options())?
+        .into_plan()
+        .net;
     let text = std::fs::read_to_string(&args.journal)
         .with_context(|| format!("cannot read {}", args.journal.display()))?;
     let frames = read_journal(&text, &net)

@@ -3,14 +3,18 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use gspn::io::plan::{Plan, read_plan};
+use gspn::plan::{Plan, read_plan};
 use gspn::ros2::config::{parse_domain, parse_networks};
 use gspn::ros2::heartbeat::Liveness;
 use gspn::ros2::robot::{RobotOptions, serve};
 use gspn::ros2::{DdsConfig, Ros2Backend};
+use gspn::runtime::{
+    Backend, BackendError, BackendFuture, Events, RuntimeBuilder, RuntimeHandle, Section, Summary,
+};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -63,7 +67,7 @@ pub(crate) fn wanted(plan: &Plan) -> bool {
 }
 
 /// Joins DDS and links to the plan's robots.
-pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2Backend> {
+pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2Run> {
     let cfg = args.dds.config(plan)?;
     if plan.robots.is_empty() {
         return Err(BadInput(format!(
@@ -77,8 +81,14 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2B
         cfg.domain_id,
         plan.robots.join(", ")
     );
-    let backend =
-        Ros2Backend::connect(plan, &plan.robots, &cfg, args.ros2_wait_subscribers).await?;
+    let backend = Ros2Backend::connect(
+        &plan.net,
+        &plan.ros2,
+        &plan.robots,
+        &cfg,
+        args.ros2_wait_subscribers,
+    )
+    .await?;
     eprintln!("ros2: robots ready");
     // Say when a robot is lost or back (the runs' errors say which action it failed).
     for r in &plan.robots {
@@ -99,17 +109,59 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2B
             });
         }
     }
-    Ok(backend)
+    Ok(Ros2Run {
+        backend: Some(backend),
+        linger: Duration::from_secs_f64(args.ros2_linger.clamp(0.0, 60.0)),
+    })
 }
 
-/// After the run: let the publisher finish and linger.
-pub(crate) async fn finish(backend: Ros2Backend, args: &RunArgs) {
-    let linger = Duration::from_secs_f64(args.ros2_linger.clamp(0.0, 60.0));
-    let p = backend.finish(linger).await;
-    eprintln!(
-        "ros2: published {} firings ({} events lost, {} publish errors)",
-        p.firings, p.lagged, p.errors
-    );
+/// The ROS 2 side of `run` as a backend: registers the `ros2` action, publishes the run's
+/// firings and marking, and after the run lingers so subscribers get the last ones.
+#[derive(Debug)]
+pub(crate) struct Ros2Run {
+    backend: Option<Ros2Backend>,
+    linger: Duration,
+}
+
+impl Backend for Ros2Run {
+    fn name(&self) -> &'static str {
+        "ros2"
+    }
+
+    fn attach(&mut self, run: RuntimeBuilder) -> Result<RuntimeBuilder, BackendError> {
+        Ok(match &self.backend {
+            Some(b) => b.attach(run),
+            None => run,
+        })
+    }
+
+    fn observes_events(&self) -> bool {
+        true
+    }
+
+    fn started<'a>(
+        &'a mut self,
+        _run: &'a Arc<RuntimeHandle>,
+        events: Option<Events>,
+    ) -> BackendFuture<'a, Result<(), BackendError>> {
+        if let (Some(b), Some(events)) = (&mut self.backend, events) {
+            b.publish(events);
+        }
+        Box::pin(async { Ok(()) })
+    }
+
+    /// Lets the publisher finish and lingers; the counts go to stderr.
+    fn finish<'a>(&'a mut self, _summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
+        Box::pin(async move {
+            let backend = self.backend.take()?;
+            let p = backend.finish(self.linger).await;
+            eprintln!(
+                "ros2: published {} firings ({} events lost, {} publish errors)",
+                p.firings, p.lagged, p.errors
+            );
+            None
+        })
+    }
 }
 
 /// Arguments of `robot`.
@@ -180,7 +232,7 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
             cfg.domain_id,
             plan.ros2.servers.len()
         );
-        serve(&plan, &cfg, opts, shutdown()).await
+        serve(&plan.net, &plan.ros2, &cfg, opts, shutdown()).await
     })?;
     eprintln!(
         "robot {}: {} goals, {} cancelled, {} firings received",

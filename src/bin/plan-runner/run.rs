@@ -5,10 +5,9 @@
 //! `stopped, firings, time, agents_spawned, agents_ended, final_marking, mean_tokens,
 //! throughput, errors`). Ctrl-C stops the run cleanly (journal flushed) with exit code 130.
 //!
-//! A plan with a `[map]` runs on simulated robots (feature `sim`): `--robots N` scales the
-//! net's initial robot tokens to N; with time scale 0 the run uses tokio's paused clock, so the
-//! world runs faster than real time; `--json` adds the key `sim` (see
-//! `gspn::sim::world::SimMetrics`).
+//! The backends (simulated robots for a plan with a `[map]`, ROS 2 for `ros2` places, the
+//! viewer with `--web`) come from `backends.rs`; each adds its section to the summary (the
+//! simulated world: key `sim`, see `gspn::world::SimMetrics`).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -16,10 +15,11 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use gspn::io::plan::{Plan, read_plan};
-use gspn::runtime::{Runtime, RuntimeBuilder, Summary};
+use gspn::plan::open;
+use gspn::runtime::{Backends, RuntimeBuilder, Section, Summary};
 
-use crate::common::{BadInput, NetArgs, load_net};
+use crate::backends::{self, BackendArgs};
+use crate::common::{BadInput, NetArgs};
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
@@ -43,40 +43,15 @@ pub(crate) struct Args {
     journal: Option<PathBuf>,
     /// Print the summary as JSON.
     #[arg(long)]
-    pub(crate) json: bool,
-    /// Watch the run in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080]
-    /// (feature `web`); after the run it stays up until Ctrl-C.
-    #[cfg(feature = "web")]
-    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
-    pub(crate) web: Option<std::net::SocketAddr>,
-    /// Run the plan's map with N simulated robots (the net's initial robot tokens scaled to
-    /// N; feature `sim`).
-    #[cfg(feature = "sim")]
-    #[arg(long, value_name = "N")]
-    pub(crate) robots: Option<usize>,
+    json: bool,
+    #[command(flatten)]
+    backends: BackendArgs,
     #[command(flatten)]
     net: NetArgs,
-    /// ROS 2 flags, used when the plan has `ros2` places (feature `ros2`).
-    #[cfg(feature = "ros2")]
-    #[command(flatten)]
-    ros2: crate::ros2::RunArgs,
-}
-
-fn load(args: &Args) -> anyhow::Result<Plan> {
-    let is_plan = args
-        .file
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    if is_plan {
-        Ok(read_plan(&args.file, &args.net.read_options())?)
-    } else {
-        let loaded = load_net(&args.file, &args.net)?;
-        Ok(Plan::for_net(&args.file, loaded))
-    }
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let mut plan = load(&args)?;
+    let mut plan = open(&args.file, &args.net.read_options())?.into_plan();
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && x >= 0.0) {
             return Err(BadInput(format!("--time-scale {x}: must be ≥ 0")).into());
@@ -95,76 +70,51 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     for w in &plan.warnings {
         eprintln!("warning: {w}");
     }
-    #[cfg(feature = "sim")]
-    if plan.map.is_some() {
-        return crate::robots::main(plan, &args);
-    } else if args.robots.is_some() {
-        return Err(
-            BadInput("--robots needs a plan with a [map] (see docs/plans.md)".into()).into(),
-        );
+    backends::check(&plan, &args.backends)?;
+    let rt = backends::tokio_runtime(&plan).context("starting tokio")?;
+    let (summary, sections) = rt.block_on(async {
+        let (run, mut backends) = backends::setup(plan, &args.backends).await?;
+        execute(run, &args, &mut backends).await
+    })?;
+    if args.json {
+        if sections.is_empty() {
+            println!("{}", serde_json::to_string_pretty(&summary)?);
+        } else {
+            let mut v = serde_json::to_value(&summary)?;
+            for (name, s) in sections {
+                v[name] = s.json;
+            }
+            println!("{}", serde_json::to_string_pretty(&v)?);
+        }
+    } else {
+        print_summary(&summary)?;
+        for (_, s) in &sections {
+            if !s.text.is_empty() {
+                println!("{}", s.text);
+            }
+        }
     }
-    let rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .context("starting tokio")?;
-    let summary = rt.block_on(execute(plan, &args))?;
-    print_summary(&summary, args.json)?;
     Ok(ExitCode::from(summary.exit_code()))
 }
 
-async fn execute(plan: Plan, args: &Args) -> anyhow::Result<Summary> {
-    #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
-    let mut backends = Backends::default();
-    #[cfg(feature = "ros2")]
-    if crate::ros2::wanted(&plan) {
-        backends.ros2 = Some(crate::ros2::connect(&plan, &args.ros2).await?);
-    }
-    execute_with(Runtime::from_plan(plan), args, backends).await
-}
-
-/// What a run drives besides the runtime itself.
-#[derive(Default)]
-pub(crate) struct Backends {
-    /// The ROS 2 connection (plans with `ros2` places).
-    #[cfg(feature = "ros2")]
-    pub(crate) ros2: Option<gspn::ros2::Ros2Backend>,
-    /// The simulated world's view, for the viewer's map (`run --web` on a plan with a map).
-    #[cfg(feature = "web")]
-    pub(crate) world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
-}
-
-/// Runs a configured builder: journal, viewer, backends, progress, Ctrl-C, summary.
-pub(crate) async fn execute_with(
-    b: RuntimeBuilder,
+/// Runs `run` with its backends: journal, progress, Ctrl-C, then every backend's section.
+async fn execute(
+    run: RuntimeBuilder,
     args: &Args,
-    #[cfg_attr(not(any(feature = "web", feature = "ros2")), allow(unused_variables))]
-    backends: Backends,
-) -> anyhow::Result<Summary> {
-    #[cfg(feature = "web")]
-    let watched = args.web.is_some();
-    #[cfg(not(feature = "web"))]
-    let watched = false;
-    #[cfg(feature = "ros2")]
-    let mut ros2 = backends.ros2;
-    #[cfg(feature = "ros2")]
-    let watched = watched || ros2.is_some();
-    let mut b = b.subscribe_at_start(watched);
-    #[cfg(feature = "ros2")]
-    if let Some(r) = &ros2 {
-        b = r.attach(b);
-    }
+    backends: &mut Backends,
+) -> anyhow::Result<(Summary, Vec<(&'static str, Section)>)> {
+    let mut b = backends.attach(run)?;
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
-    #[cfg_attr(not(feature = "ros2"), allow(unused_mut))]
-    let mut handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
-    #[cfg(feature = "ros2")]
-    if let Some(r) = &mut ros2 {
-        r.publish(handle.events());
-    }
-    #[cfg(feature = "web")]
-    let (handle, viewer) = crate::serve::follow(handle, args.web, backends.world).await?;
+    let handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    let handle = match backends.start(handle).await {
+        Ok(h) => h,
+        Err(e) => {
+            backends.stop();
+            return Err(e.into());
+        }
+    };
     for w in handle.warnings() {
         eprintln!("warning: {w}");
     }
@@ -203,20 +153,12 @@ pub(crate) async fn execute_with(
         bar.finish_and_clear();
     }
     eprintln!("seed {}", handle.seed());
-    #[cfg(feature = "ros2")]
-    if let Some(r) = ros2 {
-        crate::ros2::finish(r, &args.ros2).await;
-    }
-    #[cfg(feature = "web")]
-    crate::serve::linger(viewer, &summary).await;
-    Ok(summary)
+    let sections = backends.finish(&summary).await;
+    backends.stop();
+    Ok((summary, sections))
 }
 
-pub(crate) fn print_summary(s: &Summary, json: bool) -> anyhow::Result<()> {
-    if json {
-        println!("{}", serde_json::to_string_pretty(s)?);
-        return Ok(());
-    }
+fn print_summary(s: &Summary) -> anyhow::Result<()> {
     println!(
         "stopped: {} after {} firings at time {:.4}",
         s.stopped, s.firings, s.time

@@ -8,14 +8,16 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::Context as _;
-use gspn::io::plan::read_plan;
 use std::sync::Arc;
 
-use gspn::runtime::{RuntimeHandle, Summary};
+use anyhow::Context as _;
+use gspn::plan::open;
+use gspn::runtime::{
+    Backend, BackendError, BackendFuture, Events, RuntimeHandle, Section, Summary,
+};
 use gspn::web::{LiveRun, WebState, serve};
 
-use crate::common::{NetArgs, load_net};
+use crate::common::NetArgs;
 
 /// Arguments of `serve`.
 #[derive(clap::Args, Debug)]
@@ -33,25 +35,13 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let is_plan = args
-        .file
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    let state = if is_plan {
-        let plan = read_plan(&args.file, &args.net.read_options())?;
-        for w in &plan.warnings {
-            eprintln!("warning: {w}");
-        }
-        let seed = args.seed.or(plan.seed).unwrap_or(0);
-        let policy = (!plan.policy.is_empty()).then_some(plan.policy);
-        WebState::new(plan.net, policy, seed)
-    } else {
-        let loaded = load_net(&args.file, &args.net)?;
-        for w in &loaded.warnings {
-            eprintln!("warning: {w}");
-        }
-        WebState::new(loaded.net, None, args.seed.unwrap_or(0))
-    };
+    let plan = open(&args.file, &args.net.read_options())?.into_plan();
+    for w in &plan.warnings {
+        eprintln!("warning: {w}");
+    }
+    let seed = args.seed.or(plan.seed).unwrap_or(0);
+    let policy = (!plan.policy.is_empty()).then_some(plan.policy);
+    let state = WebState::new(plan.net, policy, seed);
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -70,44 +60,83 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     })
 }
 
-/// A viewer following a run (`plan-runner run --web`).
-pub(crate) struct Viewer {
+/// The viewer of `plan-runner run --web` as a backend: serves the live run from its first
+/// event (and the simulated world's map when there is one); after the run it stays up until
+/// Ctrl-C, so the final state can be looked at.
+#[derive(Debug)]
+pub(crate) struct LiveViewer {
     addr: SocketAddr,
-    task: tokio::task::JoinHandle<std::io::Result<()>>,
-}
-
-/// Serves the live view of `handle`'s run at `addr` (nothing when `None`). Call right after
-/// spawning the run (with `subscribe_at_start(true)`), so the viewer sees every event.
-pub(crate) async fn follow(
-    mut handle: RuntimeHandle,
-    addr: Option<SocketAddr>,
     world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
-) -> anyhow::Result<(Arc<RuntimeHandle>, Option<Viewer>)> {
-    let Some(addr) = addr else {
-        return Ok((Arc::new(handle), None));
-    };
-    let events = handle.events();
-    let handle = Arc::new(handle);
-    let mut live = LiveRun::start(handle.clone(), events);
-    if let Some(world) = world {
-        live = live.with_world(world);
-    }
-    let listener = tokio::net::TcpListener::bind(addr)
-        .await
-        .with_context(|| format!("cannot listen on {addr}"))?;
-    let addr = listener.local_addr()?;
-    eprintln!("watch the run at http://{addr}/");
-    let task = tokio::spawn(serve(listener, WebState::for_live(live)));
-    Ok((handle, Some(Viewer { addr, task })))
+    served: Option<(SocketAddr, tokio::task::JoinHandle<std::io::Result<()>>)>,
 }
 
-/// After the run: keeps the viewer up until Ctrl-C, so the final state can be looked at.
-pub(crate) async fn linger(viewer: Option<Viewer>, summary: &Summary) {
-    let Some(v) = viewer else { return };
-    eprintln!(
-        "run over ({}); the viewer stays at http://{}/ until Ctrl-C",
-        summary.stopped, v.addr
-    );
-    let _ = tokio::signal::ctrl_c().await;
-    v.task.abort();
+impl LiveViewer {
+    /// A viewer to serve at `addr`, with the world's view when the run has one.
+    pub(crate) fn new(
+        addr: SocketAddr,
+        world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
+    ) -> Self {
+        LiveViewer {
+            addr,
+            world,
+            served: None,
+        }
+    }
+}
+
+impl Backend for LiveViewer {
+    fn name(&self) -> &'static str {
+        "web"
+    }
+
+    fn observes_events(&self) -> bool {
+        true
+    }
+
+    fn started<'a>(
+        &'a mut self,
+        run: &'a Arc<RuntimeHandle>,
+        events: Option<Events>,
+    ) -> BackendFuture<'a, Result<(), BackendError>> {
+        Box::pin(async move {
+            let Some(events) = events else {
+                return Ok(());
+            };
+            let mut live = LiveRun::start(Arc::clone(run), events);
+            if let Some(world) = self.world.take() {
+                live = live.with_world(world);
+            }
+            let addr = self.addr;
+            let listener = tokio::net::TcpListener::bind(addr)
+                .await
+                .map_err(|e| BackendError::new("web", format!("cannot listen on {addr}: {e}")))?;
+            let addr = listener
+                .local_addr()
+                .map_err(|e| BackendError::new("web", e))?;
+            eprintln!("watch the run at http://{addr}/");
+            let task = tokio::spawn(serve(listener, WebState::for_live(live)));
+            self.served = Some((addr, task));
+            Ok(())
+        })
+    }
+
+    /// Keeps the viewer up until Ctrl-C.
+    fn finish<'a>(&'a mut self, summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
+        Box::pin(async move {
+            if let Some((addr, _)) = &self.served {
+                eprintln!(
+                    "run over ({}); the viewer stays at http://{addr}/ until Ctrl-C",
+                    summary.stopped
+                );
+                let _ = tokio::signal::ctrl_c().await;
+            }
+            None
+        })
+    }
+
+    fn stop(&mut self) {
+        if let Some((_, task)) = self.served.take() {
+            task.abort();
+        }
+    }
 }

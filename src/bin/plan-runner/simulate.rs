@@ -9,14 +9,14 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context;
-use gspn::io::plan::read_plan;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
+use gspn::plan::open;
 use gspn::policy::Policy;
 use gspn::sim::{Estimate, Horizon, MonteCarlo, SimError, Simulator};
 use serde_json::{Map, Value, json};
 
-use crate::common::{BadInput, NetArgs, load_net};
+use crate::common::{BadInput, NetArgs};
 
 /// Arguments of `simulate`.
 #[derive(clap::Args, Debug)]
@@ -54,37 +54,18 @@ struct Input {
 }
 
 fn load(args: &Args) -> anyhow::Result<Input> {
-    let is_plan = args
-        .file
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    if is_plan {
-        let plan = read_plan(&args.file, &args.net.read_options())?;
-        for w in &plan.warnings {
-            eprintln!("warning: {w}");
-        }
-        Ok(Input {
-            policy: (!plan.policy.is_empty()).then_some(plan.policy),
-            seed: plan.seed,
-            time_limit: plan.stop.time_limit,
-            max_firings: plan.stop.max_firings,
-            stop_when: plan.stop.when,
-            net: plan.net,
-        })
-    } else {
-        let loaded = load_net(&args.file, &args.net)?;
-        for w in &loaded.warnings {
-            eprintln!("warning: {w}");
-        }
-        Ok(Input {
-            net: loaded.net,
-            policy: None,
-            seed: None,
-            time_limit: None,
-            max_firings: None,
-            stop_when: None,
-        })
+    let plan = open(&args.file, &args.net.read_options())?.into_plan();
+    for w in &plan.warnings {
+        eprintln!("warning: {w}");
     }
+    Ok(Input {
+        policy: (!plan.policy.is_empty()).then_some(plan.policy),
+        seed: plan.seed,
+        time_limit: plan.stop.time_limit,
+        max_firings: plan.stop.max_firings,
+        stop_when: plan.stop.when,
+        net: plan.net,
+    })
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {

@@ -389,7 +389,7 @@ fn scaled(_: &Net, _: usize) -> anyhow::Result<Net> {
 
 /// The plan's text with its `net` path made relative to `dir` (where the output goes).
 fn rebase_plan(plan: &Path, text: &str, dir: &Path) -> anyhow::Result<String> {
-    let file = gspn::io::plan::PlanFile::parse(plan, text)?;
+    let file = gspn::plan::PlanFile::parse(plan, text)?;
     let net_path = file.net_path(plan);
     let span = file.net.span();
     let rel = relative_to(&net_path, dir);
@@ -429,7 +429,7 @@ fn parse_sweep(s: &str) -> anyhow::Result<std::ops::RangeInclusive<usize>> {
 #[cfg(feature = "sim")]
 fn scaled(net: &Net, n: usize) -> anyhow::Result<Net> {
     let robot: Vec<bool> = net.places().iter().map(|p| p.initial > 0).collect();
-    let m = gspn::sim::world::fleet::scaled_marking(net, &robot, n);
+    let m = gspn::world::fleet::scaled_marking(net, &robot, n);
     net.with_initial_marking(&m)
         .map_err(|e| anyhow::anyhow!("scaling the initial marking: {e}"))
 }
@@ -473,7 +473,7 @@ fn read_input(args: &Args) -> anyhow::Result<Input> {
         )
         .into());
     }
-    let plan = gspn::io::plan::read_plan(&args.file, &args.net.read_options())?;
+    let plan = gspn::plan::read_plan(&args.file, &args.net.read_options())?;
     let spec = match &args.reward {
         Some(name) => plan
             .rewards

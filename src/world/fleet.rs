@@ -1,4 +1,5 @@
-//! [`Fleet`]: a plan with a `[map]` made ready to run on simulated robots.
+//! [`Fleet`]: a run with a [`Map`] made ready to run on simulated robots. A plan converts
+//! into a [`FleetPlan`] (`gspn::plan` does it), so `Fleet::new(plan, n)` takes a plan.
 //!
 //! 1. The net's initial tokens in robot places (action places running built-in robot
 //!    actions) are scaled to the number of robots asked for, largest remainder first
@@ -10,11 +11,12 @@
 
 use std::sync::Arc;
 
+use super::map::Map;
+use super::program::ProgramError;
 use super::{RobotStart, SimAction, World, WorldHandle};
 use crate::analysis::invariants::conserves_tokens;
-use crate::io::plan::{Plan, Role};
 use crate::net::{Net, PlaceId};
-use crate::runtime::{Runtime, RuntimeBuilder};
+use crate::runtime::{Role, RuntimeBuilder};
 
 /// Why a plan cannot run on simulated robots.
 #[derive(Debug, thiserror::Error)]
@@ -59,7 +61,7 @@ pub enum FleetError {
         /// The action name.
         action: String,
         /// What is wrong.
-        reason: String,
+        reason: ProgramError,
     },
     /// The net could not be rebuilt with the scaled marking.
     #[error("net: {0}")]
@@ -78,20 +80,30 @@ pub struct Fleet {
     pub seed: u64,
 }
 
+/// What a fleet is made from: a configured run (net, roles, policy, stop conditions, seed,
+/// time scale, robot names) and the room, when there is one.
+#[derive(Debug)]
+pub struct FleetPlan {
+    /// The run, configured but not spawned.
+    pub run: RuntimeBuilder,
+    /// The room; `None` is refused with [`FleetError::NoMap`].
+    pub map: Option<Map>,
+}
+
 /// Places whose agents are robots: action places whose action is a built-in program.
-fn robot_places(plan: &Plan) -> Result<Vec<bool>, FleetError> {
-    let map = plan.map.as_ref().ok_or(FleetError::NoMap)?;
-    let mut out = vec![false; plan.net.place_count()];
-    for p in plan.net.place_ids() {
-        if let Some(Role::Action { name, .. }) = plan.role(p) {
+fn robot_places(run: &RuntimeBuilder, map: &Map) -> Result<Vec<bool>, FleetError> {
+    let net = run.net();
+    let mut out = vec![false; net.place_count()];
+    for p in net.place_ids() {
+        if let Some(Role::Action { name, .. }) = run.role_of(p) {
             let prog = map.program(name).map_err(|reason| FleetError::BadAction {
                 action: name.clone(),
                 reason,
             })?;
             out[p.index()] = prog.is_some();
-            if prog.is_none() && plan.net.place(p).initial > 0 {
+            if prog.is_none() && net.place(p).initial > 0 {
                 return Err(FleetError::NotARobotAction {
-                    place: plan.net.place(p).name.clone(),
+                    place: net.place(p).name.clone(),
                     action: name.clone(),
                 });
             }
@@ -134,48 +146,50 @@ pub fn scaled_marking(net: &Net, robot: &[bool], n: usize) -> Vec<u32> {
 }
 
 impl Fleet {
-    /// Prepares `plan` (which must have a `[map]`) for `robots` robots (`None`: as many as
-    /// the net's initial tokens in robot places) and spawns the world. Call inside a tokio
+    /// Prepares `plan` (which must have a map) for `robots` robots (`None`: as many as the
+    /// net's initial tokens in robot places) and spawns the world. Call inside a tokio
     /// runtime (with a paused clock for virtual time faster than real time).
-    pub fn new(mut plan: Plan, robots: Option<usize>) -> Result<Fleet, FleetError> {
-        let map = Arc::new(plan.map.clone().ok_or(FleetError::NoMap)?);
-        let robot = robot_places(&plan)?;
-        let resources: Vec<PlaceId> = plan
-            .net
+    pub fn new(plan: impl Into<FleetPlan>, robots: Option<usize>) -> Result<Fleet, FleetError> {
+        let FleetPlan { run, map } = plan.into();
+        let map = Arc::new(map.ok_or(FleetError::NoMap)?);
+        let robot = robot_places(&run, &map)?;
+        let net = run.net();
+        let resources: Vec<PlaceId> = net
             .place_ids()
-            .filter(|&p| matches!(plan.role(p), Some(Role::Resource)))
+            .filter(|&p| matches!(run.role_of(p), Some(Role::Resource)))
             .collect();
-        if let Err(leaks) = conserves_tokens(&plan.net, &resources) {
+        if let Err(leaks) = conserves_tokens(net, &resources) {
             let leak = &leaks[0];
             return Err(FleetError::RobotTokens {
-                transition: plan.net.transition(leak.transition).name.clone(),
+                transition: net.transition(leak.transition).name.clone(),
                 change: leak.delta,
             });
         }
+        let mut run = run;
         if let Some(n) = robots {
             if n == 0 {
                 return Err(FleetError::ZeroRobots);
             }
-            let m = scaled_marking(&plan.net, &robot, n);
-            plan.net = plan
-                .net
-                .with_initial_marking(&m)
+            let m = scaled_marking(run.net(), &robot, n);
+            run = run
+                .initial_marking(&m)
                 .map_err(|e| FleetError::Net(e.to_string()))?;
         }
+        let net = run.net();
         let mut starts = Vec::new();
-        for p in plan.net.place_ids() {
-            let k = plan.net.place(p).initial;
+        for p in net.place_ids() {
+            let k = net.place(p).initial;
             if !robot[p.index()] || k == 0 {
                 continue;
             }
             let loc = map
                 .location_of_place(p)
-                .ok_or_else(|| FleetError::Unplaced(plan.net.place(p).name.clone()))?;
+                .ok_or_else(|| FleetError::Unplaced(net.place(p).name.clone()))?;
             for _ in 0..k {
                 // The plan's robot names when it lists them (and no count was asked for).
                 let i = starts.len();
-                let name: Arc<str> = match plan.robots.get(i) {
-                    Some(n) if robots.is_none() => Arc::from(n.as_str()),
+                let name: Arc<str> = match run.robot_names().get(i) {
+                    Some(n) if robots.is_none() => Arc::clone(n),
                     _ => Arc::from(format!("r{}", i + 1)),
                 };
                 // Robots are bound to the initial agents in agent order: agent i carries robot i.
@@ -190,17 +204,15 @@ impl Fleet {
         if starts.is_empty() {
             return Err(FleetError::NoRobots);
         }
-        let seed = plan.seed.unwrap_or_else(|| {
+        let seed = run.seed_value().unwrap_or_else(|| {
             std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_nanos() as u64)
         });
-        let time_scale = plan.time_scale.unwrap_or(0.0);
-        let world = World::spawn(Arc::clone(&map), &starts, time_scale, seed);
-        let mut names: Vec<String> = plan
-            .roles
-            .iter()
-            .filter_map(|r| match r {
+        let world = World::spawn(Arc::clone(&map), &starts, run.time_scale_value(), seed);
+        let mut names: Vec<String> = net
+            .place_ids()
+            .filter_map(|p| match run.role_of(p) {
                 Some(Role::Action { name, .. }) => Some(name.clone()),
                 _ => None,
             })
@@ -208,7 +220,7 @@ impl Fleet {
         names.sort();
         names.dedup();
         let bound: Vec<Arc<str>> = starts.into_iter().map(|s| s.name).collect();
-        let mut builder = Runtime::from_plan(plan).seed(seed).robots(bound);
+        let mut builder = run.seed(seed).robots(bound);
         for name in names {
             let action =
                 SimAction::parse(&map, &name, &world).map_err(|reason| FleetError::BadAction {

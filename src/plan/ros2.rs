@@ -1,5 +1,6 @@
 //! The ROS 2 part of plan files (feature `ros2` uses it; plans parse it with or without the
-//! feature): the `[ros2]` table and the `server` key of `ros2` places (`docs/ros2.md`).
+//! feature): the `[ros2]` table and the `server` key of `ros2` places (`docs/ros2.md`),
+//! resolved into the backend's [`Ros2Settings`].
 
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -8,33 +9,11 @@ use schemars::JsonSchema;
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::{PlaceFile, out_of_range};
+use super::file::PlaceFile;
+use super::resolve::out_of_range;
 use crate::io::{LoadError, LoadErrorKind};
-use crate::net::{Net, PlaceId};
-
-/// The action name that makes a place a ROS 2 place: its agents' actions are ExecPlace goals
-/// sent to their robots (feature `ros2`, `docs/ros2.md`).
-pub const ROS2_ACTION: &str = "ros2";
-
-/// The ExecPlace action server a `ros2` place uses when the plan names none.
-pub const DEFAULT_SERVER: &str = "exec_place";
-
-/// The plan's `[ros2]` table and its `ros2` places, resolved.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Ros2Settings {
-    /// The DDS domain id.
-    pub domain_id: Option<u16>,
-    /// The local addresses DDS may use (empty = the backend's default, loopback).
-    pub networks: Vec<std::net::IpAddr>,
-    /// Seconds between a robot's heartbeats.
-    pub heartbeat: Option<f64>,
-    /// Seconds without a heartbeat after which a robot is lost.
-    pub lost_after: Option<f64>,
-    /// Seconds the supervisor waits for its robots before it gives up.
-    pub startup: Option<f64>,
-    /// Places whose action is `ros2`, with their ExecPlace server name, in net order.
-    pub servers: Vec<(PlaceId, String)>,
-}
+use crate::net::Net;
+use crate::ros2::settings::{DEFAULT_SERVER, ROS2_ACTION, Ros2Settings};
 
 /// The `[ros2]` table: how the ROS 2 backend joins DDS and watches robots.
 #[derive(Debug, Deserialize, JsonSchema)]

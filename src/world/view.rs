@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use crate::io::plan::map::{Map, Rect};
+use crate::world::map::{Map, Rect};
 
 /// The room and its robots at one time.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -18,8 +18,9 @@ use std::time::Duration;
 use tokio::sync::oneshot;
 
 use super::WorldHandle;
-use super::messages::{Goto, Hold, Turn};
-use crate::io::plan::map::{Map, Step};
+use super::actor::messages::{Goto, Hold, Turn};
+use super::map::Map;
+use super::program::{ProgramError, Step};
 use crate::net::Timing;
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
@@ -33,7 +34,11 @@ pub struct SimAction {
 impl SimAction {
     /// The action named `name` on `map`, when it is a built-in program (`Ok(None)`: a user
     /// action).
-    pub fn parse(map: &Map, name: &str, world: &WorldHandle) -> Result<Option<SimAction>, String> {
+    pub fn parse(
+        map: &Map,
+        name: &str,
+        world: &WorldHandle,
+    ) -> Result<Option<SimAction>, ProgramError> {
         Ok(map.program(name)?.map(|steps| SimAction {
             steps: steps.into(),
             world: world.clone(),

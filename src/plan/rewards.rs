@@ -9,7 +9,7 @@ use schemars::JsonSchema;
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::{out_of_range, unknown};
+use super::resolve::{out_of_range, unknown};
 use crate::analysis::decision::{Controls, PlaceMode, RewardSpec};
 use crate::io::{LoadError, LoadErrorKind};
 use crate::net::Net;

@@ -14,7 +14,7 @@ use std::collections::VecDeque;
 use rapier2d::prelude::{ColliderBuilder, PhysicsWorld, RigidBodyBuilder, RigidBodyHandle};
 use rustc_hash::FxHashSet;
 
-use crate::io::plan::map::{Map, Rect};
+use crate::world::map::{Map, Rect};
 
 /// A 2-D vector of the room (rapier's glam `Vec2`).
 pub type Vec2 = rapier2d::math::Vector;
@@ -411,7 +411,7 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::plan::map::{QueueSpec, RobotSpec};
+    use crate::world::map::{QueueSpec, RobotSpec};
 
     fn open_map(walls: Vec<[f64; 4]>) -> Map {
         Map {

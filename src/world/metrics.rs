@@ -35,3 +35,24 @@ pub struct SimMetrics {
     /// Completed patrol loops, per robot.
     pub cycles_per_robot: Vec<u32>,
 }
+
+impl std::fmt::Display for SimMetrics {
+    /// Three lines: robots and time, safety counts, patrol cycles.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "sim: {} robots, {:.1} s simulated ({:.1}× real time)",
+            self.robots, self.sim_time_s, self.real_time_factor
+        )?;
+        writeln!(
+            f,
+            "  collisions {}  min separation {}  order violations {}  stuck {}",
+            self.collisions,
+            self.min_separation_m
+                .map_or("-".to_string(), |s| format!("{s:.3} m")),
+            self.order_violations,
+            self.stuck_events
+        )?;
+        write!(f, "  patrol cycles per robot {:?}", self.cycles_per_robot)
+    }
+}

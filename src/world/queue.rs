@@ -11,7 +11,7 @@
 use std::collections::VecDeque;
 
 use super::room::Vec2;
-use crate::io::plan::map::Map;
+use crate::world::map::Map;
 
 /// The queues of every location.
 #[derive(Debug)]
@@ -96,7 +96,7 @@ impl Queues {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::plan::map::{Location, QueueSpec, RobotSpec};
+    use crate::world::map::{Location, QueueSpec, RobotSpec};
 
     fn map() -> Map {
         Map {

@@ -34,8 +34,8 @@ mod pylit;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::plan::{Plan, read_plan};
-use super::{LoadError, LoadErrorKind, ReadOptions, Span, read_net};
+use super::{Plan, read_plan};
+use crate::io::{LoadError, LoadErrorKind, ReadOptions, Span, read_net};
 use crate::net::{Net, Timing};
 
 /// A name in the input and where it is.

@@ -1,49 +1,4 @@
-//! Simulated robots (feature `sim`): a rapier2d room stepped by a [`World`] actor, and the
-//! built-in robot actions that drive it (`goto`, `measure`, `wait`, `decide`).
-//!
-//! - [`room`]: the physics — disc robots as dynamic rapier bodies, walls and obstacles as
-//!   static colliders, ORCA (dodgy_2d) between robots; synchronous, benchmarkable.
-//! - [`queue`]: first-come-first-served queues with lanes at every location.
-//! - [`action`]: the built-in [`Action`](crate::runtime::Action)s and how a plan names them.
-//! - [`fleet`]: a plan with a `[map]` → robots placed, world spawned, actions registered.
-//! - [`metrics`]: collisions, clearance, order violations, stuck robots, patrol cycles.
-//! - [`view`]: [`WorldView`], what a viewer draws, published on a `watch` channel.
-//!
-//! Time: the world steps `1 / step_hz` of simulated time per tick and sleeps on tokio time
-//! between ticks (`dt × time_scale`; with time scale 0, tokio's paused clock jumps straight to
-//! the next tick, so a run is as fast as the computer allows). It steps only while some robot
-//! moves: a world of parked robots costs nothing.
-//!
-//! ```
-//! use gspn::io::{ReadOptions, plan::read_plan};
-//! use gspn::sim::world::Fleet;
-//!
-//! let rt = tokio::runtime::Builder::new_current_thread()
-//!     .enable_all()
-//!     .start_paused(true) // virtual time: as fast as the steps compute
-//!     .build()
-//!     .unwrap();
-//! rt.block_on(async {
-//!     let path = std::path::Path::new("plans/temperature-patrol/plan.toml");
-//!     let mut plan = read_plan(path, &ReadOptions::default()).unwrap();
-//!     plan.stop.time_limit = Some(150.0);
-//!     let fleet = Fleet::new(plan, Some(2)).unwrap();
-//!     let handle = fleet.builder.spawn().unwrap();
-//!     handle.wait().await;
-//!     let m = fleet.world.metrics().await.unwrap();
-//!     fleet.world.stop();
-//!     assert_eq!((m.robots, m.collisions, m.stuck_events), (2, 0, 0));
-//!     assert!(m.cycles_per_robot.iter().all(|&c| c >= 1), "{m:?}");
-//! });
-//! ```
-
-pub mod action;
-pub mod fleet;
-mod messages;
-pub mod metrics;
-pub mod queue;
-pub mod room;
-pub mod view;
+//! The [`World`] actor: steps the room, moves robots through the queues, publishes views.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -57,15 +12,13 @@ use rustc_hash::FxHashMap;
 use tokio::sync::{oneshot, watch};
 use tokio::time::Instant;
 
-pub use action::SimAction;
-pub use fleet::{Fleet, FleetError};
+use super::map::Map;
+use super::queue::Queues;
+use super::room::{Room, Vec2};
+use super::{MapView, RobotView, SimMetrics, WorldView};
 use messages::{GetMetrics, Goto, Hold};
-pub use metrics::SimMetrics;
-pub use view::{MapView, RobotView, WorldView};
 
-use crate::io::plan::map::Map;
-use queue::Queues;
-use room::{Room, Vec2};
+pub(super) mod messages;
 
 /// Views per simulated second, at most.
 const VIEWS_PER_SECOND: f64 = 20.0;

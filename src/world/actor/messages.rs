@@ -5,7 +5,8 @@ use std::sync::Arc;
 use kameo::message::{Context, Message};
 use tokio::sync::oneshot;
 
-use super::{GotoError, SimMetrics, World};
+use super::super::SimMetrics;
+use super::{GotoError, World};
 use crate::net::TransitionId;
 
 /// Drive `robot` to `location` (see [`action`]).

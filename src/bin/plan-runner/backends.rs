@@ -1,0 +1,112 @@
+//! The backends of `plan-runner run`, built in one place: the simulated world (feature
+//! `sim`, a plan with a `[map]`), ROS 2 (feature `ros2`, a plan with `ros2` places) and the
+//! live viewer (feature `web`, `--web`). Every feature switch of `run` is in this file;
+//! `run.rs` attaches, starts and finishes the list it gets.
+
+use gspn::plan::Plan;
+use gspn::runtime::{Backends, RuntimeBuilder};
+
+#[cfg(feature = "sim")]
+use crate::common::BadInput;
+
+/// The flags of `run` that belong to a backend.
+#[derive(clap::Args, Debug)]
+pub(crate) struct BackendArgs {
+    /// Watch the run in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080]
+    /// (feature `web`); after the run it stays up until Ctrl-C.
+    #[cfg(feature = "web")]
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+    web: Option<std::net::SocketAddr>,
+    /// Run the plan's map with N simulated robots (the net's initial robot tokens scaled to
+    /// N; feature `sim`).
+    #[cfg(feature = "sim")]
+    #[arg(long, value_name = "N")]
+    robots: Option<usize>,
+    /// ROS 2 flags, used when the plan has `ros2` places (feature `ros2`).
+    #[cfg(feature = "ros2")]
+    #[command(flatten)]
+    ros2: crate::ros2::RunArgs,
+}
+
+/// Refuses flags the plan cannot honour, before anything starts.
+pub(crate) fn check(plan: &Plan, args: &BackendArgs) -> anyhow::Result<()> {
+    #[cfg(feature = "sim")]
+    if plan.map.is_none() && args.robots.is_some() {
+        return Err(
+            BadInput("--robots needs a plan with a [map] (see docs/plans.md)".into()).into(),
+        );
+    }
+    let _ = (plan, args);
+    Ok(())
+}
+
+/// The tokio runtime of a run. A simulated world on virtual time (time scale 0) gets a
+/// paused clock on one thread, so simulated time jumps from one physics step to the next as
+/// fast as the steps compute; everything else two worker threads.
+pub(crate) fn tokio_runtime(plan: &Plan) -> std::io::Result<tokio::runtime::Runtime> {
+    #[cfg(feature = "sim")]
+    if plan.map.is_some() && plan.time_scale.unwrap_or(0.0) == 0.0 {
+        return tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .start_paused(true)
+            .build();
+    }
+    let _ = plan;
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+}
+
+/// The run's builder and its backends, in order: the simulated world (a plan with a map)
+/// or ROS 2 (a plan with `ros2` places), then the viewer. Call inside the run's tokio
+/// runtime.
+pub(crate) async fn setup(
+    plan: Plan,
+    args: &BackendArgs,
+) -> anyhow::Result<(RuntimeBuilder, Backends)> {
+    let mut backends = Backends::default();
+    #[cfg(feature = "sim")]
+    if plan.map.is_some() {
+        let fleet =
+            gspn::world::Fleet::new(plan, args.robots).map_err(|e| BadInput(e.to_string()))?;
+        #[cfg(feature = "web")]
+        if let Some(addr) = args.web {
+            let feed = world_feed(fleet.world.view());
+            backends.push(gspn::world::WorldBackend::new(fleet.world));
+            backends.push(crate::serve::LiveViewer::new(addr, Some(feed)));
+            return Ok((fleet.builder, backends));
+        }
+        backends.push(gspn::world::WorldBackend::new(fleet.world));
+        return Ok((fleet.builder, backends));
+    }
+    #[cfg(feature = "ros2")]
+    if crate::ros2::wanted(&plan) {
+        backends.push(crate::ros2::connect(&plan, &args.ros2).await?);
+    }
+    #[cfg(feature = "web")]
+    if let Some(addr) = args.web {
+        backends.push(crate::serve::LiveViewer::new(addr, None));
+    }
+    let _ = args;
+    Ok((plan.runtime_builder(), backends))
+}
+
+/// The world's view as JSON for the viewer's map: a task forwards each new view.
+#[cfg(all(feature = "sim", feature = "web"))]
+fn world_feed(
+    mut view: tokio::sync::watch::Receiver<gspn::world::WorldView>,
+) -> tokio::sync::watch::Receiver<serde_json::Value> {
+    let json =
+        |v: &gspn::world::WorldView| serde_json::to_value(v).unwrap_or(serde_json::Value::Null);
+    let (tx, rx) = tokio::sync::watch::channel(json(&view.borrow_and_update()));
+    tokio::spawn(async move {
+        while view.changed().await.is_ok() {
+            let v = json(&view.borrow_and_update());
+            if tx.send(v).is_err() {
+                break;
+            }
+        }
+    });
+    rx
+}

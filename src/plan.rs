@@ -1,0 +1,240 @@
+//! Plan files (TOML): the net, the roles of its places, the policy, the stop conditions.
+//!
+//! ```toml
+//! net = "temperature_patrol.xml"      # relative to this file
+//! page = "main"                       # optional (PNPRO pages)
+//! seed = 42
+//! time_scale = 0.0                    # 0 = virtual time, as fast as possible; 1 = real time
+//!
+//! [params]                            # PNPRO template parameters (--param overrides)
+//! N = 3
+//!
+//! [places."p1:Check_Temperature_L1"]
+//! action = "check_temperature"        # or: role = "resource"
+//! timeout = 30.0
+//! on_failure = "retry 3"              # "stop" | "retry N" | "fire T"
+//!
+//! [[policy]]
+//! marking = { "p3:Decide_L1" = 1, "p5:Check_Temperature_L2" = 0 }
+//! partial = true                      # listed places must match, the others are free
+//! choose = { "t6:Go_Check_L2" = 1.0 }
+//!
+//! [stop]
+//! when = "`p1:Check_Temperature_L1` == 0"
+//! time_limit = 1000.0
+//! max_firings = 100000
+//! ```
+//!
+//! [`PlanFile`] is the TOML as written (its JSON Schema is `docs/plan.schema.json`);
+//! [`PlanFile::resolve`] checks it against the net and gives a [`Plan`], where names have
+//! become ids. Every mistake is a [`LoadError`] with the plan's line and column: unknown keys,
+//! a place or transition that does not exist, a bad probability, a bad predicate.
+//!
+//! - [`file`]: the TOML as written and its schema; [`resolve`]: names → ids.
+//! - [`map`]: the `[map]` section (the room of simulated robots, `gspn::world::map`).
+//! - [`ros2`]: the `[ros2]` table and the `server` keys of `ros2` places.
+//! - [`thesis`]: `plan-runner import-thesis`, the thesis framework's inputs → a plan.
+
+pub mod file;
+pub mod map;
+pub mod resolve;
+pub mod rewards;
+pub mod ros2;
+pub mod thesis;
+
+use std::path::{Path, PathBuf};
+
+use crate::analysis::decision::{Controls, RewardSpec};
+use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span, read_net};
+use crate::net::{Net, PlaceId};
+use crate::policy::Policy;
+use crate::ros2::Ros2Settings;
+use crate::runtime::{Role, Runtime, RuntimeBuilder, StopConditions};
+use crate::world::map::Map;
+use file::locate;
+
+pub use file::{ParamValue, PlaceFile, PlanFile, RuleFile, StopFile, json_schema};
+pub use rewards::RewardFile;
+pub use ros2::Ros2File;
+
+/// A plan ready to run: the net, what each place does, the policy and when to stop.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The plan file.
+    pub path: PathBuf,
+    /// The net file, resolved relative to the plan's directory.
+    pub net_path: PathBuf,
+    /// The page of the net file that was read, when one was named.
+    pub page: Option<String>,
+    /// The net.
+    pub net: Net,
+    /// Seed for every random choice; `None` = the caller picks one.
+    pub seed: Option<u64>,
+    /// Scale of time: 0 = virtual time as fast as possible, 1 = real time.
+    pub time_scale: Option<f64>,
+    /// Role of each place, indexed by [`PlaceId::index`]; `None` = no role (net-timed).
+    pub roles: Vec<Option<Role>>,
+    /// The policy over immediate transitions.
+    pub policy: Policy,
+    /// Where each policy rule is in the plan file, in rule order.
+    pub rule_spans: Vec<Span>,
+    /// When the run ends (besides "nothing can fire any more").
+    pub stop: StopConditions,
+    /// Robots bound to the initial agents, in agent order (places in net order, then
+    /// tokens); empty when the plan names none.
+    pub robots: Vec<String>,
+    /// Things accepted but worth saying (from the net reader and from the plan).
+    pub warnings: Vec<String>,
+    /// The room simulated robots drive in (`[map]`), when the plan has one.
+    pub map: Option<Map>,
+    /// The ROS 2 backend's settings and the places it serves (feature `ros2`).
+    pub ros2: Ros2Settings,
+    /// Reward structures (`[rewards.NAME]`), in name order.
+    pub rewards: Vec<RewardSpec>,
+    /// What a policy controls: `controllable` transitions and `wait`.
+    pub controls: Controls,
+}
+
+impl Plan {
+    /// The plan for a bare net: no roles (every place net-timed), no policy, no stop
+    /// condition. `plan-runner run NET` uses it.
+    pub fn for_net(net_path: &Path, loaded: Loaded) -> Plan {
+        let n = loaded.net.place_count();
+        let controls = Controls::zero_weight(&loaded.net);
+        Plan {
+            path: net_path.to_path_buf(),
+            net_path: net_path.to_path_buf(),
+            page: None,
+            net: loaded.net,
+            seed: None,
+            time_scale: None,
+            roles: vec![None; n],
+            policy: Policy::empty(),
+            rule_spans: Vec::new(),
+            stop: StopConditions::default(),
+            robots: Vec::new(),
+            warnings: loaded.warnings,
+            map: None,
+            ros2: Ros2Settings::default(),
+            rewards: Vec::new(),
+            controls,
+        }
+    }
+
+    /// The role of place `p`.
+    pub fn role(&self, p: PlaceId) -> Option<&Role> {
+        self.roles.get(p.index()).and_then(Option::as_ref)
+    }
+
+    /// A runtime builder for this plan: its net, roles, policy, stop conditions, seed, time
+    /// scale and robots. Register actions on it, then spawn.
+    pub fn runtime_builder(self) -> RuntimeBuilder {
+        let places: Vec<PlaceId> = self.net.place_ids().collect();
+        let mut b = Runtime::builder(self.net)
+            .policy(self.policy)
+            .stop_conditions(self.stop)
+            .robots(self.robots);
+        for (p, role) in places.into_iter().zip(self.roles) {
+            if let Some(role) = role {
+                b = b.role(p, role);
+            }
+        }
+        if let Some(seed) = self.seed {
+            b = b.seed(seed);
+        }
+        b.time_scale(self.time_scale.unwrap_or(0.0))
+    }
+}
+
+#[cfg(feature = "sim")]
+impl From<Plan> for crate::world::fleet::FleetPlan {
+    fn from(plan: Plan) -> Self {
+        let map = plan.map.clone();
+        crate::world::fleet::FleetPlan {
+            run: plan.runtime_builder(),
+            map,
+        }
+    }
+}
+
+/// Reads and checks the plan in `path`, and the net it names. `opts.page` (the CLI's
+/// `--page`) overrides the plan's `page`; `opts.params` override the plan's `params` of the
+/// same name, and both go to the net reader.
+pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+    if text.trim().is_empty() {
+        return Err(LoadError::file(path, LoadErrorKind::Empty));
+    }
+    let file = PlanFile::parse(path, &text)?;
+    let net_path = file.net_path(path);
+    let page = opts.page.clone().or_else(|| file.page.clone());
+    let mut params: Vec<(String, String)> = file
+        .params
+        .iter()
+        .filter(|(k, _)| !opts.params.iter().any(|(o, _)| o == *k))
+        .map(|(k, v)| (k.clone(), v.to_string()))
+        .collect();
+    params.extend(opts.params.iter().cloned());
+    let net_opts = ReadOptions {
+        page: page.clone(),
+        params,
+    };
+    if !net_path.is_file() {
+        return Err(LoadError::at(
+            path,
+            locate(&text, file.net.span()),
+            LoadErrorKind::Invalid(format!(
+                "net file `{}` not found (looked at {})",
+                file.net.get_ref(),
+                net_path.display()
+            )),
+        ));
+    }
+    let loaded = read_net(&net_path, &net_opts)?;
+    let mut plan = file.resolve(path, &text, loaded.net)?;
+    plan.net_path = net_path;
+    plan.page = page;
+    let mut warnings = loaded.warnings;
+    warnings.append(&mut plan.warnings);
+    plan.warnings = warnings;
+    Ok(plan)
+}
+
+/// A file opened by [`open`]: a plan, or a bare net.
+#[derive(Clone, Debug)]
+pub enum Opened {
+    /// A plan file (`.toml`) with the net it names.
+    Plan(Box<Plan>),
+    /// A net file (PIPE, PNML, PNPRO).
+    Net {
+        /// The file.
+        path: PathBuf,
+        /// The net, its format and the reader's warnings.
+        loaded: Box<Loaded>,
+    },
+}
+
+impl Opened {
+    /// The plan to run: the plan itself, or [`Plan::for_net`] for a bare net (every place
+    /// net-timed, no policy, no stop condition).
+    pub fn into_plan(self) -> Plan {
+        match self {
+            Opened::Plan(plan) => *plan,
+            Opened::Net { path, loaded } => Plan::for_net(&path, *loaded),
+        }
+    }
+}
+
+/// Opens `path` as a plan when its extension is `.toml` (in any case), else as a net file.
+/// Every command that accepts "a plan or a net" goes through here.
+pub fn open(path: &Path, opts: &ReadOptions) -> Result<Opened, LoadError> {
+    if Format::from_extension(path) == Some(Format::Plan) {
+        Ok(Opened::Plan(Box::new(read_plan(path, opts)?)))
+    } else {
+        Ok(Opened::Net {
+            path: path.to_path_buf(),
+            loaded: Box::new(read_net(path, opts)?),
+        })
+    }
+}

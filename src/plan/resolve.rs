@@ -1,0 +1,406 @@
+//! [`PlanFile::resolve`]: a plan file checked against its net, names turned into ids —
+//! roles, the policy, stop conditions, robots, the map and the ROS 2 places. Every mistake is
+//! a [`LoadError`] at the offending name's line and column.
+
+use std::ops::Range;
+use std::path::Path;
+
+use toml::Spanned;
+
+use super::Plan;
+use super::file::{PlaceFile, PlanFile, RuleFile, locate};
+use super::rewards::{resolve_controls, resolve_rewards};
+use super::ros2::resolve_ros2;
+use crate::io::{LoadError, LoadErrorKind};
+use crate::net::predicate::Predicate;
+use crate::net::{Net, PlaceId, Timing, TransitionId};
+use crate::policy::{Pattern, Policy, PolicyError, Rule};
+use crate::runtime::{FailurePolicy, Role, StopConditions};
+
+impl PlanFile {
+    /// Checks the plan against `net` (read from [`PlanFile::net_path`]) and resolves names
+    /// to ids. `text` is the plan's text, for line and column numbers.
+    pub fn resolve(self, path: &Path, text: &str, net: Net) -> Result<Plan, LoadError> {
+        let at =
+            |span: Range<usize>, kind: LoadErrorKind| LoadError::at(path, locate(text, span), kind);
+        let mut warnings = Vec::new();
+
+        if let Some(ts) = &self.time_scale {
+            let v = *ts.get_ref();
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(at(
+                    ts.span(),
+                    out_of_range("time_scale", "plan", v, "must be a finite number ≥ 0"),
+                ));
+            }
+        }
+
+        let mut roles: Vec<Option<Role>> = vec![None; net.place_count()];
+        for (name, role) in &self.places {
+            let p = net
+                .place_by_name(name.get_ref())
+                .ok_or_else(|| at(name.span(), unknown("place", name.get_ref())))?;
+            roles[p.index()] = Some(resolve_role(&net, p, role, &at)?);
+            if matches!(roles[p.index()], Some(Role::Action { .. }))
+                && net_outputs(&net, p).is_empty()
+            {
+                warnings.push(format!(
+                    "place `{}` has an action but no output transition: its agents end Inactive",
+                    name.get_ref()
+                ));
+            }
+        }
+
+        let ros2 = resolve_ros2(&net, self.ros2.as_ref(), &self.places, &at)?;
+
+        let mut rules = Vec::with_capacity(self.policy.len());
+        let mut rule_spans = Vec::with_capacity(self.policy.len());
+        for rule in &self.policy {
+            rules.push(resolve_rule(&net, rule.get_ref(), &at)?);
+            rule_spans.push(locate(text, rule.span()));
+        }
+        let policy = Policy::new(&net, rules).map_err(|e| {
+            let rule = self.policy[e.rule()].get_ref();
+            let span = policy_error_span(&e, rule).unwrap_or_else(|| self.policy[e.rule()].span());
+            at(span, LoadErrorKind::Invalid(format!("policy {e}")))
+        })?;
+
+        let mut stop = StopConditions::default();
+        if let Some(s) = &self.stop {
+            if let Some(w) = &s.when {
+                let pred = Predicate::parse(&net, w.get_ref()).map_err(|e| {
+                    let span = w.span();
+                    let start = span.start + string_content_offset(text, span.start);
+                    // Columns count characters; the content starts after the opening quote.
+                    let byte = w
+                        .get_ref()
+                        .char_indices()
+                        .nth(e.column.saturating_sub(1))
+                        .map_or(w.get_ref().len(), |(i, _)| i);
+                    let kind = match e.name {
+                        Some(n) if e.message.contains("does not exist") => unknown("place", &n),
+                        _ => LoadErrorKind::Invalid(format!("stop.when: {}", e.message)),
+                    };
+                    at(start + byte..start + byte, kind)
+                })?;
+                stop.when = Some(pred);
+            }
+            if let Some(t) = &s.time_limit {
+                let v = *t.get_ref();
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(at(
+                        t.span(),
+                        out_of_range("time_limit", "stop", v, "must be a finite number > 0"),
+                    ));
+                }
+                stop.time_limit = Some(v);
+            }
+            if s.max_firings == Some(0) {
+                warnings.push("stop.max_firings = 0: the run stops before any firing".into());
+            }
+            stop.max_firings = s.max_firings;
+        }
+
+        let mut robots: Vec<String> = Vec::with_capacity(self.robots.len());
+        for r in &self.robots {
+            let name = r.get_ref();
+            if name.is_empty() || name.contains(char::is_whitespace) {
+                return Err(at(
+                    r.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "robot name `{name}` must be non-empty and without spaces"
+                    )),
+                ));
+            }
+            if robots.iter().any(|n| n == name) {
+                return Err(at(
+                    r.span(),
+                    LoadErrorKind::Invalid(format!("robot `{name}` is listed twice")),
+                ));
+            }
+            robots.push(name.clone());
+        }
+
+        let map = match &self.map {
+            Some(m) => Some(m.get_ref().resolve(&net, m.span(), &at)?),
+            None => None,
+        };
+        if let Some(m) = &map {
+            // Built-in robot actions (`goto L2; measure`) name locations: check them now.
+            for (name, role) in &self.places {
+                if let Some(a) = &role.get_ref().action {
+                    m.program(a).map_err(|e| {
+                        at(
+                            role.span(),
+                            LoadErrorKind::Invalid(format!("place `{}`: {e}", name.get_ref())),
+                        )
+                    })?;
+                }
+            }
+        }
+
+        let rewards = resolve_rewards(&net, &self.rewards, &at)?;
+        let controls = resolve_controls(&net, self.controllable.as_ref(), self.wait, &at)?;
+
+        Ok(Plan {
+            path: path.to_path_buf(),
+            net_path: self.net_path(path),
+            page: self.page,
+            net,
+            seed: self.seed,
+            time_scale: self.time_scale.map(Spanned::into_inner),
+            roles,
+            policy,
+            rule_spans,
+            stop,
+            robots,
+            warnings,
+            map,
+            ros2,
+            rewards,
+            controls,
+        })
+    }
+}
+
+/// Bytes between the start of a TOML string value and its content (its opening quotes).
+fn string_content_offset(text: &str, start: usize) -> usize {
+    let rest = &text[start.min(text.len())..];
+    if rest.starts_with("\"\"\"") || rest.starts_with("'''") {
+        3
+    } else if rest.starts_with('"') || rest.starts_with('\'') {
+        1
+    } else {
+        0
+    }
+}
+
+pub(super) fn unknown(what: &'static str, name: &str) -> LoadErrorKind {
+    LoadErrorKind::UnknownNode {
+        what,
+        name: name.to_string(),
+    }
+}
+
+pub(super) fn out_of_range(
+    what: &'static str,
+    name: &str,
+    v: f64,
+    expected: &'static str,
+) -> LoadErrorKind {
+    LoadErrorKind::OutOfRange {
+        what,
+        name: name.to_string(),
+        value: v.to_string(),
+        expected,
+    }
+}
+
+fn net_outputs(net: &Net, p: PlaceId) -> Vec<TransitionId> {
+    net.transition_ids()
+        .filter(|&t| net.inputs(t).iter().any(|&(q, _)| q == p))
+        .collect()
+}
+
+fn resolve_role(
+    net: &Net,
+    p: PlaceId,
+    role: &Spanned<PlaceFile>,
+    at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+) -> Result<Role, LoadError> {
+    let place = &net.place(p).name;
+    let f = role.get_ref();
+    let resource = match &f.role {
+        None => false,
+        Some(r) if r.get_ref() == "resource" => true,
+        Some(r) if r.get_ref() == "action" => false,
+        Some(r) => {
+            return Err(at(
+                r.span(),
+                LoadErrorKind::Invalid(format!(
+                    "role `{}` of place `{place}`: expected \"resource\" or \"action\"",
+                    r.get_ref()
+                )),
+            ));
+        }
+    };
+    if resource {
+        if let Some(a) = &f.action {
+            return Err(at(
+                role.span(),
+                LoadErrorKind::Invalid(format!(
+                    "place `{place}` is a resource and also has action `{a}`: choose one"
+                )),
+            ));
+        }
+        for (key, span) in [
+            ("timeout", f.timeout.as_ref().map(Spanned::span)),
+            ("on_failure", f.on_failure.as_ref().map(Spanned::span)),
+        ] {
+            if let Some(span) = span {
+                return Err(at(
+                    span,
+                    LoadErrorKind::Invalid(format!(
+                        "place `{place}` is a resource: `{key}` applies to actions only"
+                    )),
+                ));
+            }
+        }
+        if f.robot.is_some() {
+            return Err(at(
+                role.span(),
+                LoadErrorKind::Invalid(format!(
+                    "place `{place}` is a resource: `robot` applies to action places only"
+                )),
+            ));
+        }
+        return Ok(Role::Resource);
+    }
+    let Some(name) = f.action.clone() else {
+        return Err(at(
+            role.span(),
+            LoadErrorKind::Missing {
+                what: "`action` (or `role = \"resource\"`)".into(),
+                name: Some(place.clone()),
+            },
+        ));
+    };
+    if name.trim().is_empty() {
+        return Err(at(
+            role.span(),
+            LoadErrorKind::Invalid(format!("place `{place}`: the action name is empty")),
+        ));
+    }
+    let timeout = match &f.timeout {
+        None => None,
+        Some(t) => {
+            let v = *t.get_ref();
+            if !(v.is_finite() && v > 0.0) {
+                return Err(at(
+                    t.span(),
+                    out_of_range("timeout", place, v, "must be a finite number > 0"),
+                ));
+            }
+            Some(v)
+        }
+    };
+    let on_failure = match &f.on_failure {
+        None => FailurePolicy::Stop,
+        Some(s) => parse_failure(net, p, s.get_ref()).map_err(|kind| at(s.span(), kind))?,
+    };
+    Ok(Role::Action {
+        name,
+        timeout,
+        on_failure,
+        robot: f.robot.clone(),
+    })
+}
+
+/// Parses `stop`, `retry N` or `fire T` for place `p`.
+fn parse_failure(net: &Net, p: PlaceId, s: &str) -> Result<FailurePolicy, LoadErrorKind> {
+    let place = &net.place(p).name;
+    let s = s.trim();
+    let (word, rest) = s.split_once(char::is_whitespace).unwrap_or((s, ""));
+    let rest = rest.trim();
+    match (word, rest) {
+        ("stop", "") => Ok(FailurePolicy::Stop),
+        ("retry", n) => {
+            n.parse::<u32>()
+                .map(FailurePolicy::Retry)
+                .map_err(|_| LoadErrorKind::NotANumber {
+                    what: "retry count",
+                    name: place.clone(),
+                    value: n.to_string(),
+                })
+        }
+        ("fire", t) if !t.is_empty() => {
+            let t = t.trim_matches('`');
+            let id = net
+                .transition_by_name(t)
+                .ok_or_else(|| unknown("transition", t))?;
+            if !net.inputs(id).iter().any(|&(q, _)| q == p) {
+                return Err(LoadErrorKind::Invalid(format!(
+                    "on_failure of `{place}`: transition `{t}` is not an output of the place"
+                )));
+            }
+            Ok(FailurePolicy::Fire(id))
+        }
+        _ => Err(LoadErrorKind::Invalid(format!(
+            "on_failure of `{place}`: `{s}` is not \"stop\", \"retry N\" or \"fire T\""
+        ))),
+    }
+}
+
+fn resolve_rule(
+    net: &Net,
+    r: &RuleFile,
+    at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+) -> Result<Rule, LoadError> {
+    let mut listed = Vec::with_capacity(r.marking.len());
+    for (name, k) in &r.marking {
+        let p = net
+            .place_by_name(name.get_ref())
+            .ok_or_else(|| at(name.span(), unknown("place", name.get_ref())))?;
+        if let Some(cap) = net.place(p).capacity
+            && *k.get_ref() > cap
+        {
+            return Err(at(
+                k.span(),
+                LoadErrorKind::Invalid(format!(
+                    "policy marking of `{}` is {}, above its capacity {cap}: the rule could never apply",
+                    name.get_ref(),
+                    k.get_ref()
+                )),
+            ));
+        }
+        listed.push((p, *k.get_ref()));
+    }
+    listed.sort_by_key(|&(p, _)| p);
+    let pattern = if r.partial {
+        Pattern::Partial(listed)
+    } else {
+        let mut m = vec![0; net.place_count()];
+        for (p, k) in listed {
+            m[p.index()] = k;
+        }
+        Pattern::Exact(m)
+    };
+    let mut choose = Vec::with_capacity(r.choose.len());
+    for (name, prob) in &r.choose {
+        let t = net
+            .transition_by_name(name.get_ref())
+            .ok_or_else(|| at(name.span(), unknown("transition", name.get_ref())))?;
+        if !matches!(net.transition(t).timing, Timing::Immediate { .. }) {
+            return Err(at(
+                name.span(),
+                LoadErrorKind::Invalid(format!(
+                    "policy chooses `{}`, an exponential transition: a policy chooses among immediate transitions",
+                    name.get_ref()
+                )),
+            ));
+        }
+        choose.push((t, *prob.get_ref()));
+    }
+    Ok(Rule { pattern, choose })
+}
+
+/// The most precise span for a policy error: the offending transition's value or key.
+fn policy_error_span(e: &PolicyError, rule: &RuleFile) -> Option<Range<usize>> {
+    match e {
+        PolicyError::BadProbability { name, .. } => rule
+            .choose
+            .iter()
+            .find(|(k, _)| k.get_ref() == name)
+            .map(|(_, v)| v.span()),
+        PolicyError::NotImmediate { name, .. } | PolicyError::DuplicateTransition { name, .. } => {
+            rule.choose
+                .keys()
+                .find(|k| k.get_ref() == name)
+                .map(Spanned::span)
+        }
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,28 @@
+//! What the ROS 2 backend is told by a plan: the DDS settings of its `[ros2]` table and the
+//! places it serves. Compiled with or without the feature `ros2`, so every plan reads the same.
+
+use crate::net::PlaceId;
+
+/// The action name that makes a place a ROS 2 place: its agents' actions are ExecPlace goals
+/// sent to their robots (feature `ros2`, `docs/ros2.md`).
+pub const ROS2_ACTION: &str = "ros2";
+
+/// The ExecPlace action server a `ros2` place uses when the plan names none.
+pub const DEFAULT_SERVER: &str = "exec_place";
+
+/// The plan's `[ros2]` table and its `ros2` places, resolved.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Ros2Settings {
+    /// The DDS domain id.
+    pub domain_id: Option<u16>,
+    /// The local addresses DDS may use (empty = the backend's default, loopback).
+    pub networks: Vec<std::net::IpAddr>,
+    /// Seconds between a robot's heartbeats.
+    pub heartbeat: Option<f64>,
+    /// Seconds without a heartbeat after which a robot is lost.
+    pub lost_after: Option<f64>,
+    /// Seconds the supervisor waits for its robots before it gives up.
+    pub startup: Option<f64>,
+    /// Places whose action is `ros2`, with their ExecPlace server name, in net order.
+    pub servers: Vec<(PlaceId, String)>,
+}

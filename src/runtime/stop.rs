@@ -1,0 +1,15 @@
+//! [`StopConditions`]: when a run ends, besides "nothing can ever fire again" (a plan file's
+//! `[stop]` table).
+
+use crate::net::predicate::Predicate;
+
+/// When a run ends, besides "nothing can ever fire again".
+#[derive(Clone, Debug, Default)]
+pub struct StopConditions {
+    /// Stop as soon as the marking satisfies this predicate.
+    pub when: Option<Predicate>,
+    /// Stop at this (model) time.
+    pub time_limit: Option<f64>,
+    /// Stop after this many firings.
+    pub max_firings: Option<u64>,
+}
