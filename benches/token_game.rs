@@ -53,7 +53,7 @@ fn bench(c: &mut Criterion) {
         ("temperature_patrol", temperature_patrol()),
         ("ring_1000x1000", ring(1000, 1)),
     ] {
-        let mut sim = Simulator::new(&net, 1);
+        let mut sim = Simulator::new(net.clone(), 1);
         g.bench_function(name, |b| {
             b.iter(|| {
                 sim.run_steps(black_box(BATCH)).expect("no timeless trap");

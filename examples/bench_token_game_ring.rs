@@ -26,7 +26,7 @@ fn main() {
     }
     let net = b.build().expect("the ring is a valid net");
 
-    let mut sim = Simulator::new(&net, 1);
+    let mut sim = Simulator::new(net, 1);
     let start = Instant::now();
     sim.run_steps(firings)
         .expect("a ring has no immediate transitions");

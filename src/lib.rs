@@ -10,6 +10,11 @@
 //! imports it or [`io`].
 //!
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
+//! - [`sample`]: chance at the bottom layer — the seeded generator, the portable exponential
+//!   sampler, weighted picks and the sum tree; every random draw goes through it.
+//! - [`firing`]: the firing rules, once — enabling, the immediate choice, the exponential
+//!   race with server semantics, the statistics; the explorer, the token game and the
+//!   runtime drive it with their own choosers.
 //! - [`policy`]: marking → distribution over immediate transitions, with an indexed lookup.
 //! - [`analysis`]: the tangible reachability graph, properties (bounds, deadlocks, liveness,
 //!   invariants), the CTMC (steady state, limiting, transient) and measures.
@@ -38,12 +43,14 @@
 
 pub mod analysis;
 pub mod check;
+pub mod firing;
 pub mod io;
 pub mod net;
 pub mod plan;
 pub mod policy;
 pub mod ros2;
 pub mod runtime;
+pub mod sample;
 pub mod sim;
 #[cfg(feature = "web")]
 pub mod web;

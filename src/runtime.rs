@@ -48,26 +48,31 @@ pub mod action;
 pub mod agent;
 mod backend;
 mod builder;
+mod clock;
 mod conservation;
 mod engine;
 pub mod event;
 mod handle;
+mod id;
 pub mod journal;
 pub mod place;
 mod role;
+mod sink;
+mod snapshot;
 mod stop;
 pub mod supervisor;
 
 use std::path::PathBuf;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 pub use action::{Action, ActionContext, ActionFuture, CancelToken, FnAction, Outcome, action_fn};
-pub use agent::{AgentId, AgentMode, AgentState};
+pub use agent::{AgentMode, AgentState};
 pub use backend::{Backend, BackendError, BackendFuture, Backends, RunError, Section};
 pub use builder::RuntimeBuilder;
 pub use event::{Event, EventKind, Events, Received};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};
+pub use id::AgentId;
 pub use role::{FailurePolicy, Role};
 pub use stop::StopConditions;
 
@@ -86,7 +91,7 @@ impl Runtime {
 }
 
 /// Why a run stopped.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StopReason {
     /// Nothing can ever fire again.

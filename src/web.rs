@@ -20,7 +20,7 @@
 //! | `POST /api/analysis/start` | starts the analysis on a blocking thread (unless it is running or done); the progress |
 //! | `GET /api/analysis/progress` | `{state: idle\|running\|cancelling\|cancelled\|done, phase: "state space"\|"properties"\|"steady state", markings, seconds}`: markings found so far by the state-space search |
 //! | `POST /api/analysis/cancel` | stops a running analysis (the search within one block of ~1,000 markings, the steady-state solver at its next sweep, the properties before they start); the progress |
-//! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`replay`]), or the token game |
+//! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`crate::runtime::journal::read_journal`]), or the token game |
 //! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
 //! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal |
 //! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log`, and `world` with a world feed |
@@ -40,7 +40,6 @@ mod analysis_job;
 mod api;
 pub mod layout;
 mod live;
-pub mod replay;
 mod report;
 mod session;
 
@@ -55,6 +54,7 @@ use tokio::net::TcpListener;
 
 use crate::net::Net;
 use crate::policy::Policy;
+use crate::runtime::journal::Frame;
 pub use live::{FRAME, LiveRun};
 use session::Session;
 
@@ -129,7 +129,7 @@ struct Inner {
     session: Mutex<Session>,
     analysis: Arc<analysis_job::AnalysisJob>,
     live: OnceLock<LiveRun>,
-    replay: OnceLock<Arc<Vec<replay::Frame>>>,
+    replay: OnceLock<Arc<Vec<Frame>>>,
 }
 
 impl WebState {
@@ -170,9 +170,9 @@ impl WebState {
         state
     }
 
-    /// A viewer of a recorded run ([`replay::read_journal`]): the page shows a time slider
+    /// A viewer of a recorded run ([`crate::runtime::journal::read_journal`]): the page shows a time slider
     /// over `frames` instead of playing its own token game.
-    pub fn for_replay(net: Net, frames: Vec<replay::Frame>) -> WebState {
+    pub fn for_replay(net: Net, frames: Vec<Frame>) -> WebState {
         let state = WebState::new(net, None, 0);
         let _ = state.inner.replay.set(Arc::new(frames));
         state

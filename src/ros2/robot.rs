@@ -17,8 +17,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use futures::StreamExt;
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::SeedableRng;
 use ros2_client::action::{
     ActionServerQosPolicies, AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId,
     NewGoalHandle,
@@ -34,6 +33,7 @@ use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, Time, exec_
 use super::settings::Ros2Settings;
 use super::{Ros2Error, heartbeat};
 use crate::net::{Net, PlaceId, Timing};
+use crate::sample::{self, Rng};
 
 type Server = AsyncActionServer<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>;
 
@@ -72,7 +72,7 @@ pub struct Decision {
 
 /// The net-timed decision for place `p`: the race of its exponential outputs, or at once
 /// with no transition when it has an immediate output (or none at all).
-pub fn decide(net: &Net, p: PlaceId, time_scale: f64, rng: &mut ChaCha8Rng) -> Decision {
+pub fn decide(net: &Net, p: PlaceId, time_scale: f64, rng: &mut Rng) -> Decision {
     let outputs: Vec<_> = net
         .transition_ids()
         .filter(|&t| net.inputs(t).iter().any(|&(q, _)| q == p))
@@ -96,17 +96,8 @@ pub fn decide(net: &Net, p: PlaceId, time_scale: f64, rng: &mut ChaCha8Rng) -> D
             transition: String::new(),
         };
     }
-    let u: f64 = rng.random::<f64>();
-    let delay = -(1.0 - u).ln() / total * time_scale;
-    let mut pick = rng.random::<f64>() * total;
-    let mut chosen = rates[rates.len() - 1].0;
-    for &(t, r) in &rates {
-        if pick < r {
-            chosen = t;
-            break;
-        }
-        pick -= r;
-    }
+    let delay = sample::exponential(rng, total) * time_scale;
+    let chosen = sample::pick_weighted(rng, &rates).unwrap_or(rates[rates.len() - 1].0);
     Decision {
         delay,
         transition: net.transition(chosen).name.clone(),
@@ -139,7 +130,7 @@ fn id_hash(id: &str) -> u64 {
 
 struct Shared {
     net: Arc<Net>,
-    rng: Mutex<ChaCha8Rng>,
+    rng: Mutex<Rng>,
     time_scale: f64,
     stats: Mutex<RobotStats>,
     /// Running goals and how to cancel them.
@@ -161,7 +152,7 @@ pub async fn serve(
     let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;
     let shared = Arc::new(Shared {
         net: Arc::new(net.clone()),
-        rng: Mutex::new(ChaCha8Rng::seed_from_u64(opts.seed ^ id_hash(&opts.id))),
+        rng: Mutex::new(Rng::seed_from_u64(opts.seed ^ id_hash(&opts.id))),
         time_scale: opts.time_scale,
         stats: Mutex::new(RobotStats::default()),
         running: Mutex::new(BTreeMap::new()),
@@ -372,7 +363,7 @@ mod tests {
         b.input(q, now, 1);
         b.output(now, p, 1);
         let net = b.build().unwrap();
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let mut rng = Rng::seed_from_u64(1);
         let n = 20_000;
         let (mut fasts, mut delay) = (0, 0.0);
         for _ in 0..n {

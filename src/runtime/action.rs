@@ -10,18 +10,19 @@ use std::panic::AssertUnwindSafe;
 use std::pin::Pin;
 use std::sync::Arc;
 use std::task::{Context, Poll};
+use std::time::Duration;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use tokio::sync::watch;
 
-use super::agent::AgentId;
+use super::id::AgentId;
 use crate::net::{Marking, Net, PlaceId, TransitionId};
 
 /// A boxed future returned by [`Action::run`].
 pub type ActionFuture = Pin<Box<dyn Future<Output = Outcome> + Send + 'static>>;
 
 /// How an action ended.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "kind", content = "detail", rename_all = "snake_case")]
 pub enum Outcome {
     /// This event happened: fire this transition (an output of the place) when it is enabled.
@@ -187,5 +188,39 @@ impl<F: Future + Unpin> Future for CatchUnwind<F> {
                 Poll::Ready(Err(msg))
             }
         }
+    }
+}
+
+/// An action's report: which agent, which start of its action (the supervisor ignores stale
+/// reports), and how it ended. Sent by the task that ran it to the supervisor.
+#[derive(Debug)]
+pub(crate) struct ActionDone {
+    pub(crate) agent: AgentId,
+    pub(crate) ticket: u64,
+    pub(crate) outcome: Outcome,
+}
+
+/// One run of `action` for one agent, as a future that never panics: a panic (when the
+/// future is made or polled) becomes `Failed("panicked…")`, and running past `timeout` becomes
+/// `Failed("timed out…")`. Place actors spawn it as a task; agent actors
+/// ([`AgentMode::Actor`](super::AgentMode::Actor)) await it in their own task.
+pub(crate) fn run_action(
+    action: &Arc<dyn Action>,
+    ctx: ActionContext,
+    timeout: Option<Duration>,
+) -> impl std::future::Future<Output = Outcome> + Send + 'static {
+    // A panic before the future exists is the agent's failure too, not the place's.
+    let fut = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| action.run(ctx)))
+        .unwrap_or_else(|_| Box::pin(async { Outcome::Failed("panicked".into()) }));
+    async move {
+        let caught = CatchUnwind(fut);
+        let outcome = match timeout {
+            Some(d) => match tokio::time::timeout(d, caught).await {
+                Ok(r) => r,
+                Err(_) => Ok(Outcome::Failed(format!("timed out after {d:?}"))),
+            },
+            None => caught.await,
+        };
+        outcome.unwrap_or_else(|p| Outcome::Failed(format!("panicked: {p}")))
     }
 }

@@ -15,15 +15,9 @@ use kameo::message::{Context, Message};
 use serde::{Deserialize, Serialize};
 use tokio::sync::mpsc::UnboundedSender;
 
-use super::action::{Action, ActionContext};
-use super::place::run_action;
-use super::supervisor::ActionDone;
+use super::action::{Action, ActionContext, ActionDone, run_action};
+use super::id::AgentId;
 use crate::net::PlaceId;
-
-/// A stable agent id: assigned once, kept while the agent moves through the net.
-#[repr(transparent)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-pub struct AgentId(pub u64);
 
 /// An agent's state, as the thesis named them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -39,8 +33,6 @@ pub enum AgentState {
     Waiting,
     /// In a place with no output transition: nothing will happen to it.
     Inactive,
-    /// Consumed by a join: the agent ended.
-    Void,
 }
 
 /// How agents are represented.
@@ -120,17 +112,5 @@ impl Message<Update> for Agent {
     async fn handle(&mut self, u: Update, _: &mut Context<Self, Self::Reply>) {
         self.place = u.place;
         self.state = u.state;
-    }
-}
-
-/// Ask an agent actor for its place and state.
-#[derive(Clone, Copy, Debug)]
-pub struct Query;
-
-impl Message<Query> for Agent {
-    type Reply = (PlaceId, AgentState);
-
-    async fn handle(&mut self, _: Query, _: &mut Context<Self, Self::Reply>) -> Self::Reply {
-        (self.place, self.state)
     }
 }

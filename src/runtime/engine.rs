@@ -1,18 +1,23 @@
 //! The supervisor's state machine, without actors or time: the marking, the agents and what
-//! they are ready for, the race of net-timed transitions, firing with agent identity, and the
-//! statistics. The supervisor actor drives it; keeping it synchronous keeps firing cheap.
+//! they are ready for, firing with agent identity. The firing rules (the immediate choice,
+//! the race with server semantics, the statistics) are [`crate::firing`]'s: the engine is its
+//! agent-readiness-filtered chooser — an immediate transition is a candidate when its input
+//! places' agents are ready for it, an exponential one races with as many servers as agents
+//! handed the choice back to the net. With no action bound, that is the net's own rules, and
+//! the engine draws exactly what the token game draws from the same seed. The supervisor
+//! actor drives it; keeping it synchronous keeps firing cheap.
 
 use std::collections::VecDeque;
 use std::sync::Arc;
 
-use rand::RngExt;
-use rand_chacha::ChaCha8Rng;
 use rustc_hash::FxHashMap;
 
-use super::agent::{AgentId, AgentState};
-use crate::net::{Marking, Net, PlaceId, Timing, TransitionId};
+use super::agent::AgentState;
+use super::id::AgentId;
+use crate::firing::{Firable, Statistics, Tally};
+use crate::net::{Marking, Net, PlaceId, TransitionId};
 use crate::policy::Policy;
-use crate::sim::sum_tree::SumTree;
+use crate::sample::Rng;
 
 /// What an agent's finished action made it ready for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,7 +74,7 @@ pub(crate) struct Engine {
     pub(crate) net: Arc<Net>,
     pub(crate) m: Marking,
     policy: Policy,
-    pub(crate) rng: ChaCha8Rng,
+    rng: Rng,
     /// Per place: index into `aps` when it is an action place.
     pub(crate) action_of: Vec<Option<u32>>,
     pub(crate) aps: Vec<ActionPlace>,
@@ -79,24 +84,16 @@ pub(crate) struct Engine {
     /// Exponential transitions some agent returned `Fire` for, in arrival order.
     pending: Vec<TransitionId>,
     in_pending: Vec<bool>,
-    pub(crate) race: SumTree,
-    /// Bumped whenever a race rate changes (a timer for an unchanged race stays valid).
-    pub(crate) race_version: u64,
-    /// Immediate transitions, highest priority first.
-    immediates: Vec<(u32, TransitionId)>,
-    cands: Vec<TransitionId>,
-    dist: Vec<(TransitionId, f64)>,
+    /// What may fire: the net's rules filtered by what the agents are ready for.
+    firable: Firable,
     /// Agents with a running action.
     pub(crate) running: usize,
-    // Statistics.
     pub(crate) firings: u64,
-    pub(crate) counts: Vec<u64>,
-    integral: Vec<f64>,
-    last_change: Vec<f64>,
+    tally: Tally,
     pub(crate) agents_spawned: u64,
     pub(crate) agents_ended: u64,
     /// Some agent is bound to a robot (firings then report the robots they moved).
-    pub(crate) has_robots: bool,
+    has_robots: bool,
 }
 
 impl Engine {
@@ -104,7 +101,7 @@ impl Engine {
         net: Arc<Net>,
         action_places: &[PlaceId],
         policy: Policy,
-        rng: ChaCha8Rng,
+        rng: Rng,
     ) -> Engine {
         let mut action_of = vec![None; net.place_count()];
         let mut aps = Vec::new();
@@ -120,15 +117,7 @@ impl Engine {
                 decide_q: VecDeque::new(),
             });
         }
-        let mut immediates: Vec<(u32, TransitionId)> = net
-            .transition_ids()
-            .filter_map(|t| match net.transition(t).timing {
-                Timing::Immediate { priority, .. } => Some((priority, t)),
-                Timing::Exponential { .. } => None,
-            })
-            .collect();
-        immediates.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
-        let (np, nt) = (net.place_count(), net.transition_count());
+        let nt = net.transition_count();
         let mut e = Engine {
             m: net.initial_marking(),
             policy,
@@ -140,23 +129,17 @@ impl Engine {
             next_ticket: 0,
             pending: Vec::new(),
             in_pending: vec![false; nt],
-            race: SumTree::new(nt),
-            race_version: 0,
-            immediates,
-            cands: Vec::new(),
-            dist: Vec::new(),
+            firable: Firable::new(&net),
             running: 0,
             firings: 0,
-            counts: vec![0; nt],
-            integral: vec![0.0; np],
-            last_change: vec![0.0; np],
+            tally: Tally::new(&net),
             agents_spawned: 0,
             agents_ended: 0,
             has_robots: false,
             net,
         };
         for t in e.net.transition_ids() {
-            e.update_race(t);
+            e.update(t);
         }
         e
     }
@@ -177,6 +160,25 @@ impl Engine {
             },
         );
         id
+    }
+
+    /// Binds the initial agents to their robots, in order (none: no robots).
+    pub(crate) fn bind_robots(
+        &mut self,
+        agents: impl Iterator<Item = AgentId>,
+        robots: Vec<Arc<str>>,
+    ) {
+        self.has_robots = !robots.is_empty();
+        for (id, robot) in agents.zip(robots) {
+            if let Some(rec) = self.agents.get_mut(&id) {
+                rec.robot = Some(robot);
+            }
+        }
+    }
+
+    /// An agent's running action ended (its report was accepted).
+    pub(crate) fn action_ended(&mut self) {
+        self.running -= 1;
     }
 
     /// True when a place's agents have something to do (an output transition).
@@ -213,7 +215,9 @@ impl Engine {
             Ready::Fire(t) => {
                 if let Some(i) = ap.local(t) {
                     ap.fire_q[i].push_back(id);
-                    if !self.net.transition(t).is_immediate() && !self.in_pending[t.index()] {
+                    if self.net.transition(t).is_immediate() {
+                        self.update(t);
+                    } else if !self.in_pending[t.index()] {
                         self.in_pending[t.index()] = true;
                         self.pending.push(t);
                     }
@@ -229,34 +233,26 @@ impl Engine {
     fn update_consumers(&mut self, a: usize) {
         for i in 0..self.aps[a].consumers.len() {
             let t = self.aps[a].consumers[i];
-            self.update_race(t);
+            self.update(t);
         }
     }
 
-    /// The rate at which the supervisor samples `t`: net-timed exponential transitions, and
-    /// event-driven ones as far as `Decide` agents hand them back to the net.
-    fn race_rate(&self, t: TransitionId) -> f64 {
-        let Timing::Exponential { rate, servers } = self.net.transition(t).timing else {
-            return 0.0;
-        };
-        let mut d = self.net.enabled_degree(&self.m, t);
-        if d == 0 {
-            return 0.0;
+    /// Re-evaluates `t` for the firing core: an immediate transition is a candidate when it
+    /// is ready; an exponential one races with at most as many servers as agents in its
+    /// action places handed the choice back to the net (`Decide`).
+    fn update(&mut self, t: TransitionId) {
+        if self.net.transition(t).is_immediate() {
+            let on = self.is_ready(t);
+            self.firable.set_immediate(&self.net, t, on);
+            return;
         }
+        let mut cap = u32::MAX;
         for &(p, w) in self.net.inputs(t) {
             if let Some(a) = self.action_of[p.index()] {
-                d = d.min((self.aps[a as usize].decide_q.len() as u32) / w);
+                cap = cap.min((self.aps[a as usize].decide_q.len() as u32) / w);
             }
         }
-        rate * servers.active(d) as f64
-    }
-
-    fn update_race(&mut self, t: TransitionId) {
-        let r = self.race_rate(t);
-        if self.race.get(t.index()) != r {
-            self.race.set(t.index(), r);
-            self.race_version += 1;
-        }
+        self.firable.refresh_capped(&self.net, &self.m, t, cap);
     }
 
     fn is_ready(&self, t: TransitionId) -> bool {
@@ -276,25 +272,17 @@ impl Engine {
         })
     }
 
-    /// The next transition the supervisor fires at once: a ready immediate one (highest
-    /// priority, policy else weights), else a reported exponential one in arrival order.
+    /// The next transition the supervisor fires at once: a ready immediate one (the firing
+    /// core's choice: highest priority, policy else weights), else a reported exponential
+    /// one in arrival order.
     pub(crate) fn next_ready(&mut self) -> Option<TransitionId> {
-        if !self.immediates.is_empty() {
-            self.cands.clear();
-            let mut best = 0;
-            for k in 0..self.immediates.len() {
-                let (prio, t) = self.immediates[k];
-                if !self.cands.is_empty() && prio < best {
-                    break;
-                }
-                if self.is_ready(t) {
-                    best = prio;
-                    self.cands.push(t);
-                }
-            }
-            if !self.cands.is_empty() {
-                return Some(self.choose_immediate());
-            }
+        if self.firable.is_vanishing() {
+            return Some(self.firable.choose_immediate(
+                &self.net,
+                &self.m,
+                Some(&self.policy),
+                &mut self.rng,
+            ));
         }
         let mut i = 0;
         while i < self.pending.len() {
@@ -312,55 +300,30 @@ impl Engine {
         None
     }
 
-    fn choose_immediate(&mut self) -> TransitionId {
-        if self.cands.len() == 1 {
-            return self.cands[0];
-        }
-        let mut dist = std::mem::take(&mut self.dist);
-        if !self
-            .policy
-            .distribution_into(&self.net, &self.m, &self.cands, &mut dist)
-        {
-            dist.clear();
-            for &t in &self.cands {
-                if let Timing::Immediate { weight, .. } = self.net.transition(t).timing {
-                    dist.push((t, weight));
-                }
-            }
-            if dist.iter().all(|&(_, w)| w <= 0.0) {
-                // Weight 0 everywhere and no rule: a decision nobody made; choose uniformly.
-                dist.iter_mut().for_each(|d| d.1 = 1.0);
-            }
-        }
-        let total: f64 = dist.iter().map(|d| d.1).sum();
-        let mut u = self.rng.random::<f64>() * total;
-        let mut pick = dist[dist.len() - 1].0;
-        for &(t, w) in &dist {
-            if u < w {
-                pick = t;
-                break;
-            }
-            u -= w;
-        }
-        self.dist = dist;
-        pick
+    /// The total rate of the net-timed race (0: nothing races).
+    pub(crate) fn race_total(&self) -> f64 {
+        self.firable.race_total()
+    }
+
+    /// Changes whenever a rate of the race changes (a pending sample stays valid until then).
+    pub(crate) fn race_version(&self) -> u64 {
+        self.firable.race_version()
+    }
+
+    /// The delay to the next net-timed firing; `None` when nothing races.
+    pub(crate) fn sample_delay(&mut self) -> Option<f64> {
+        self.firable.sample_delay(&mut self.rng)
     }
 
     /// Samples the race: the delay to the next net-timed firing and the transition.
     pub(crate) fn sample_race(&mut self) -> Option<(f64, TransitionId)> {
-        let total = self.race.total();
-        if total <= 0.0 {
-            return None;
-        }
-        let u: f64 = self.rng.random::<f64>();
-        let dt = -(1.0 - u).ln() / total;
-        Some((dt, self.pick_race()))
+        let dt = self.firable.sample_delay(&mut self.rng)?;
+        Some((dt, self.firable.pick_race(&mut self.rng)?))
     }
 
-    /// Picks a transition of the race ∝ its rate.
-    pub(crate) fn pick_race(&mut self) -> TransitionId {
-        let u = self.rng.random::<f64>() * self.race.total();
-        TransitionId(self.race.find(u) as u32)
+    /// Picks a transition of the race ∝ its rate; `None` when nothing races.
+    pub(crate) fn pick_race(&mut self) -> Option<TransitionId> {
+        self.firable.pick_race(&mut self.rng)
     }
 
     /// Fires `t` at model time `now`, moving agents by the identity rules: consumed agents
@@ -378,19 +341,16 @@ impl Engine {
             if let Some(a) = self.action_of[p.index()] {
                 let ap = &mut self.aps[a as usize];
                 let local = ap.local(t);
-                let mut decided = false;
                 for _ in 0..w {
-                    let id = local.and_then(|i| ap.fire_q[i].pop_front()).or_else(|| {
-                        decided = true;
-                        ap.decide_q.pop_front()
-                    });
+                    let id = local
+                        .and_then(|i| ap.fire_q[i].pop_front())
+                        .or_else(|| ap.decide_q.pop_front());
                     if let Some(id) = id {
                         out.consumed.push(id);
                     }
                 }
-                if decided {
-                    self.update_consumers(a as usize);
-                }
+                // Fewer agents are ready: the place's transitions are re-evaluated.
+                self.update_consumers(a as usize);
             }
         }
         if self.has_robots {
@@ -400,14 +360,8 @@ impl Engine {
                 }
             }
         }
-        for &(p, _) in net.delta(t) {
-            let i = p.index();
-            self.integral[i] += self.m.as_slice()[i] as f64 * (now - self.last_change[i]);
-            self.last_change[i] = now;
-        }
-        net.fire(&mut self.m, t);
+        self.tally.fire(&net, &mut self.m, t, now);
         self.firings += 1;
-        self.counts[t.index()] += 1;
         let mut next = 0;
         for &(p, w) in net.outputs(t) {
             if self.action_of[p.index()].is_none() {
@@ -437,7 +391,7 @@ impl Engine {
             out.ended.push(id);
         }
         for &u in net.affected_by(t) {
-            self.update_race(u);
+            self.update(u);
         }
     }
 
@@ -459,18 +413,9 @@ impl Engine {
         }
     }
 
-    /// Time-averaged tokens per place over [0, now].
-    pub(crate) fn mean_tokens(&self, now: f64) -> Vec<f64> {
-        (0..self.m.len())
-            .map(|i| {
-                let total =
-                    self.integral[i] + self.m.as_slice()[i] as f64 * (now - self.last_change[i]);
-                if now > 0.0 {
-                    total / now
-                } else {
-                    self.m.as_slice()[i] as f64
-                }
-            })
-            .collect()
+    /// The statistics over [0, now]: time-averaged tokens per place, firings per
+    /// transition.
+    pub(crate) fn statistics(&self, now: f64) -> Statistics {
+        self.tally.read(&self.m, now)
     }
 }

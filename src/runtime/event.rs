@@ -5,16 +5,16 @@
 
 use std::sync::Arc;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use tokio::sync::broadcast;
 
 use super::StopReason;
 use super::action::Outcome;
-use super::agent::AgentId;
+use super::id::AgentId;
 use crate::net::{Marking, PlaceId, TransitionId};
 
 /// One change of a run.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Event {
     /// Sequence number, from 0, without gaps.
     pub seq: u64,
@@ -26,7 +26,7 @@ pub struct Event {
 }
 
 /// What happened.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "event", rename_all = "snake_case")]
 pub enum EventKind {
     /// A transition fired. `consumed` are the agents taken from action places (arc order),
@@ -41,7 +41,7 @@ pub enum EventKind {
         /// The marking after the firing.
         marking: Marking,
         /// Robots of the consumed agents, in the same order (empty when no robot is bound).
-        #[serde(skip_serializing_if = "Vec::is_empty")]
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
         robots: Vec<Arc<str>>,
     },
     /// A new agent exists (initial token or fork).
@@ -51,7 +51,7 @@ pub enum EventKind {
         /// Its place.
         place: PlaceId,
         /// The robot it is bound to, when there is one.
-        #[serde(skip_serializing_if = "Option::is_none")]
+        #[serde(default, skip_serializing_if = "Option::is_none")]
         robot: Option<Arc<str>>,
     },
     /// An agent's action started.

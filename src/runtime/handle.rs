@@ -9,9 +9,10 @@ use serde::Serialize;
 use tokio::sync::{broadcast, watch};
 
 use super::StopReason;
-use super::agent::{AgentId, AgentState};
+use super::agent::AgentState;
 use super::engine::Engine;
 use super::event::{Event, Events};
+use super::id::AgentId;
 use super::supervisor::{GetAgents, GetMarking, StopRequest, Supervisor};
 use crate::net::{Marking, Net, PlaceId};
 
@@ -82,7 +83,7 @@ pub struct Summary {
 impl Summary {
     pub(crate) fn new(eng: &Engine, stopped: StopReason, now: f64, errors: Vec<String>) -> Self {
         let net = &eng.net;
-        let mean = eng.mean_tokens(now);
+        let stats = eng.statistics(now);
         Summary {
             stopped,
             firings: eng.firings,
@@ -98,14 +99,14 @@ impl Summary {
             mean_tokens: net
                 .places()
                 .iter()
-                .zip(mean)
+                .zip(stats.mean_tokens)
                 .map(|(p, x)| (p.name.clone(), x))
                 .collect(),
             throughput: net
                 .transitions()
                 .iter()
-                .zip(&eng.counts)
-                .map(|(t, &c)| (t.name.clone(), if now > 0.0 { c as f64 / now } else { 0.0 }))
+                .zip(stats.throughput)
+                .map(|(t, x)| (t.name.clone(), x))
                 .collect(),
             errors,
             marking: eng.m.clone(),

@@ -11,8 +11,7 @@ use std::time::Duration;
 use kameo::Actor;
 use kameo::message::{Context, Message};
 
-use super::action::{Action, ActionContext, CatchUnwind, Outcome};
-use super::supervisor::ActionDone;
+use super::action::{Action, ActionContext, ActionDone, run_action};
 use tokio::sync::mpsc::UnboundedSender;
 
 /// The actor of one action place.
@@ -56,30 +55,5 @@ impl Message<Start> for Place {
                 outcome,
             });
         });
-    }
-}
-
-/// One run of `action` for one agent, as a future that never panics: a panic (when the
-/// future is made or polled) becomes `Failed("panicked…")`, and running past `timeout` becomes
-/// `Failed("timed out…")`. Place actors spawn it as a task; agent actors
-/// ([`AgentMode::Actor`](super::AgentMode::Actor)) await it in their own task.
-pub(crate) fn run_action(
-    action: &Arc<dyn Action>,
-    ctx: ActionContext,
-    timeout: Option<Duration>,
-) -> impl std::future::Future<Output = Outcome> + Send + 'static {
-    // A panic before the future exists is the agent's failure too, not the place's.
-    let fut = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| action.run(ctx)))
-        .unwrap_or_else(|_| Box::pin(async { Outcome::Failed("panicked".into()) }));
-    async move {
-        let caught = CatchUnwind(fut);
-        let outcome = match timeout {
-            Some(d) => match tokio::time::timeout(d, caught).await {
-                Ok(r) => r,
-                Err(_) => Ok(Outcome::Failed(format!("timed out after {d:?}"))),
-            },
-            None => caught.await,
-        };
-        outcome.unwrap_or_else(|p| Outcome::Failed(format!("panicked: {p}")))
     }
 }

@@ -1,11 +1,12 @@
 //! The supervisor: one actor per running plan. It owns the marking, the policy and the agent
 //! registry (through the [`Engine`]), serialises every firing, and never awaits a user action:
-//! actions run in tasks hosted by the place actors and report back with [`ActionDone`].
+//! actions run in tasks hosted by the place actors and report back with an [`ActionDone`].
 //!
-//! Time: model time is `offset + tokio elapsed / scale`. With `time_scale = 0` (virtual
-//! time) and no action running, the supervisor plays the net-timed race directly, in batches,
-//! jumping the model clock — as fast as possible and exactly reproducible from the seed; while
-//! actions run it waits on tokio timers (paused clock in tests) like in scaled real time.
+//! The supervisor keeps only the decisions of when to fire and when to stop. Time is its
+//! [`Clock`]'s: with `time_scale = 0` (virtual time) and no action running, the supervisor
+//! plays the net-timed race directly, in batches, jumping the model clock — as fast as possible
+//! and exactly reproducible from the seed; while actions run it waits on the clock's tokio
+//! timer (paused clock in tests) like in scaled real time. Events go to its [`EventSink`].
 
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
@@ -17,27 +18,26 @@ use kameo::mailbox;
 use kameo::mailbox::{MailboxReceiver, Signal};
 use rustc_hash::FxHashMap;
 use tokio::sync::{broadcast, mpsc, watch};
-use tokio::task::JoinHandle;
-use tokio::time::Instant;
 
 use super::StopReason;
-use super::action::{ActionContext, CancelSource, CancelToken};
-use super::agent::{Agent, AgentId, AgentMode, AgentState, Run, Update};
+use super::action::{ActionContext, ActionDone, CancelSource, CancelToken};
+use super::agent::{Agent, AgentMode, AgentState, Run, Update};
+use super::clock::Clock;
 use super::engine::{Engine, Firing, Ready};
 use super::event::{Event, EventKind};
 use super::handle::{Progress, Summary};
+use super::id::AgentId;
 use super::journal::Journal;
 use super::place::{Place, Start};
+use super::sink::EventSink;
+use super::snapshot::Snapshots;
 use super::{FailurePolicy, StopConditions};
-use crate::net::{Marking, PlaceId, TransitionId};
+use crate::net::{PlaceId, TransitionId};
 
 mod messages;
 
-pub(crate) use messages::{ActionDone, GetAgents, GetMarking, StopRequest};
 use messages::{Continue, StopDeadline, Timer};
-
-/// Retired marking snapshots kept for reuse.
-const SNAPSHOT_POOL: usize = 16;
+pub(crate) use messages::{GetAgents, GetMarking, StopRequest};
 
 /// Initial agents from which actor spawning is split over two threads.
 const PARALLEL_SPAWN: usize = 20_000;
@@ -60,20 +60,12 @@ pub struct Supervisor {
     buf: Firing,
     setups: Vec<PlaceSetup>,
     places: Vec<ActorRef<Place>>,
-    scale: f64,
-    virtual_time: bool,
-    clock_start: Instant,
-    offset: f64,
-    now: f64,
+    clock: Clock,
     stop: StopConditions,
     stopping: Option<StopReason>,
     finished: bool,
-    timer: Option<(JoinHandle<()>, u64)>,
-    generation: u64,
     continue_pending: bool,
-    bus: broadcast::Sender<Event>,
-    seq: u64,
-    journal: Option<Journal>,
+    sink: EventSink,
     errors: Vec<String>,
     done: watch::Sender<Option<Arc<Summary>>>,
     progress: Arc<Progress>,
@@ -83,8 +75,7 @@ pub struct Supervisor {
     me: Option<ActorRef<Supervisor>>,
     agent_mode: AgentMode,
     agent_actors: FxHashMap<AgentId, ActorRef<Agent>>,
-    snapshot: Option<(u64, Arc<Marking>)>,
-    snapshot_pool: Vec<Arc<Marking>>,
+    snapshots: Snapshots,
     reports_tx: mpsc::UnboundedSender<ActionDone>,
     reports_rx: Option<mpsc::UnboundedReceiver<ActionDone>>,
     robots: Vec<Arc<str>>,
@@ -95,7 +86,7 @@ impl std::fmt::Debug for Supervisor {
         f.debug_struct("Supervisor")
             .field("net", &self.eng.net.name())
             .field("firings", &self.eng.firings)
-            .field("now", &self.now)
+            .field("now", &self.clock.now())
             .finish()
     }
 }
@@ -121,26 +112,17 @@ impl Supervisor {
     pub(crate) fn start(args: SupervisorArgs) -> ActorRef<Supervisor> {
         let (cancel, cancel_token) = CancelSource::new();
         let (reports_tx, reports_rx) = mpsc::unbounded_channel();
-        let virtual_time = args.time_scale <= 0.0;
         let sup = Supervisor {
             eng: args.eng,
             buf: Firing::default(),
             setups: args.setups,
             places: Vec::new(),
-            scale: if virtual_time { 1.0 } else { args.time_scale },
-            virtual_time,
-            clock_start: Instant::now(),
-            offset: 0.0,
-            now: 0.0,
+            clock: Clock::new(args.time_scale),
             stop: args.stop,
             stopping: None,
             finished: false,
-            timer: None,
-            generation: 0,
             continue_pending: false,
-            bus: args.bus,
-            seq: 0,
-            journal: args.journal,
+            sink: EventSink::new(args.bus, args.journal),
             errors: Vec::new(),
             done: args.done,
             progress: args.progress,
@@ -150,8 +132,7 @@ impl Supervisor {
             me: None,
             agent_mode: args.agent_mode,
             agent_actors: FxHashMap::default(),
-            snapshot: None,
-            snapshot_pool: Vec::new(),
+            snapshots: Snapshots::default(),
             reports_tx,
             reports_rx: Some(reports_rx),
             robots: args.robots,
@@ -163,70 +144,16 @@ impl Supervisor {
         self.me.as_ref().expect("set in on_start")
     }
 
-    fn clock(&self) -> f64 {
-        self.offset + self.clock_start.elapsed().as_secs_f64() / self.scale
-    }
-
-    fn advance_clock(&mut self) {
-        let c = self.clock();
-        if c > self.now {
-            self.now = c;
-        }
-    }
-
-    fn jump_to(&mut self, t: f64) {
-        self.now = t;
-        self.offset = t - self.clock_start.elapsed().as_secs_f64() / self.scale;
+    fn now(&self) -> f64 {
+        self.clock.now()
     }
 
     fn observed(&self) -> bool {
-        self.journal.is_some() || self.bus.receiver_count() > 0
+        self.sink.observed()
     }
 
     fn emit(&mut self, kind: EventKind) {
-        let e = Event {
-            seq: self.seq,
-            time: self.now,
-            kind,
-        };
-        self.seq += 1;
-        if let Some(j) = &mut self.journal {
-            j.write(&e);
-        }
-        let _ = self.bus.send(e);
-    }
-
-    /// The marking for an action's context: one snapshot per firing count, shared by the
-    /// actions started in between. Retired snapshots go to a small pool and are overwritten
-    /// once no action holds them any more: a large marking is copied, not allocated, at
-    /// every firing (allocating it cost half the firing rate on a 1000-place ring).
-    fn snapshot(&mut self) -> Arc<Marking> {
-        if let Some((f, m)) = &self.snapshot
-            && *f == self.eng.firings
-        {
-            return Arc::clone(m);
-        }
-        if let Some((_, old)) = self.snapshot.take()
-            && self.snapshot_pool.len() < SNAPSHOT_POOL
-        {
-            self.snapshot_pool.push(old);
-        }
-        let free = self
-            .snapshot_pool
-            .iter_mut()
-            .position(|a| Arc::get_mut(a).is_some());
-        let m = match free {
-            Some(i) => {
-                let mut a = self.snapshot_pool.swap_remove(i);
-                if let Some(m) = Arc::get_mut(&mut a) {
-                    m.copy_from_slice(&self.eng.m);
-                }
-                a
-            }
-            None => Arc::new(self.eng.m.clone()),
-        };
-        self.snapshot = Some((self.eng.firings, Arc::clone(&m)));
-        m
+        self.sink.emit(self.clock.now(), kind);
     }
 
     fn ap(&self, p: PlaceId) -> usize {
@@ -312,7 +239,7 @@ impl Supervisor {
             agent: id,
             robot: robot.or_else(|| self.setups[a].robot.clone()),
             place,
-            marking: self.snapshot(),
+            marking: self.snapshots.get(self.eng.firings, &self.eng.m),
             attempt,
             cancel: self.cancel_token.clone(),
             net: Arc::clone(&self.eng.net),
@@ -325,9 +252,7 @@ impl Supervisor {
                         ctx,
                         ticket,
                         action: Arc::clone(&setup.action),
-                        timeout: setup
-                            .timeout
-                            .map(|t| Duration::from_secs_f64(t * self.scale)),
+                        timeout: setup.timeout.map(|t| self.clock.to_tokio(t)),
                     })
                     .try_send();
             }
@@ -347,13 +272,13 @@ impl Supervisor {
 
     fn fire_one(&mut self, t: TransitionId) {
         let mut buf = std::mem::take(&mut self.buf);
-        self.eng.fire(t, self.now, &mut buf);
+        self.eng.fire(t, self.now(), &mut buf);
         self.progress
             .firings
             .store(self.eng.firings, Ordering::Relaxed);
         self.progress
             .time
-            .store(self.now.to_bits(), Ordering::Relaxed);
+            .store(self.now().to_bits(), Ordering::Relaxed);
         let observed = self.observed();
         if observed {
             self.emit(EventKind::Fired {
@@ -415,38 +340,29 @@ impl Supervisor {
         }
     }
 
-    fn cancel_timer(&mut self) {
-        if let Some((h, _)) = self.timer.take() {
-            h.abort();
-        }
-    }
-
     /// After every change: nothing more can happen (stop), the fast path (virtual time, no
     /// action running), or a timer for the next net-timed firing or the time limit.
     fn schedule(&mut self) {
         if self.stopping.is_some() {
             return;
         }
-        if self.virtual_time && self.eng.running == 0 {
-            self.cancel_timer();
+        if self.clock.is_virtual() && self.eng.running == 0 {
+            self.clock.cancel();
             self.kick();
             return;
         }
-        let total = self.eng.race.total();
+        let total = self.eng.race_total();
         if total <= 0.0 && self.eng.running == 0 {
             self.dead();
             return;
         }
-        if let Some((_, version)) = &self.timer
-            && *version == self.eng.race_version
-        {
+        if self.clock.armed_for(self.eng.race_version()) {
             return; // the race did not change: the pending sample stays valid (memoryless)
         }
-        self.cancel_timer();
-        self.generation += 1;
+        self.clock.cancel();
         let (mut at, mut limit) = (f64::INFINITY, false);
-        if let Some((dt, _)) = self.eng.sample_race() {
-            at = self.now + dt;
+        if let Some(dt) = self.eng.sample_delay() {
+            at = self.now() + dt;
         }
         if let Some(u) = self.stop.time_limit
             && u < at
@@ -454,20 +370,17 @@ impl Supervisor {
             (at, limit) = (u, true);
         }
         if at.is_finite() {
-            let wait = ((at - self.clock()) * self.scale).max(0.0);
             let me = self.me().clone();
-            let generation = self.generation;
-            let h = tokio::spawn(async move {
-                tokio::time::sleep(Duration::from_secs_f64(wait)).await;
-                let _ = me
-                    .tell(Timer {
-                        generation,
-                        at,
-                        limit,
-                    })
-                    .try_send();
-            });
-            self.timer = Some((h, self.eng.race_version));
+            self.clock
+                .arm(at, self.eng.race_version(), move |generation| {
+                    let _ = me
+                        .tell(Timer {
+                            generation,
+                            at,
+                            limit,
+                        })
+                        .try_send();
+                });
         }
     }
 
@@ -498,15 +411,15 @@ impl Supervisor {
                 self.dead();
                 return;
             };
-            let at = self.now + dt;
+            let at = self.now() + dt;
             if let Some(u) = self.stop.time_limit
                 && at > u
             {
-                self.jump_to(u);
+                self.clock.jump_to(u);
                 self.begin_stop(StopReason::TimeLimit);
                 return;
             }
-            self.jump_to(at);
+            self.clock.jump_to(at);
             self.fire_one(t);
             self.settle();
         }
@@ -518,7 +431,7 @@ impl Supervisor {
             return;
         }
         self.stopping = Some(reason);
-        self.cancel_timer();
+        self.clock.cancel();
         self.cancel.cancel();
         if self.eng.running == 0 {
             self.finish();
@@ -541,12 +454,10 @@ impl Supervisor {
         self.emit(EventKind::Stopped {
             reason: reason.clone(),
         });
-        if let Some(j) = &mut self.journal
-            && let Some(err) = j.flush()
-        {
+        if let Some(err) = self.sink.flush() {
             self.errors.push(format!("journal: {err}"));
         }
-        let summary = Summary::new(&self.eng, reason, self.now, self.errors.clone());
+        let summary = Summary::new(&self.eng, reason, self.now(), self.errors.clone());
         let _ = self.done.send(Some(Arc::new(summary)));
         for (_, a) in self.agent_actors.drain() {
             a.kill();
@@ -556,7 +467,9 @@ impl Supervisor {
         }
     }
 
-    fn failure(&mut self, id: AgentId, place: PlaceId, attempt: u32, reason: String) {
+    /// What the place's failure policy says after an agent's action failed (the error is
+    /// already recorded).
+    fn failure(&mut self, id: AgentId, place: PlaceId, attempt: u32) {
         let a = self.ap(place);
         match self.setups[a].on_failure {
             FailurePolicy::Stop => self.begin_stop(StopReason::Failure),
@@ -573,7 +486,6 @@ impl Supervisor {
             }
             FailurePolicy::Fire(t) => self.eng.ready(id, Ready::Fire(t)),
         }
-        let _ = reason;
     }
 }
 
@@ -583,9 +495,9 @@ impl Actor for Supervisor {
 
     async fn on_start(mut sup: Supervisor, me: ActorRef<Self>) -> Result<Self, Self::Error> {
         sup.me = Some(me.clone());
-        sup.clock_start = Instant::now();
+        sup.clock.restart();
         for s in &sup.setups {
-            let timeout = s.timeout.map(|t| Duration::from_secs_f64(t * sup.scale));
+            let timeout = s.timeout.map(|t| sup.clock.to_tokio(t));
             let place = Place::spawn_with_mailbox(
                 Place {
                     action: Arc::clone(&s.action),
@@ -606,12 +518,8 @@ impl Actor for Supervisor {
         }
         // The builder checked that there is one robot per initial agent.
         let robots = std::mem::take(&mut sup.robots);
-        sup.eng.has_robots = !robots.is_empty();
-        for (&(id, _), robot) in initial.iter().zip(robots) {
-            if let Some(rec) = sup.eng.agents.get_mut(&id) {
-                rec.robot = Some(robot);
-            }
-        }
+        sup.eng
+            .bind_robots(initial.iter().map(|&(id, _)| id), robots);
         let observed = sup.observed();
         sup.spawn_agent_actors(&initial);
         for &(id, p) in &initial {
@@ -645,7 +553,7 @@ impl Actor for Supervisor {
             self.stopping.get_or_insert(StopReason::Requested);
             self.finish();
         }
-        self.cancel_timer();
+        self.clock.cancel();
         Ok(())
     }
 

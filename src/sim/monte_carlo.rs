@@ -9,6 +9,7 @@
 //! the blocks are merged in index order, so the result does not depend on the number of
 //! threads — bit for bit.
 
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::{SimError, Simulator};
@@ -162,6 +163,9 @@ impl<'n> MonteCarlo<'n> {
         }
         .min(blocks as usize)
         .max(1);
+        // The runs share one copy of the net and the policy.
+        let net = Arc::new(self.net.clone());
+        let policy = self.policy.map(|p| Arc::new(p.clone()));
         let next = AtomicU64::new(0);
         let mut done: Vec<(u64, Result<Acc, SimError>)> = std::thread::scope(|s| {
             let workers: Vec<_> = (0..threads)
@@ -173,7 +177,12 @@ impl<'n> MonteCarlo<'n> {
                             if b >= blocks {
                                 return out;
                             }
-                            let r = self.block(b * BLOCK, ((b + 1) * BLOCK).min(self.runs));
+                            let r = self.block(
+                                &net,
+                                policy.as_ref(),
+                                b * BLOCK,
+                                ((b + 1) * BLOCK).min(self.runs),
+                            );
                             let failed = r.is_err();
                             out.push((b, r));
                             if failed {
@@ -197,16 +206,22 @@ impl<'n> MonteCarlo<'n> {
     }
 
     /// Runs `from..to` in order.
-    fn block(&self, from: u64, to: u64) -> Result<Acc, SimError> {
+    fn block(
+        &self,
+        net: &Arc<Net>,
+        policy: Option<&Arc<Policy>>,
+        from: u64,
+        to: u64,
+    ) -> Result<Acc, SimError> {
         let places = self.net.place_count();
         let mut acc = Acc::new(places + self.net.transition_count());
         let mut x = Vec::with_capacity(places + self.net.transition_count());
         for i in from..to {
-            let mut sim = Simulator::new(self.net, self.seed)
+            let mut sim = Simulator::new(Arc::clone(net), self.seed)
                 .with_stream(i)
                 .with_max_immediate(self.max_immediate);
-            if let Some(p) = self.policy {
-                sim = sim.with_policy(p);
+            if let Some(p) = policy {
+                sim = sim.with_policy(Arc::clone(p));
             }
             let end = match self.horizon {
                 Horizon::Until(t) => sim.run_until(t)?,

@@ -175,7 +175,7 @@ fn session_error(e: SessionError) -> Response {
     let status = match e {
         SessionError::UnknownTransition(_) => StatusCode::NOT_FOUND,
         SessionError::NotFirable(_) => StatusCode::CONFLICT,
-        SessionError::Sim(_) | SessionError::Net(_) => StatusCode::UNPROCESSABLE_ENTITY,
+        SessionError::Sim(_) => StatusCode::UNPROCESSABLE_ENTITY,
     };
     error(status, e.to_string())
 }

@@ -1,22 +1,20 @@
 //! The viewer's token game: one seeded [`Simulator`] run that the page steps, fires by hand,
 //! and resets.
 //!
-//! A [`Simulator`] borrows its net, so the session does not keep one alive between requests:
-//! it keeps the *segment* it is in — the net whose initial marking is where the segment
-//! started, its seed, and how many steps were taken in it — and replays those steps when the
-//! next request comes (each step is `O(log n)`; replaying thousands takes microseconds). Steps
-//! after a reset are therefore exactly `plan-runner simulate --seed S --steps N`.
+//! The session keeps its [`Simulator`] alive between requests (it shares the net), so a step
+//! request costs its own steps only, however long the run already is. Steps after a reset
+//! are exactly `plan-runner simulate --seed S --steps N`.
 //!
-//! Firing a transition by hand leaves the seeded run: a new segment starts from the marking
-//! after that firing, with a seed derived from the session seed and the number of hand
-//! firings so far — still reproducible from the same sequence of requests.
+//! Firing a transition by hand leaves the seeded run: a new *segment* — a simulator started
+//! from the marking after that firing — draws from a seed derived from the session seed and
+//! the number of hand firings so far, still reproducible from the same sequence of requests.
 
 use std::collections::VecDeque;
 use std::sync::Arc;
 
 use serde::Serialize;
 
-use crate::net::{Net, TransitionId};
+use crate::net::{Marking, Net, TransitionId};
 use crate::policy::Policy;
 use crate::sim::{SimError, Simulator};
 
@@ -52,9 +50,6 @@ pub(crate) enum SessionError {
     /// The token game stopped (a timeless trap).
     #[error("{0}")]
     Sim(#[from] SimError),
-    /// Rebuilding the net from the current marking failed.
-    #[error("{0}")]
-    Net(String),
 }
 
 /// The state of the viewer's run.
@@ -63,14 +58,11 @@ pub(crate) struct Session {
     net: Arc<Net>,
     policy: Option<Arc<Policy>>,
     seed: u64,
-    /// The net of the current segment (initial marking = where the segment started).
-    segment: Arc<Net>,
-    segment_seed: u64,
-    segment_steps: u64,
+    /// The run of the current segment (since the reset or the last hand firing).
+    sim: Simulator,
+    /// When the segment started (its simulator's clock starts at 0).
     segment_time: f64,
     manual: u64,
-    marking: Vec<u32>,
-    time: f64,
     firings: u64,
     trace: VecDeque<TraceEntry>,
 }
@@ -78,20 +70,29 @@ pub(crate) struct Session {
 impl Session {
     /// A run of `net` from its initial marking, drawing from `seed`.
     pub(crate) fn new(net: Arc<Net>, policy: Option<Arc<Policy>>, seed: u64) -> Session {
-        let marking = net.initial_marking().into_vec();
+        let marking = net.initial_marking();
         Session {
-            segment: net.clone(),
+            sim: Session::segment(&net, &policy, marking, seed),
             net,
             policy,
             seed,
-            segment_seed: seed,
-            segment_steps: 0,
             segment_time: 0.0,
             manual: 0,
-            marking,
-            time: 0.0,
             firings: 0,
             trace: VecDeque::new(),
+        }
+    }
+
+    fn segment(
+        net: &Arc<Net>,
+        policy: &Option<Arc<Policy>>,
+        marking: Marking,
+        seed: u64,
+    ) -> Simulator {
+        let sim = Simulator::from_marking(Arc::clone(net), marking, seed);
+        match policy {
+            Some(p) => sim.with_policy(Arc::clone(p)),
+            None => sim,
         }
     }
 
@@ -113,11 +114,11 @@ impl Session {
     }
 
     pub(crate) fn marking(&self) -> &[u32] {
-        &self.marking
+        self.sim.marking()
     }
 
     pub(crate) fn time(&self) -> f64 {
-        self.time
+        self.segment_time + self.sim.time()
     }
 
     pub(crate) fn firings(&self) -> u64 {
@@ -133,22 +134,11 @@ impl Session {
     /// Fires up to `n` transitions drawn by the token game; returns how many fired (fewer
     /// when a dead marking is reached).
     pub(crate) fn step(&mut self, n: u64) -> Result<u64, SessionError> {
-        let segment = self.segment.clone();
-        let policy = self.policy.clone();
-        let mut sim = Simulator::new(&segment, self.segment_seed);
-        if let Some(p) = &policy {
-            sim = sim.with_policy(p);
-        }
-        // Replay the steps already taken in this segment: they drew the same numbers.
-        sim.run_steps(self.segment_steps)?;
         let mut fired = 0;
         while fired < n {
-            let Some(step) = sim.step()? else { break };
+            let Some(step) = self.sim.step()? else { break };
             fired += 1;
-            self.segment_steps += 1;
             self.firings += 1;
-            self.time = self.segment_time + step.time;
-            self.marking.copy_from_slice(sim.marking());
             self.record(step.transition, step.immediate, false);
         }
         Ok(fired)
@@ -160,22 +150,18 @@ impl Session {
             .net
             .transition_by_name(name)
             .ok_or_else(|| SessionError::UnknownTransition(name.to_string()))?;
-        if !self.net.firable(&self.marking).contains(&t) {
+        if !self.net.firable(self.sim.marking()).contains(&t) {
             return Err(SessionError::NotFirable(name.to_string()));
         }
-        self.net.fire(&mut self.marking, t);
+        let mut marking = self.sim.marking().clone();
+        self.net.fire(&mut marking, t);
         self.manual += 1;
         self.firings += 1;
-        self.segment = Arc::new(
-            self.net
-                .with_initial_marking(&self.marking)
-                .map_err(|e| SessionError::Net(e.to_string()))?,
-        );
-        self.segment_seed = self
+        self.segment_time = self.time();
+        let seed = self
             .seed
             .wrapping_add(self.manual.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        self.segment_steps = 0;
-        self.segment_time = self.time;
+        self.sim = Session::segment(&self.net, &self.policy, marking, seed);
         let immediate = self.net.transition(t).is_immediate();
         self.record(t, immediate, true);
         Ok(())
@@ -187,11 +173,11 @@ impl Session {
         }
         self.trace.push_back(TraceEntry {
             step: self.firings,
-            time: self.time,
+            time: self.time(),
             transition: self.net.transition(t).name.clone(),
             immediate,
             manual,
-            marking: self.net.format_marking(&self.marking),
+            marking: self.net.format_marking(self.sim.marking()),
         });
     }
 }
@@ -223,7 +209,7 @@ mod tests {
         for n in [1, 3, 2, 10] {
             assert_eq!(s.step(n).unwrap(), n);
         }
-        let mut sim = Simulator::new(&net, 7);
+        let mut sim = Simulator::new(net.clone(), 7);
         sim.run_steps(16).unwrap();
         assert_eq!(s.marking(), sim.marking().as_slice());
         assert_eq!(s.time(), sim.time());

@@ -6,8 +6,7 @@ use std::time::Duration;
 use kameo::actor::{Actor, ActorRef, Spawn, WeakActorRef};
 use kameo::error::Infallible;
 use kameo::mailbox::{self, MailboxReceiver, Signal};
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use rand::SeedableRng;
 use rustc_hash::FxHashMap;
 use tokio::sync::{oneshot, watch};
 use tokio::time::Instant;
@@ -17,6 +16,8 @@ use super::queue::Queues;
 use super::room::{Room, Vec2};
 use super::{MapView, RobotView, SimMetrics, WorldView};
 use messages::{GetMetrics, Goto, Hold};
+
+use crate::sample::{self, Rng};
 
 pub(super) mod messages;
 
@@ -58,7 +59,7 @@ struct Robot {
     best: f32,
     progress_step: u64,
     turn: Option<oneshot::Sender<()>>,
-    rng: ChaCha8Rng,
+    rng: Rng,
     patrol_at: Option<usize>,
     streak: usize,
     cycles: u32,
@@ -168,7 +169,7 @@ impl World {
             .iter()
             .enumerate()
             .map(|(r, s)| {
-                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                let mut rng = Rng::seed_from_u64(seed);
                 rng.set_stream(r as u64 + 1);
                 Robot {
                     name: Arc::clone(&s.name),
@@ -448,23 +449,13 @@ impl World {
         let total: f64 = m.outputs.iter().map(|o| o.1).sum();
         let seconds = m.seconds.unwrap_or_else(|| {
             if total > 0.0 {
-                let u: f64 = rb.rng.random();
-                -(1.0 - u).ln() / total
+                sample::exponential(&mut rb.rng, total)
             } else {
                 0.0
             }
         });
         let pick = if total > 0.0 {
-            let mut u = rb.rng.random::<f64>() * total;
-            let mut pick = m.outputs.last().map(|o| o.0);
-            for &(t, w) in &m.outputs {
-                if u < w {
-                    pick = Some(t);
-                    break;
-                }
-                u -= w;
-            }
-            pick
+            sample::pick_weighted(&mut rb.rng, &m.outputs)
         } else {
             None
         };

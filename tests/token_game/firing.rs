@@ -93,7 +93,7 @@ proptest! {
         seed in any::<u64>(),
     ) {
         let net = build(&places, &ts);
-        let mut sim = Simulator::new(&net, seed).with_max_immediate(100);
+        let mut sim = Simulator::new(net.clone(), seed).with_max_immediate(100);
         let mut sigma = vec![0i64; net.transition_count()];
         let mut last_time = 0.0;
         for _ in 0..300 {

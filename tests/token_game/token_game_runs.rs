@@ -33,7 +33,7 @@ fn choice() -> (Net, [TransitionId; 2]) {
     (n.build().unwrap(), [a, b])
 }
 
-fn trace(sim: &mut Simulator<'_>, n: usize) -> Vec<Step> {
+fn trace(sim: &mut Simulator, n: usize) -> Vec<Step> {
     (0..n).map_while(|_| sim.step().unwrap()).collect()
 }
 
@@ -49,7 +49,7 @@ fn highest_priority_immediate_fires_first() {
     }
     let net = b.build().unwrap();
     for seed in 0..200 {
-        let mut sim = Simulator::new(&net, seed);
+        let mut sim = Simulator::new(net.clone(), seed);
         assert!(sim.is_vanishing());
         let s = sim.step().unwrap().unwrap();
         assert_eq!((s.transition, s.time, s.immediate), (high, 0.0, true));
@@ -61,7 +61,7 @@ fn highest_priority_immediate_fires_first() {
 #[test]
 fn weights_split_conflicting_immediates() {
     let (net, [a, b]) = choice();
-    let mut sim = Simulator::new(&net, 5);
+    let mut sim = Simulator::new(net.clone(), 5);
     let steps = trace(&mut sim, 40_000);
     let na = steps.iter().filter(|s| s.transition == a).count() as f64;
     let nb = steps.iter().filter(|s| s.transition == b).count() as f64;
@@ -82,7 +82,7 @@ fn policy_overrides_weights_where_a_rule_applies() {
         }],
     )
     .unwrap();
-    let mut sim = Simulator::new(&net, 5).with_policy(&policy);
+    let mut sim = Simulator::new(net.clone(), 5).with_policy(policy.clone());
     let steps = trace(&mut sim, 40_000);
     let na = steps.iter().filter(|s| s.transition == a).count() as f64;
     // P(a) = 0.9 by the policy instead of 1/4 by weight; sd ≈ 0.0021.
@@ -97,7 +97,7 @@ fn policy_overrides_weights_where_a_rule_applies() {
         }],
     )
     .unwrap();
-    let mut sim = Simulator::new(&net, 6).with_policy(&always_a);
+    let mut sim = Simulator::new(net.clone(), 6).with_policy(always_a.clone());
     assert!(trace(&mut sim, 1000).iter().all(|s| s.transition != b));
 }
 
@@ -116,7 +116,7 @@ fn zero_weights_without_a_policy_choose_uniformly() {
     n.input(q, back, 1);
     n.output(back, p, 1);
     let net = n.build().unwrap();
-    let steps = trace(&mut Simulator::new(&net, 9), 20_000);
+    let steps = trace(&mut Simulator::new(net.clone(), 9), 20_000);
     let nx = steps.iter().filter(|s| s.transition == x).count() as f64;
     assert!((nx / 10_000.0 - 0.5).abs() < 0.02, "{}", nx / 10_000.0);
 }
@@ -139,7 +139,7 @@ fn server_semantics_scale_the_rate() {
         (Servers::Infinite, 3.0),
     ] {
         let net = self_loop(servers);
-        let mut sim = Simulator::new(&net, 11);
+        let mut sim = Simulator::new(net.clone(), 11);
         assert_eq!(sim.run_until(20_000.0).unwrap(), RunEnd::Limit);
         let x = sim.statistics().throughput[0];
         // Poisson count: sd of the rate estimate = √(rate/T) ≤ 0.0123.
@@ -162,7 +162,7 @@ fn dead_marking_ends_the_run_and_holds_for_ever() {
     b.output(t2, p3, 1);
     let net = b.build().unwrap();
 
-    let mut sim = Simulator::new(&net, 3);
+    let mut sim = Simulator::new(net.clone(), 3);
     assert_eq!(sim.run_steps(10).unwrap(), RunEnd::Dead);
     assert_eq!(sim.firings(), 2);
     assert_eq!(sim.marking().as_slice(), &[0, 0, 1]);
@@ -170,7 +170,7 @@ fn dead_marking_ends_the_run_and_holds_for_ever() {
     assert_eq!(sim.step().unwrap(), None);
     assert_eq!(sim.time(), died, "the clock does not move on a dead step");
 
-    let mut sim = Simulator::new(&net, 3);
+    let mut sim = Simulator::new(net.clone(), 3);
     assert_eq!(sim.run_until(100.0).unwrap(), RunEnd::Dead);
     let s = sim.statistics();
     assert_eq!(s.time, 100.0);
@@ -196,7 +196,7 @@ fn vanishing_initial_marking_resolves_at_time_zero() {
         b.output(t, places[i + 1], 1);
     }
     let net = b.build().unwrap();
-    let mut sim = Simulator::new(&net, 0);
+    let mut sim = Simulator::new(net.clone(), 0);
     let steps = trace(&mut sim, 10);
     assert_eq!(steps.len(), 3);
     assert!(steps.iter().all(|s| s.time == 0.0 && s.immediate));
@@ -215,7 +215,7 @@ fn timeless_trap_is_reported_not_looped_for_ever() {
     b.input(q, back, 1);
     b.output(back, p, 1);
     let net = b.build().unwrap();
-    let mut sim = Simulator::new(&net, 0).with_max_immediate(1000);
+    let mut sim = Simulator::new(net.clone(), 0).with_max_immediate(1000);
     let err = sim.run_until(10.0).unwrap_err();
     assert_eq!(
         err,
@@ -232,7 +232,7 @@ fn timeless_trap_is_reported_not_looped_for_ever() {
 fn same_seed_same_trace_other_seed_other_trace() {
     let net = cyc3(Servers::Single);
     let run = |seed| {
-        let mut sim = Simulator::new(&net, seed);
+        let mut sim = Simulator::new(net.clone(), seed);
         let steps = trace(&mut sim, 500);
         (steps, sim.marking().clone(), sim.statistics())
     };
@@ -241,7 +241,7 @@ fn same_seed_same_trace_other_seed_other_trace() {
     assert_eq!(a.0.len(), 500);
     assert_ne!(a.0, c.0);
     // Pin the first firing time of seed 42, so a change of RNG or sampling is noticed.
-    let mut sim = Simulator::new(&net, 42);
+    let mut sim = Simulator::new(net.clone(), 42);
     let first = sim.step().unwrap().unwrap();
     assert_eq!(first.transition, net.transition_by_name("T1").unwrap());
     assert!(first.time > 0.0 && first.time.is_finite());
@@ -250,9 +250,9 @@ fn same_seed_same_trace_other_seed_other_trace() {
 #[test]
 fn streams_give_independent_runs_of_one_seed() {
     let net = cyc3(Servers::Single);
-    let s0 = trace(&mut Simulator::new(&net, 1), 50);
-    let s0_again = trace(&mut Simulator::new(&net, 1).with_stream(0), 50);
-    let s1 = trace(&mut Simulator::new(&net, 1).with_stream(1), 50);
+    let s0 = trace(&mut Simulator::new(net.clone(), 1), 50);
+    let s0_again = trace(&mut Simulator::new(net.clone(), 1).with_stream(0), 50);
+    let s1 = trace(&mut Simulator::new(net.clone(), 1).with_stream(1), 50);
     assert_eq!(s0, s0_again);
     assert_ne!(s0, s1);
 }

@@ -80,7 +80,7 @@ async fn five_seeded_steps_give_the_marking_of_plan_runner_simulate() {
 
     // The library's token game with the same seed.
     let net = state.net();
-    let mut sim = Simulator::new(net, seed);
+    let mut sim = Simulator::new(net.clone(), seed);
     sim.run_steps(5).unwrap();
     let tokens: Vec<u32> = serde_json::from_value(last["tokens"].clone()).unwrap();
     assert_eq!(tokens, sim.marking().as_slice());

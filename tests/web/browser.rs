@@ -191,7 +191,7 @@ async fn five_steps_in_the_browser_give_the_marking_of_plan_runner_simulate() {
     let shown = marking_of(&net, &page_marking(&b).await);
 
     // The library's token game with that seed.
-    let mut sim = Simulator::new(&net, seed);
+    let mut sim = Simulator::new(net.clone(), seed);
     sim.run_steps(5).unwrap();
     assert_eq!(shown, sim.marking().as_slice());
     // `plan-runner simulate` with that seed.
@@ -460,7 +460,7 @@ async fn a_journal_plays_back_on_the_time_slider() {
         .wait()
         .await;
     let text = std::fs::read_to_string(&path).unwrap();
-    let frames = gspn::web::replay::read_journal(&text, &cyc3()).unwrap();
+    let frames = gspn::runtime::journal::read_journal(&text, &cyc3()).unwrap();
     let (addr, server) = start_server(WebState::for_replay(cyc3(), frames.clone())).await;
     let b = Browser::start(1200, 800).await;
     open(&b, addr).await;
@@ -521,7 +521,7 @@ async fn a_large_net_is_drawn_on_a_canvas_with_the_same_hooks() {
     n.send_keys("25").await.unwrap();
     b.click("#step-n").await;
     wait_firings(&b, 25).await;
-    let mut sim = Simulator::new(&net, 3);
+    let mut sim = Simulator::new(net.clone(), 3);
     sim.run_steps(25).unwrap();
     let shown = marking_of(&net, &page_marking(&b).await);
     assert_eq!(shown, sim.marking().as_slice());

@@ -101,7 +101,7 @@ async fn a_journal_plays_back_as_the_markings_of_the_run() {
         .unwrap();
     let summary = handle.wait().await;
     let text = std::fs::read_to_string(&path).unwrap();
-    let frames = gspn::web::replay::read_journal(&text, &cyc3()).unwrap();
+    let frames = gspn::runtime::journal::read_journal(&text, &cyc3()).unwrap();
     assert_eq!(frames.len(), 13);
     assert_eq!(frames[0].tokens, vec![2, 0, 0]);
     assert_eq!(frames[12].tokens, summary.marking.as_slice());
@@ -120,7 +120,7 @@ async fn a_journal_plays_back_as_the_markings_of_the_run() {
     // Another net's journal is refused, naming both nets.
     let mut b = NetBuilder::new("other");
     b.place("x", 1);
-    let err = gspn::web::replay::read_journal(&text, &b.build().unwrap()).unwrap_err();
+    let err = gspn::runtime::journal::read_journal(&text, &b.build().unwrap()).unwrap_err();
     assert!(err.to_string().contains("`cyc3`"), "{err}");
 
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();

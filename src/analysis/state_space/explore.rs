@@ -1,4 +1,5 @@
-//! Breadth-first search of the reachability graph, tangible and vanishing markings alike.
+//! Breadth-first search of the reachability graph, tangible and vanishing markings alike:
+//! the exhaustive chooser of [`crate::firing`] (every move of [`firing::moves`] is taken).
 //!
 //! Markings get ids in discovery order, so processing ids in order *is* the breadth-first
 //! queue, and the parent recorded at discovery gives a shortest firing sequence. Successors
@@ -14,7 +15,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::packing::{Layout, MarkingStore};
 use super::table::MoveTable;
 use super::{AnalysisError, Monitor, Move};
-use crate::net::{Net, Timing, TransitionId};
+use crate::firing::{self, Rules};
+use crate::net::{Net, TransitionId};
 
 /// States per block handed between threads.
 const BLOCK: usize = 1024;
@@ -35,36 +37,6 @@ pub(crate) struct Raw {
     pub(crate) parent: Vec<(u32, u32)>,
 }
 
-/// Which transitions may fire, precomputed from the net.
-#[derive(Debug)]
-struct Rules {
-    /// Immediate transitions by decreasing priority: (transition, weight, priority).
-    immediates: Vec<(TransitionId, f64, u32)>,
-    exponentials: Vec<TransitionId>,
-    /// Decision models with WAIT: vanishing markings also list their enabled exponential
-    /// transitions (what a WAIT copy of the marking would race).
-    wait: bool,
-}
-
-impl Rules {
-    fn new(net: &Net, wait: bool) -> Rules {
-        let mut immediates = Vec::new();
-        let mut exponentials = Vec::new();
-        for t in net.transition_ids() {
-            match net.transition(t).timing {
-                Timing::Immediate { weight, priority } => immediates.push((t, weight, priority)),
-                Timing::Exponential { .. } => exponentials.push(t),
-            }
-        }
-        immediates.sort_by_key(|&(t, _, p)| (std::cmp::Reverse(p), t));
-        Rules {
-            immediates,
-            exponentials,
-            wait,
-        }
-    }
-}
-
 /// Successors of consecutive states `first..first + count.len()`.
 #[derive(Debug, Default)]
 struct Block {
@@ -80,7 +52,14 @@ struct Block {
 }
 
 /// Computes the successors of the states whose packed words are `frontier`.
-fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: usize) -> Block {
+fn generate(
+    net: &Net,
+    rules: &Rules,
+    layout: &Layout,
+    frontier: &[u64],
+    first: usize,
+    wait: bool,
+) -> Block {
     let w = layout.words();
     let n = frontier.len() / w;
     let mut b = Block {
@@ -98,10 +77,10 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
     for i in 0..n {
         let base = &frontier[i * w..(i + 1) * w];
         layout.unpack(base, &mut m);
-        let tangible = firable(net, rules, &m, &mut fire);
-        if rules.wait && !tangible {
+        let tangible = firing::moves(net, rules, &m, &mut fire);
+        if wait && !tangible {
             // Negative: an exponential rate out of a vanishing marking (see `Search::insert`).
-            for &t in &rules.exponentials {
+            for &t in rules.exponentials() {
                 let r = net.exp_rate(&m, t);
                 if r > 0.0 {
                     fire.push((t, -r));
@@ -131,37 +110,6 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
         b.tangible.push(tangible);
     }
     b
-}
-
-/// Fills `out` with what may fire in `m` and its rate (tangible) or probability (vanishing);
-/// returns whether `m` is tangible.
-fn firable(net: &Net, rules: &Rules, m: &[u32], out: &mut Vec<(TransitionId, f64)>) -> bool {
-    out.clear();
-    let mut level = None;
-    for &(t, w, pr) in &rules.immediates {
-        if level.is_some_and(|l| pr < l) {
-            break;
-        }
-        if net.is_enabled(m, t) {
-            level = Some(pr);
-            out.push((t, w));
-        }
-    }
-    if level.is_some() {
-        let sum: f64 = out.iter().map(|&(_, w)| w).sum();
-        let k = out.len() as f64;
-        for (_, w) in out.iter_mut() {
-            *w = if sum > 0.0 { *w / sum } else { 1.0 / k };
-        }
-        return false;
-    }
-    for &t in &rules.exponentials {
-        let r = net.exp_rate(m, t);
-        if r > 0.0 {
-            out.push((t, r));
-        }
-    }
-    true
 }
 
 /// The search's mutable state, owned by the inserting thread.
@@ -249,7 +197,7 @@ pub(crate) fn explore_with(
     monitor: &Monitor,
     wait: bool,
 ) -> Result<Raw, AnalysisError> {
-    let rules = Rules::new(net, wait);
+    let rules = Rules::new(net);
     let mut store = MarkingStore::new(layout, net.place_count());
     let mut m0 = net.initial_marking().into_vec();
     let mut key = vec![0u64; store.layout.words()];
@@ -291,7 +239,7 @@ pub(crate) fn explore_with(
         let overflow = if threads <= 1 || hi - cursor < PAR_MIN {
             let mut over = None;
             for (k, chunk) in frontier.chunks(BLOCK * w).enumerate() {
-                let b = generate(net, &rules, &layout, chunk, cursor + k * BLOCK);
+                let b = generate(net, &rules, &layout, chunk, cursor + k * BLOCK, wait);
                 over = s.insert(&b)?;
                 if over.is_some() {
                     break;
@@ -299,7 +247,9 @@ pub(crate) fn explore_with(
             }
             over
         } else {
-            expand_parallel(net, &rules, &layout, &frontier, cursor, threads, &mut s)?
+            expand_parallel(
+                net, &rules, &layout, &frontier, cursor, threads, &mut s, wait,
+            )?
         };
         match overflow {
             Some((state, p, value)) => {
@@ -326,6 +276,7 @@ pub(crate) fn explore_with(
 
 /// Expands a large frontier: `threads - 1` workers compute blocks round-robin, the calling
 /// thread inserts them in order.
+#[allow(clippy::too_many_arguments)]
 fn expand_parallel(
     net: &Net,
     rules: &Rules,
@@ -334,6 +285,7 @@ fn expand_parallel(
     first: usize,
     threads: usize,
     s: &mut Search<'_>,
+    wait: bool,
 ) -> Result<Option<(usize, usize, u32)>, AnalysisError> {
     let w = layout.words();
     let chunks: Vec<&[u64]> = frontier.chunks(BLOCK * w).collect();
@@ -346,7 +298,7 @@ fn expand_parallel(
             let chunks = &chunks;
             scope.spawn(move || {
                 for (j, chunk) in chunks.iter().enumerate().skip(k).step_by(workers) {
-                    let b = generate(net, rules, layout, chunk, first + j * BLOCK);
+                    let b = generate(net, rules, layout, chunk, first + j * BLOCK, wait);
                     let stop = b.overflow.is_some();
                     if tx.send(b).is_err() || stop {
                         return;

@@ -8,7 +8,6 @@ mod check;
 mod common;
 mod convert;
 mod import_thesis;
-#[cfg(feature = "web")]
 mod replay;
 #[cfg(feature = "ros2")]
 mod ros2;
@@ -50,7 +49,6 @@ enum Command {
     #[cfg(feature = "web")]
     Serve(serve::Args),
     /// Play a run's journal back: print its firings, or show them with --web (feature `web`).
-    #[cfg(feature = "web")]
     Replay(replay::Args),
     /// Serve a plan's `ros2` places as one robot: ExecPlace action servers at /<ID>/<server>
     /// with net-timed local actions, a heartbeat, the firings (feature `ros2`).
@@ -71,7 +69,6 @@ fn main() -> ExitCode {
         Command::ImportThesis(a) => import_thesis::main(a),
         #[cfg(feature = "web")]
         Command::Serve(a) => serve::main(a),
-        #[cfg(feature = "web")]
         Command::Replay(a) => replay::main(a),
         #[cfg(feature = "ros2")]
         Command::Robot(a) => ros2::robot(a),

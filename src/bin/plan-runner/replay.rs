@@ -1,8 +1,8 @@
 //! `plan-runner replay JOURNAL --net FILE [--web [ADDR]]`: play a run's journal back.
 //!
 //! The journal names its net by hash; `--net` gives the net (or plan) file it was run from.
-//! Without `--web` the firings are printed (time, transition, marking); with it the viewer
-//! shows the run on the net with a time slider.
+//! Without `--web` the firings are printed (time, transition, marking) — no feature needed;
+//! with it (feature `web`) the viewer shows the run on the net with a time slider.
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -10,8 +10,7 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use gspn::plan::open;
-use gspn::web::replay::read_journal;
-use gspn::web::{WebState, serve};
+use gspn::runtime::journal::{Frame, read_journal};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -38,17 +37,41 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         .with_context(|| format!("cannot read {}", args.journal.display()))?;
     let frames = read_journal(&text, &net)
         .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
-    let Some(addr) = args.web else {
-        for f in &frames {
-            println!(
-                "{:>14.6}  {:<24}  {}",
-                f.time,
-                f.transition.as_deref().unwrap_or("(initial)"),
-                net.format_marking(&f.tokens)
-            );
+    match args.web {
+        Some(addr) => viewer(addr, &args.journal, net, frames),
+        None => {
+            for f in &frames {
+                println!(
+                    "{:>14.6}  {:<24}  {}",
+                    f.time,
+                    f.transition.as_deref().unwrap_or("(initial)"),
+                    net.format_marking(&f.tokens)
+                );
+            }
+            Ok(ExitCode::SUCCESS)
         }
-        return Ok(ExitCode::SUCCESS);
-    };
+    }
+}
+
+/// Without the viewer compiled in, `--web` is refused (exit code 2).
+#[cfg(not(feature = "web"))]
+fn viewer(
+    _: SocketAddr,
+    _: &std::path::Path,
+    _: gspn::net::Net,
+    _: Vec<Frame>,
+) -> anyhow::Result<ExitCode> {
+    Err(BadInput("--web needs plan-runner built with the `web` feature".into()).into())
+}
+
+#[cfg(feature = "web")]
+fn viewer(
+    addr: SocketAddr,
+    journal: &std::path::Path,
+    net: gspn::net::Net,
+    frames: Vec<Frame>,
+) -> anyhow::Result<ExitCode> {
+    use gspn::web::{WebState, serve};
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -59,7 +82,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             .with_context(|| format!("cannot listen on {addr}"))?;
         println!(
             "replay of {} ({} firings) at http://{}/",
-            args.journal.display(),
+            journal.display(),
             frames.len() - 1,
             listener.local_addr()?
         );

@@ -118,9 +118,9 @@ fn trace(
     out: &mut impl Write,
 ) -> anyhow::Result<()> {
     let net = &input.net;
-    let mut sim = Simulator::new(net, seed);
+    let mut sim = Simulator::new(net.clone(), seed);
     if let Some(p) = &input.policy {
-        sim = sim.with_policy(p);
+        sim = sim.with_policy(p.clone());
     }
     let (until, max_steps) = match horizon {
         Horizon::Until(t) => (t, u64::MAX),

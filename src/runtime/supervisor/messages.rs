@@ -4,20 +4,12 @@
 use kameo::message::{Context, Message};
 
 use super::super::StopReason;
-use super::super::action::Outcome;
-use super::super::agent::{AgentId, AgentState};
+use super::super::action::{ActionDone, Outcome};
+use super::super::agent::AgentState;
 use super::super::engine::Ready;
 use super::super::event::EventKind;
 use super::super::handle::AgentInfo;
 use super::Supervisor;
-
-/// An action ended (sent by the place's task).
-#[derive(Debug)]
-pub(crate) struct ActionDone {
-    pub(crate) agent: AgentId,
-    pub(crate) ticket: u64,
-    pub(crate) outcome: Outcome,
-}
 
 /// The next net-timed firing (or the time limit) is due.
 #[derive(Debug)]
@@ -78,8 +70,8 @@ impl Supervisor {
             return false;
         }
         let (place, attempt) = (rec.place, rec.attempt);
-        self.eng.running -= 1;
-        self.advance_clock();
+        self.eng.action_ended();
+        self.clock.advance();
         self.set_state(msg.agent, AgentState::Done);
         if self.observed() {
             self.emit(EventKind::ActionEnded {
@@ -95,9 +87,9 @@ impl Supervisor {
             return false;
         }
         if let Some(u) = self.stop.time_limit
-            && self.now >= u
+            && self.now() >= u
         {
-            self.jump_to(u);
+            self.clock.jump_to(u);
             self.begin_stop(StopReason::TimeLimit);
             return false;
         }
@@ -120,16 +112,16 @@ impl Supervisor {
                         msg.agent.0
                     );
                     self.errors.push(m.clone());
-                    self.emit(EventKind::Error { message: m.clone() });
-                    self.failure(msg.agent, place, attempt, m);
+                    self.emit(EventKind::Error { message: m });
+                    self.failure(msg.agent, place, attempt);
                 }
             }
             Outcome::Decide => self.eng.ready(msg.agent, Ready::Decide),
             Outcome::Failed(r) => {
                 let m = format!("agent {} in `{}` failed: {r}", msg.agent.0, pname());
                 self.errors.push(m.clone());
-                self.emit(EventKind::Error { message: m.clone() });
-                self.failure(msg.agent, place, attempt, m);
+                self.emit(EventKind::Error { message: m });
+                self.failure(msg.agent, place, attempt);
             }
             Outcome::Cancelled => {
                 let m = format!(
@@ -137,8 +129,8 @@ impl Supervisor {
                     msg.agent.0,
                     pname()
                 );
-                self.errors.push(m.clone());
-                self.failure(msg.agent, place, attempt, m);
+                self.errors.push(m);
+                self.failure(msg.agent, place, attempt);
             }
         }
         true
@@ -149,15 +141,13 @@ impl Message<Timer> for Supervisor {
     type Reply = ();
 
     async fn handle(&mut self, msg: Timer, ctx: &mut Context<Self, ()>) {
-        if msg.generation != self.generation || self.stopping.is_some() {
+        if self.stopping.is_some() || !self.clock.fired(msg.generation) {
             return;
         }
-        self.timer = None;
-        self.jump_to(msg.at.max(self.now));
+        self.clock.jump_to(msg.at.max(self.now()));
         if msg.limit {
             self.begin_stop(StopReason::TimeLimit);
-        } else if self.eng.race.total() > 0.0 {
-            let t = self.eng.pick_race();
+        } else if let Some(t) = self.eng.pick_race() {
             self.fire_one(t);
             self.settle();
             self.schedule();
@@ -174,7 +164,7 @@ impl Message<Continue> for Supervisor {
     async fn handle(&mut self, _: Continue, ctx: &mut Context<Self, ()>) {
         self.continue_pending = false;
         if self.stopping.is_none() {
-            if self.virtual_time && self.eng.running == 0 {
+            if self.clock.is_virtual() && self.eng.running == 0 {
                 self.fast_path();
             } else {
                 self.schedule();
@@ -188,7 +178,7 @@ impl Message<StopRequest> for Supervisor {
     type Reply = ();
 
     async fn handle(&mut self, msg: StopRequest, ctx: &mut Context<Self, ()>) {
-        self.advance_clock();
+        self.clock.advance();
         self.begin_stop(msg.0);
         finish_turn!(self, ctx)
     }
