@@ -152,7 +152,7 @@ fn a_long_token_game_under_the_policy_earns_the_optimal_rate() {
     // Batch means: 40 batches of 500 time units, each the reward earned per unit of time.
     let (batches, len) = (40usize, 500.0);
     let mut earned = vec![0.0f64; batches];
-    let mut sim = Simulator::new(&net, 2024).with_policy(&policy);
+    let mut sim = Simulator::new(net.clone(), 2024).with_policy(policy.clone());
     let rate = |m: &[u32]| -> f64 {
         spec.places
             .iter()
