@@ -5,8 +5,10 @@
 //!           publishers, one ExecPlace client per (robot, server); waits (≤ startup) for
 //!           every robot's heartbeat and server and for the wanted firing subscribers
 //! attach    registers the `ros2` action (RemotePlaces) on the runtime builder
+//!           then says the run is `running` on /gspn/run
 //! publish   a task that publishes every firing and the marking from the run's events
-//! finish    waits for the publisher, lingers so reliable samples reach the subscribers
+//! finish    waits for the publisher, says the run is `over` (robots leave), lingers so
+//!           reliable samples reach the subscribers
 //! ```
 
 use std::collections::HashMap;
@@ -21,9 +23,12 @@ use tokio::task::JoinHandle;
 
 use super::Ros2Error;
 use super::config::DdsConfig;
-use super::firings::{FiringPublisher, Published};
+use super::firings::{FiringPublisher, Published, RunStatePublisher};
 use super::heartbeat::RobotWatch;
-use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, exec_place_type};
+use super::msgs::{
+    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RUN_OVER, RUN_RUNNING, RunState,
+    exec_place_type,
+};
 use super::remote_place::{RemotePlaces, RobotLink};
 use super::settings::{ROS2_ACTION, Ros2Settings};
 use crate::net::Net;
@@ -37,6 +42,7 @@ pub struct Ros2Backend {
     task: Option<JoinHandle<Published>>,
     places: RemotePlaces,
     watch: RobotWatch,
+    run_state: RunStatePublisher,
 }
 
 impl std::fmt::Debug for Ros2Backend {
@@ -84,10 +90,11 @@ impl Ros2Backend {
         });
         let watch = RobotWatch::start(&mut node, robots, cfg.lost_after)?;
         let publisher = FiringPublisher::new(&mut node, Arc::new(net.clone()))?;
+        let run_state = RunStatePublisher::new(&mut node)?;
         let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
         servers.sort_unstable();
         servers.dedup();
-        let mut links = Vec::new();
+        let mut clients = Vec::new();
         for robot in robots {
             for &server in &servers {
                 let name = Name::new(&format!("/{robot}"), server).map_err(Ros2Error::dds)?;
@@ -102,10 +109,7 @@ impl Ros2Backend {
                 let live = watch
                     .liveness(robot)
                     .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))?;
-                links.push((
-                    server.to_string(),
-                    Arc::new(RobotLink::new(robot.clone(), client, live)),
-                ));
+                clients.push((robot.clone(), server.to_string(), client, live));
             }
         }
         let startup = cfg.startup;
@@ -117,8 +121,8 @@ impl Ros2Backend {
             ))
         })?;
         let servers_ready = async {
-            for (_, l) in &links {
-                l.wait_for_server(&node).await;
+            for (_, _, c, _) in &clients {
+                RobotLink::wait_for_server(c, &node).await;
             }
         };
         tokio::time::timeout(startup, servers_ready)
@@ -128,6 +132,12 @@ impl Ros2Backend {
                     "robots answer heartbeats but their ExecPlace servers were not matched within {startup:?}"
                 ))
             })?;
+        let links: Vec<_> = clients
+            .into_iter()
+            .map(|(robot, server, client, live)| {
+                (server, Arc::new(RobotLink::new(robot, client, live)))
+            })
+            .collect();
         let subs = async {
             while publisher.firing_subscribers(&node) < subscribers {
                 tokio::time::sleep(Duration::from_millis(20)).await;
@@ -140,7 +150,15 @@ impl Ros2Backend {
             ))
         })?;
         let servers: HashMap<_, _> = settings.servers.iter().cloned().collect();
+        run_state
+            .publish(RunState {
+                state: RUN_RUNNING.into(),
+                stopped: String::new(),
+                firings: 0,
+            })
+            .await?;
         Ok(Ros2Backend {
+            run_state,
             node,
             spin,
             publisher: Some(publisher),
@@ -173,13 +191,23 @@ impl Ros2Backend {
         &mut self.node
     }
 
-    /// Waits for the publisher to have sent every firing (the run must be over), then keeps
-    /// the participant alive for `linger` so reliable samples reach slow subscribers.
-    pub async fn finish(mut self, linger: Duration) -> Published {
-        let published = match self.task.take() {
+    /// Waits for the publisher to have sent every firing (the run must be over), says the
+    /// run is over (`stopped`: why) so robots leave, then keeps the participant alive for
+    /// `linger` so reliable samples reach slow subscribers.
+    pub async fn finish(mut self, linger: Duration, stopped: &str) -> Published {
+        let mut published = match self.task.take() {
             Some(t) => t.await.unwrap_or_default(),
             None => Published::default(),
         };
+        let over = RunState {
+            state: RUN_OVER.into(),
+            stopped: stopped.to_string(),
+            firings: published.firings,
+        };
+        if let Err(e) = self.run_state.publish(over).await {
+            tracing::warn!("publishing the end of the run: {e}");
+            published.errors += 1;
+        }
         tokio::time::sleep(linger).await;
         self.spin.abort();
         published

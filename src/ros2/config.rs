@@ -1,8 +1,12 @@
 //! DDS settings: the domain, the networks a participant uses, and how robots are watched.
 //!
 //! Defaults suit a sandbox: loopback only (`127.0.0.1`), domain 0. The plan's `[ros2]` table
-//! sets them for a plan; the environment (`GSPN_ROS2_DOMAIN`, `GSPN_ROS2_NETWORKS`) overrides
-//! the plan, and command-line flags override both (see `docs/ros2.md`).
+//! sets them for a plan; the environment (`GSPN_ROS2_DOMAIN`, then `ROS_DOMAIN_ID`;
+//! `GSPN_ROS2_NETWORKS`) overrides the plan, and command-line flags override both (see
+//! `docs/ros2.md`).
+//!
+//! Every DDS socket binds to the one configured address (RustDDS patched for it:
+//! `vendor/rustdds`), not to `0.0.0.0`; `0.0.0.0` is accepted as "every interface".
 
 use std::net::IpAddr;
 use std::time::Duration;
@@ -17,8 +21,13 @@ use super::settings::Ros2Settings;
 pub struct DdsConfig {
     /// The DDS domain id (0–232).
     pub domain_id: u16,
-    /// The local addresses used for discovery, multicast and advertised locators.
+    /// The local address every DDS socket binds to and the only one advertised and used for
+    /// multicast (one address; `0.0.0.0` = every interface, the wildcard).
     pub networks: Vec<IpAddr>,
+    /// How many participant indices of this host (0..n) a participant announces itself to
+    /// by unicast SPDP on 127.0.0.1 (loopback has no multicast): at least the number of
+    /// processes on the domain, so any start order works (≤ 120).
+    pub localhost_peers: u16,
     /// How often a robot publishes its heartbeat.
     pub heartbeat: Duration,
     /// A robot whose heartbeats stop for this long is lost.
@@ -32,6 +41,7 @@ impl Default for DdsConfig {
         DdsConfig {
             domain_id: 0,
             networks: vec![IpAddr::from([127, 0, 0, 1])],
+            localhost_peers: 12,
             heartbeat: Duration::from_millis(100),
             lost_after: Duration::from_millis(1000),
             startup: Duration::from_secs(30),
@@ -52,15 +62,44 @@ pub enum ConfigError {
         /// What is expected.
         why: &'static str,
     },
+    /// The networks cannot be bound.
+    #[error("DDS networks {0}: give one IPv4 address (or 0.0.0.0 for every interface)")]
+    Networks(String),
     /// The DDS participant or the ROS 2 node could not be created.
     #[error("DDS: {0}")]
     Dds(String),
 }
 
 impl DdsConfig {
-    /// The defaults, then the plan's `[ros2]` settings, then the environment.
+    /// The plan's `[ros2]` settings over the environment over the defaults: the domain is
+    /// the plan's, else `GSPN_ROS2_DOMAIN`, else `ROS_DOMAIN_ID`, else 0; the networks the
+    /// plan's, else `GSPN_ROS2_NETWORKS`, else `127.0.0.1` (flags override all: the CLI).
     pub fn resolve(plan: &Ros2Settings) -> Result<DdsConfig, ConfigError> {
+        DdsConfig::resolve_with(plan, |name| std::env::var(name).ok())
+    }
+
+    /// [`DdsConfig::resolve`] with the environment given as a function (for tests).
+    pub fn resolve_with(
+        plan: &Ros2Settings,
+        env: impl Fn(&str) -> Option<String>,
+    ) -> Result<DdsConfig, ConfigError> {
         let mut c = DdsConfig::default();
+        for name in ["ROS_DOMAIN_ID", "GSPN_ROS2_DOMAIN"] {
+            if let Some(v) = env(name) {
+                c.domain_id = parse_domain(&v).map_err(|why| ConfigError::Env {
+                    name,
+                    value: v.clone(),
+                    why,
+                })?;
+            }
+        }
+        if let Some(v) = env("GSPN_ROS2_NETWORKS") {
+            c.networks = parse_networks(&v).map_err(|why| ConfigError::Env {
+                name: "GSPN_ROS2_NETWORKS",
+                value: v.clone(),
+                why,
+            })?;
+        }
         if let Some(d) = plan.domain_id {
             c.domain_id = d;
         }
@@ -76,29 +115,40 @@ impl DdsConfig {
         if let Some(s) = plan.startup {
             c.startup = Duration::from_secs_f64(s);
         }
-        if let Ok(v) = std::env::var("GSPN_ROS2_DOMAIN") {
-            c.domain_id = parse_domain(&v).map_err(|why| ConfigError::Env {
-                name: "GSPN_ROS2_DOMAIN",
-                value: v.clone(),
-                why,
-            })?;
-        }
-        if let Ok(v) = std::env::var("GSPN_ROS2_NETWORKS") {
-            c.networks = parse_networks(&v).map_err(|why| ConfigError::Env {
-                name: "GSPN_ROS2_NETWORKS",
-                value: v.clone(),
-                why,
-            })?;
-        }
+        c.bind_address()?;
         Ok(c)
     }
 
-    /// A ROS 2 context (one DDS participant) with these settings.
+    /// Room for a fleet of `processes` participants on one host: announce to that many
+    /// participant indices plus a margin (viewers, recorders), between 12 and 120.
+    pub fn for_fleet(mut self, processes: usize) -> DdsConfig {
+        self.localhost_peers = (processes + 8).clamp(12, 120) as u16;
+        self
+    }
+
+    /// The address every socket binds to: `None` for the wildcard (`0.0.0.0`), else the one
+    /// IPv4 address of `networks` (RustDDS listens on IPv4 only).
+    pub fn bind_address(&self) -> Result<Option<IpAddr>, ConfigError> {
+        let bad = || {
+            let list: Vec<String> = self.networks.iter().map(ToString::to_string).collect();
+            ConfigError::Networks(format!("`{}`", list.join(",")))
+        };
+        match self.networks.as_slice() {
+            [a] if a.is_unspecified() && a.is_ipv4() => Ok(None),
+            [a @ IpAddr::V4(_)] => Ok(Some(*a)),
+            _ => Err(bad()),
+        }
+    }
+
+    /// A ROS 2 context (one DDS participant) with these settings: every socket bound to the
+    /// configured address.
     pub fn context(&self) -> Result<Context, ConfigError> {
-        let dp = DomainParticipantBuilder::new(self.domain_id)
-            .with_only_networks(self.networks.iter().copied())
-            .build()
-            .map_err(|e| ConfigError::Dds(format!("{e:?}")))?;
+        let mut b = DomainParticipantBuilder::new(self.domain_id)
+            .localhost_peer_count(self.localhost_peers);
+        if let Some(a) = self.bind_address()? {
+            b = b.with_only_networks([a]).bind_address(a);
+        }
+        let dp = b.build().map_err(|e| ConfigError::Dds(format!("{e:?}")))?;
         Context::from_domain_participant(dp).map_err(|e| ConfigError::Dds(format!("{e:?}")))
     }
 
@@ -154,7 +204,7 @@ mod tests {
     }
 
     #[test]
-    fn the_plan_overrides_the_defaults() {
+    fn the_plan_overrides_the_environment_which_overrides_the_defaults() {
         let plan = Ros2Settings {
             domain_id: Some(17),
             networks: vec![],
@@ -163,17 +213,62 @@ mod tests {
             startup: None,
             ..Ros2Settings::default()
         };
-        let c = DdsConfig {
-            domain_id: plan.domain_id.unwrap(),
-            heartbeat: Duration::from_millis(50),
-            lost_after: Duration::from_millis(500),
+        let none = |_: &str| None;
+        let c = DdsConfig::resolve_with(&plan, none).unwrap();
+        assert_eq!(
+            c,
+            DdsConfig {
+                domain_id: 17,
+                heartbeat: Duration::from_millis(50),
+                lost_after: Duration::from_millis(500),
+                ..DdsConfig::default()
+            }
+        );
+        let env = |vars: &'static [(&'static str, &'static str)]| {
+            move |name: &str| {
+                vars.iter()
+                    .find(|(k, _)| *k == name)
+                    .map(|(_, v)| v.to_string())
+            }
+        };
+        let bare = Ros2Settings::default();
+        let ros = env(&[("ROS_DOMAIN_ID", "42")]);
+        assert_eq!(DdsConfig::resolve_with(&bare, ros).unwrap().domain_id, 42);
+        let both = env(&[("ROS_DOMAIN_ID", "42"), ("GSPN_ROS2_DOMAIN", "7")]);
+        assert_eq!(DdsConfig::resolve_with(&bare, both).unwrap().domain_id, 7);
+        assert_eq!(DdsConfig::resolve_with(&plan, both).unwrap().domain_id, 17);
+        assert_eq!(DdsConfig::resolve_with(&bare, none).unwrap().domain_id, 0);
+        let bad = env(&[("ROS_DOMAIN_ID", "300")]);
+        let e = DdsConfig::resolve_with(&bare, bad).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "environment variable ROS_DOMAIN_ID=`300`: expected a domain id in 0..=232"
+        );
+        let nets = env(&[("GSPN_ROS2_NETWORKS", "10.0.0.5")]);
+        let c = DdsConfig::resolve_with(&bare, nets).unwrap();
+        assert_eq!(c.bind_address().unwrap(), Some(IpAddr::from([10, 0, 0, 5])));
+    }
+
+    #[test]
+    fn sockets_bind_to_one_ipv4_address_or_the_wildcard() {
+        let with = |n: &[IpAddr]| DdsConfig {
+            networks: n.to_vec(),
             ..DdsConfig::default()
         };
-        // The environment is not set in tests (GSPN_ROS2_* belong to the CLI's users).
-        if std::env::var_os("GSPN_ROS2_DOMAIN").is_none()
-            && std::env::var_os("GSPN_ROS2_NETWORKS").is_none()
-        {
-            assert_eq!(DdsConfig::resolve(&plan).unwrap(), c);
-        }
+        let lo = IpAddr::from([127, 0, 0, 1]);
+        assert_eq!(DdsConfig::default().bind_address().unwrap(), Some(lo));
+        assert_eq!(
+            with(&[IpAddr::from([0, 0, 0, 0])]).bind_address().unwrap(),
+            None
+        );
+        let two = with(&[lo, IpAddr::from([10, 0, 0, 5])]).bind_address();
+        assert_eq!(
+            two.unwrap_err().to_string(),
+            "DDS networks `127.0.0.1,10.0.0.5`: give one IPv4 address (or 0.0.0.0 for every interface)"
+        );
+        assert!(with(&["::1".parse().unwrap()]).bind_address().is_err());
+        assert_eq!(DdsConfig::default().for_fleet(64).localhost_peers, 72);
+        assert_eq!(DdsConfig::default().for_fleet(1).localhost_peers, 12);
+        assert_eq!(DdsConfig::default().for_fleet(500).localhost_peers, 120);
     }
 }

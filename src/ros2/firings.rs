@@ -1,6 +1,7 @@
-//! The supervisor's publications: every firing on `/gspn/firings` (reliable, keep-all) and
-//! the current marking on `/gspn/marking` (reliable, transient-local, depth 1); and
-//! [`FiringListener`], a subscriber to both for robots, tests and tools.
+//! The supervisor's publications: every firing on `/gspn/firings` (reliable, keep-all), the
+//! current marking on `/gspn/marking` (reliable, transient-local, depth 1) and the run's
+//! state on `/gspn/run` ([`RunStatePublisher`], same QoS as the marking); and
+//! [`FiringListener`], a subscriber to them for robots, tests and tools.
 
 use std::sync::Arc;
 
@@ -9,7 +10,10 @@ use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{Name, Node, Publisher, QosProfile, Subscription};
 
 use super::Ros2Error;
-use super::msgs::{FIRINGS_TOPIC, Firing, MARKING_TOPIC, Marking, Time, firing_type, marking_type};
+use super::msgs::{
+    FIRINGS_TOPIC, Firing, MARKING_TOPIC, Marking, RUN_TOPIC, RunState, Time, firing_type,
+    marking_type, run_state_type,
+};
 use crate::net::Net;
 use crate::runtime::{EventKind, Events, Received};
 
@@ -151,10 +155,38 @@ impl FiringPublisher {
     }
 }
 
-/// A subscriber to `/gspn/firings` and `/gspn/marking`.
+/// Publishes the run's [`RunState`] on `/gspn/run`.
+pub struct RunStatePublisher {
+    run: Publisher<RunState>,
+}
+
+impl std::fmt::Debug for RunStatePublisher {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("RunStatePublisher")
+    }
+}
+
+impl RunStatePublisher {
+    /// Creates the publisher on `node`.
+    pub fn new(node: &mut Node) -> Result<RunStatePublisher, Ros2Error> {
+        let q = marking_qos();
+        let t = topic(node, RUN_TOPIC, run_state_type(), &q)?;
+        Ok(RunStatePublisher {
+            run: node.create_publisher(&t, Some(q)).map_err(Ros2Error::dds)?,
+        })
+    }
+
+    /// Publishes `state`.
+    pub async fn publish(&self, state: RunState) -> Result<(), Ros2Error> {
+        self.run.async_publish(state).await.map_err(Ros2Error::dds)
+    }
+}
+
+/// A subscriber to `/gspn/firings`, `/gspn/marking` and `/gspn/run`.
 pub struct FiringListener {
     firings: Subscription<Firing>,
     marking: Subscription<Marking>,
+    run: Subscription<RunState>,
 }
 
 impl std::fmt::Debug for FiringListener {
@@ -170,7 +202,11 @@ impl FiringListener {
         let mq = marking_qos();
         let ft = topic(node, FIRINGS_TOPIC, firing_type(), &fq)?;
         let mt = topic(node, MARKING_TOPIC, marking_type(), &mq)?;
+        let rt = topic(node, RUN_TOPIC, run_state_type(), &mq)?;
         Ok(FiringListener {
+            run: node
+                .create_subscription(&rt, Some(mq.clone()))
+                .map_err(Ros2Error::dds)?,
             firings: node
                 .create_subscription(&ft, Some(fq))
                 .map_err(Ros2Error::dds)?,
@@ -185,6 +221,13 @@ impl FiringListener {
         self.firings
             .async_stream()
             .filter_map(|r| async move { r.ok().map(|(f, _)| f) })
+    }
+
+    /// The run's states as they arrive (the current one first, for a late joiner).
+    pub fn run_states(&self) -> impl futures::Stream<Item = RunState> + '_ {
+        self.run
+            .async_stream()
+            .filter_map(|r| async move { r.ok().map(|(m, _)| m) })
     }
 
     /// The markings as they arrive (the current one first, for a late joiner).

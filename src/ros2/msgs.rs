@@ -13,6 +13,8 @@ pub const FIRINGS_TOPIC: &str = "/gspn/firings";
 pub const MARKING_TOPIC: &str = "/gspn/marking";
 /// Topic of the robots' [`Heartbeat`]s.
 pub const HEARTBEAT_TOPIC: &str = "/gspn/heartbeat";
+/// Topic of the supervisor's [`RunState`].
+pub const RUN_TOPIC: &str = "/gspn/run";
 
 /// `builtin_interfaces/Time`: seconds and nanoseconds since the Unix epoch.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -79,6 +81,24 @@ pub struct Heartbeat {
 }
 impl Message for Heartbeat {}
 
+/// `gspn_msgs/msg/RunState`: the supervisor's run is `running` or `over`, on [`RUN_TOPIC`]
+/// (robots leave when it is over).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RunState {
+    /// `running` or `over`.
+    pub state: String,
+    /// Why the run stopped (`max_firings`, `failure`, …); empty while running.
+    pub stopped: String,
+    /// Firings so far.
+    pub firings: u64,
+}
+impl Message for RunState {}
+
+/// [`RunState::state`] of a run that has started.
+pub const RUN_RUNNING: &str = "running";
+/// [`RunState::state`] of a run that has ended.
+pub const RUN_OVER: &str = "over";
+
 /// `gspn_msgs/action/ExecPlace` goal: run the action of `place` for `agent`.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ExecPlaceGoal {
@@ -122,6 +142,11 @@ pub fn heartbeat_type() -> MessageTypeName {
     MessageTypeName::new(PACKAGE, "Heartbeat")
 }
 
+/// DDS type of [`RunState`]: `gspn_msgs::msg::dds_::RunState_`.
+pub fn run_state_type() -> MessageTypeName {
+    MessageTypeName::new(PACKAGE, "RunState")
+}
+
 /// The action type `gspn_msgs/action/ExecPlace`.
 pub fn exec_place_type() -> ActionTypeName {
     ActionTypeName::new(PACKAGE, "ExecPlace")
@@ -144,6 +169,10 @@ mod tests {
         assert_eq!(
             heartbeat_type().dds_msg_type(),
             "gspn_msgs::msg::dds_::Heartbeat_"
+        );
+        assert_eq!(
+            run_state_type().dds_msg_type(),
+            "gspn_msgs::msg::dds_::RunState_"
         );
     }
 

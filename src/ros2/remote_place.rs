@@ -9,17 +9,24 @@
 //! - the robot's heartbeats stop ([`Liveness::Lost`]) → `Failed("robot … lost")`, and the
 //!   plan's failure policy decides.
 //!
-//! One goal at a time per robot and server: ros2-client's service client drops responses
-//! meant for a concurrent call, so calls through one client are serialised.
+//! Any number of goals at a time per robot and server: one task per link owns the action
+//! client ([`RobotLink`]), sends the requests and hands each response to its caller by
+//! request id (ros2-client's own calls drop responses meant for a concurrent call).
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use ros2_client::action::{GoalId, GoalStatusEnum};
+use futures::StreamExt;
+use ros2_client::action::{
+    CancelGoalRequest, CancelGoalResponse, GetResultRequest, GoalId, GoalInfo, GoalStatusEnum,
+    SendGoalRequest, SendGoalResponse,
+};
 use ros2_client::builtin_interfaces;
 use ros2_client::dds::ActionClient;
-use tokio::sync::watch;
+use ros2_client::dds::Client;
+use ros2_client::{Message, RmwRequestId};
+use tokio::sync::{mpsc, oneshot, watch};
 
 use super::heartbeat::Liveness;
 use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult};
@@ -32,12 +39,115 @@ pub type ExecPlaceClient = ActionClient<ExecPlaceGoal, ExecPlaceResult, ExecPlac
 /// How long a cancel request may take before the action gives up waiting for its answer.
 const CANCEL_WAIT: Duration = Duration::from_secs(1);
 
-/// One robot's ExecPlace server as the supervisor reaches it.
+/// A call through a link's action client; the answer comes back on the sender.
+enum Call {
+    Goal(ExecPlaceGoal, Reply<(GoalId, SendGoalResponse)>),
+    Result(GoalId, Reply<(GoalStatusEnum, ExecPlaceResult)>),
+    Cancel(GoalId, Reply<CancelGoalResponse>),
+}
+
+type Reply<T> = oneshot::Sender<Result<T, String>>;
+
+/// Calls waiting for their response, by request id (callers that gave up are dropped on the
+/// next insert).
+struct Pending<T>(BTreeMap<RmwRequestId, Reply<T>>);
+
+impl<T> Pending<T> {
+    fn insert(&mut self, id: RmwRequestId, reply: Reply<T>) {
+        self.0.retain(|_, r| !r.is_closed());
+        self.0.insert(id, reply);
+    }
+
+    fn answer(&mut self, id: RmwRequestId, v: T) {
+        if let Some(r) = self.0.remove(&id) {
+            let _ = r.send(Ok(v));
+        }
+    }
+}
+
+/// Sends `req` through `client`, then waits (in the link's task) for its response.
+async fn send<Req: Message + 'static, Resp: Message + 'static, T>(
+    client: &Client<Req, Resp>,
+    req: Req,
+    reply: Reply<T>,
+    pending: &mut Pending<T>,
+) {
+    match client.async_send_request(req).await {
+        Ok(id) => pending.insert(id, reply),
+        Err(e) => {
+            let _ = reply.send(Err(format!("{e:?}")));
+        }
+    }
+}
+
+/// The task owning one link's action client: sends the calls it is given and hands every
+/// response to the call with its request id.
+async fn serve_calls(client: ExecPlaceClient, mut calls: mpsc::UnboundedReceiver<Call>) {
+    let (mut goals, mut results, mut cancels) = (
+        Pending(BTreeMap::new()),
+        Pending(BTreeMap::new()),
+        Pending(BTreeMap::new()),
+    );
+    let goal_responses = client.goal_client().response_stream();
+    let result_responses = client.result_client().response_stream();
+    let cancel_responses = client.cancel_client().response_stream();
+    futures::pin_mut!(goal_responses, result_responses, cancel_responses);
+    loop {
+        tokio::select! {
+            c = calls.recv() => match c {
+                None => break,
+                Some(Call::Goal(goal, reply)) => {
+                    let goal_id = GoalId::new_random();
+                    let req = SendGoalRequest { goal_id, goal };
+                    let (tx, rx) = oneshot::channel();
+                    send(client.goal_client(), req, tx, &mut goals).await;
+                    // The goal id travels with the response.
+                    tokio::spawn(async move {
+                        if let Ok(r) = rx.await {
+                            let _ = reply.send(r.map(|resp| (goal_id, resp)));
+                        }
+                    });
+                }
+                Some(Call::Result(goal_id, reply)) => {
+                    let req = GetResultRequest { goal_id };
+                    send(client.result_client(), req, reply, &mut results).await;
+                }
+                Some(Call::Cancel(goal_id, reply)) => {
+                    let goal_info = GoalInfo { goal_id, stamp: builtin_interfaces::Time::ZERO };
+                    let req = CancelGoalRequest { goal_info };
+                    send(client.cancel_client(), req, reply, &mut cancels).await;
+                }
+            },
+            Some(r) = goal_responses.next() => match r {
+                Ok((id, resp)) => goals.answer(id, resp),
+                Err(e) => tracing::warn!("goal response: {e:?}"),
+            },
+            Some(r) = result_responses.next() => match r {
+                Ok((id, resp)) => results.answer(id, (resp.status, resp.result)),
+                Err(e) => tracing::warn!("result response: {e:?}"),
+            },
+            Some(r) = cancel_responses.next() => match r {
+                Ok((id, resp)) => cancels.answer(id, resp),
+                Err(e) => tracing::warn!("cancel response: {e:?}"),
+            },
+        }
+    }
+}
+
+/// One robot's ExecPlace server as the supervisor reaches it: a task owns the action client
+/// and serves any number of concurrent calls.
 pub struct RobotLink {
     /// The robot.
     pub robot: String,
-    client: tokio::sync::Mutex<ExecPlaceClient>,
+    calls: mpsc::UnboundedSender<Call>,
+    task: tokio::task::JoinHandle<()>,
     liveness: watch::Receiver<Liveness>,
+}
+
+impl Drop for RobotLink {
+    fn drop(&mut self) {
+        self.task.abort();
+    }
 }
 
 impl std::fmt::Debug for RobotLink {
@@ -49,26 +159,58 @@ impl std::fmt::Debug for RobotLink {
 }
 
 impl RobotLink {
-    /// A link through `client`, failing goals when `liveness` turns [`Liveness::Lost`].
+    /// A link through `client` (its task is spawned on the current tokio runtime), failing
+    /// goals when `liveness` turns [`Liveness::Lost`].
     pub fn new(
         robot: String,
         client: ExecPlaceClient,
         liveness: watch::Receiver<Liveness>,
     ) -> RobotLink {
+        let (calls, rx) = mpsc::unbounded_channel();
         RobotLink {
             robot,
-            client: tokio::sync::Mutex::new(client),
+            calls,
+            task: tokio::spawn(serve_calls(client, rx)),
             liveness,
         }
     }
 
-    /// Waits until the robot's goal, result and cancel services are matched (needs the
-    /// node's spinner running).
-    pub async fn wait_for_server(&self, node: &ros2_client::Node) {
-        let c = self.client.lock().await;
-        c.goal_client().wait_for_service(node).await;
-        c.result_client().wait_for_service(node).await;
-        c.cancel_client().wait_for_service(node).await;
+    /// Waits until the robot's goal, result and cancel services of `client` are matched
+    /// (needs the node's spinner running); before [`RobotLink::new`].
+    pub async fn wait_for_server(client: &ExecPlaceClient, node: &ros2_client::Node) {
+        client.goal_client().wait_for_service(node).await;
+        client.result_client().wait_for_service(node).await;
+        client.cancel_client().wait_for_service(node).await;
+    }
+
+    async fn call<T>(&self, make: impl FnOnce(Reply<T>) -> Call) -> Result<T, String> {
+        let (tx, rx) = oneshot::channel();
+        self.calls
+            .send(make(tx))
+            .map_err(|_| "the link's task has ended".to_string())?;
+        rx.await
+            .map_err(|_| "the link's task has ended".to_string())?
+    }
+
+    /// Sends `goal`; the goal's id and the server's response.
+    pub async fn send_goal(
+        &self,
+        goal: ExecPlaceGoal,
+    ) -> Result<(GoalId, SendGoalResponse), String> {
+        self.call(|r| Call::Goal(goal, r)).await
+    }
+
+    /// Asks for the result of goal `id`: answered when the goal has ended.
+    pub async fn request_result(
+        &self,
+        id: GoalId,
+    ) -> Result<(GoalStatusEnum, ExecPlaceResult), String> {
+        self.call(|r| Call::Result(id, r)).await
+    }
+
+    /// Asks the robot to cancel goal `id`.
+    pub async fn cancel_goal(&self, id: GoalId) -> Result<CancelGoalResponse, String> {
+        self.call(|r| Call::Cancel(id, r)).await
     }
 }
 
@@ -142,12 +284,7 @@ impl Drop for GoalGuard {
             let link = Arc::clone(&self.link);
             if let Ok(rt) = tokio::runtime::Handle::try_current() {
                 rt.spawn(async move {
-                    let c = link.client.lock().await;
-                    let _ = tokio::time::timeout(
-                        CANCEL_WAIT,
-                        c.async_cancel_goal(id, builtin_interfaces::Time::ZERO),
-                    )
-                    .await;
+                    let _ = tokio::time::timeout(CANCEL_WAIT, link.cancel_goal(id)).await;
                 });
             }
         }
@@ -171,28 +308,22 @@ async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
         link: Arc::clone(&link),
         goal: Mutex::new(None),
     };
-    let client = tokio::select! {
-        c = link.client.lock() => c,
-        _ = live.wait_for(|s| *s == Liveness::Lost) => return Outcome::Failed(lost_msg()),
-        _ = ctx.cancel.cancelled() => return Outcome::Cancelled,
-    };
     let goal = ExecPlaceGoal {
         place: ctx.place_name().to_string(),
         agent: ctx.agent.0.to_string(),
     };
     let work = async {
-        let (id, resp) = client
-            .async_send_goal(goal)
+        let (id, resp) = link
+            .send_goal(goal)
             .await
-            .map_err(|e| format!("sending the goal to robot `{robot}`: {e:?}"))?;
+            .map_err(|e| format!("sending the goal to robot `{robot}`: {e}"))?;
         if !resp.accepted {
             return Err(format!("robot `{robot}` rejected the goal"));
         }
         guard.set(Some(id));
-        client
-            .async_request_result(id)
+        link.request_result(id)
             .await
-            .map_err(|e| format!("result from robot `{robot}`: {e:?}"))
+            .map_err(|e| format!("result from robot `{robot}`: {e}"))
     };
     let ended = tokio::select! {
         r = work => Ended::Result(r),
@@ -220,11 +351,7 @@ async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
         }
         Ended::Cancel => {
             if let Some(id) = guard.take() {
-                let _ = tokio::time::timeout(
-                    CANCEL_WAIT,
-                    client.async_cancel_goal(id, builtin_interfaces::Time::ZERO),
-                )
-                .await;
+                let _ = tokio::time::timeout(CANCEL_WAIT, link.cancel_goal(id)).await;
             }
             Outcome::Cancelled
         }

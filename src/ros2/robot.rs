@@ -29,7 +29,9 @@ use tokio::sync::oneshot;
 
 use super::config::DdsConfig;
 use super::firings::FiringListener;
-use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, Time, exec_place_type};
+use super::msgs::{
+    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RUN_OVER, Time, exec_place_type,
+};
 use super::settings::Ros2Settings;
 use super::{Ros2Error, heartbeat};
 use crate::net::{Net, PlaceId, Timing};
@@ -48,10 +50,12 @@ pub struct RobotOptions {
     pub time_scale: f64,
     /// Appends `seq stamp_ns received_ns` for each firing received to this file.
     pub latency_log: Option<PathBuf>,
+    /// Keep serving when the supervisor's run is over (else [`serve`] returns then).
+    pub stay: bool,
 }
 
 /// What a robot did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RobotStats {
     /// Goals received.
     pub goals: u64,
@@ -59,6 +63,9 @@ pub struct RobotStats {
     pub cancelled: u64,
     /// Firings received on `/gspn/firings`.
     pub firings: u64,
+    /// The supervisor said its run is over: why it stopped and after how many firings
+    /// (`max_firings after 100 firings`); `None` when the robot was stopped otherwise.
+    pub run_over: Option<String>,
 }
 
 /// The local decision for one goal: wait this long, then answer this transition.
@@ -176,20 +183,46 @@ pub async fn serve(
     }
     let listener = FiringListener::new(&mut node)?;
     let listen = listen(&listener, opts.latency_log.clone(), Arc::clone(&shared));
+    let over = run_over(&listener, &opts);
+    let mut run_over = None;
     tokio::select! {
         _ = stop => {}
         r = listen => r?,
+        o = over => run_over = Some(o),
     }
     beat.abort();
     for t in tasks {
         t.abort();
     }
     spin.abort();
-    let stats = *shared
+    let mut stats = shared
         .stats
         .lock()
-        .map_err(|_| Ros2Error::Other("poisoned".into()))?;
+        .map_err(|_| Ros2Error::Other("poisoned".into()))?
+        .clone();
+    stats.run_over = run_over;
     Ok(stats)
+}
+
+/// Completes when the supervisor says its run is over (never with `opts.stay`, which says
+/// once that the robot stays, idle).
+async fn run_over(listener: &FiringListener, opts: &RobotOptions) -> String {
+    let states = listener.run_states();
+    futures::pin_mut!(states);
+    while let Some(s) = states.next().await {
+        if s.state != RUN_OVER {
+            continue;
+        }
+        let why = format!("{} after {} firings", s.stopped, s.firings);
+        if !opts.stay {
+            return why;
+        }
+        tracing::info!(
+            "robot {}: the supervisor's run is over ({why}); idle, serving until stopped (--stay)",
+            opts.id
+        );
+    }
+    std::future::pending().await
 }
 
 /// A robot id as part of a node name (letters, digits, underscores).

@@ -7,5 +7,10 @@ mod support;
 #[path = "support.rs"]
 mod ros2_support;
 
+#[path = "rtps.rs"]
+mod ros2_rtps;
+
 mod interop;
+mod lifecycle;
 mod multiprocess;
+mod security;

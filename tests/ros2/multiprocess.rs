@@ -116,9 +116,16 @@ async fn a_killed_robot_is_detected_and_the_failure_policy_stops_the_run() {
         }
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
+    let sup_log = sup.log.clone();
     let (code, out) = finish(sup, Duration::from_secs(20)).await;
     let ended = killed.elapsed();
     let detected = detected.expect("the supervisor reports robot r2 lost");
+    // The ROS 2 layer's own warning reaches stderr (a log subscriber is installed).
+    let log = std::fs::read_to_string(&sup_log).unwrap();
+    assert!(
+        log.contains("WARN gspn::ros2::heartbeat: robot `r2`: no heartbeat for 1s: lost"),
+        "{log}"
+    );
     println!(
         "robot r2 killed → reported lost after {detected:?}, supervisor ended after {ended:?}"
     );
@@ -140,10 +147,22 @@ async fn a_killed_robot_is_detected_and_the_failure_policy_stops_the_run() {
                 || e.as_str().unwrap_or("").contains("robot `r3` lost")),
         "{errors:?}"
     );
-    // The other robot processes carry on (they serve whoever asks next).
-    for k in [0, 2] {
-        let r = &mut robots[k];
-        assert!(r.child.try_wait().unwrap().is_none(), "{} ended", r.name);
+    // The other robot processes leave by themselves: the supervisor said the run is over.
+    let mut robots = robots.into_iter();
+    let (r1, _r2, r3) = (
+        robots.next().unwrap(),
+        robots.next(),
+        robots.next().unwrap(),
+    );
+    for r in [r1, r3] {
+        let (name, log) = (r.name.clone(), r.log.clone());
+        let (code, _) = finish(r, Duration::from_secs(20)).await;
+        let log = std::fs::read_to_string(log).unwrap();
+        assert_eq!(code, Some(0), "{name}: {log}");
+        assert!(
+            log.contains("the supervisor's run is over (failure after"),
+            "{name}: {log}"
+        );
     }
     // Every firing before the stop was published once, in order.
     let mut all = before;

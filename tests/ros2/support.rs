@@ -44,7 +44,7 @@ fn command(dir: &Path, name: &str, args: &[String], stdout: bool) -> Proc {
     let child = Command::new(env!("CARGO_BIN_EXE_plan-runner"))
         .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env("RUST_LOG", "warn")
+        .env_remove("RUST_LOG")
         .stdin(Stdio::null())
         .stdout(if stdout {
             Stdio::piped()
@@ -175,4 +175,79 @@ pub async fn finish(p: Proc, limit: Duration) -> (Option<i32>, String) {
             std::fs::read_to_string(log).unwrap_or_default()
         ),
     }
+}
+
+/// A UDP socket of a process: its local address, from /proc/net/udp{,6}.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct UdpSocket {
+    pub addr: std::net::IpAddr,
+    pub port: u16,
+}
+
+/// Every UDP socket (IPv4 and IPv6) process `pid` holds: the inodes of its
+/// `/proc/<pid>/fd/*` links `socket:[N]` looked up in `/proc/<pid>/net/udp{,6}` (the
+/// process's own network namespace).
+pub fn udp_sockets(pid: u32) -> Vec<UdpSocket> {
+    let mut inodes = std::collections::BTreeSet::new();
+    if let Ok(fds) = std::fs::read_dir(format!("/proc/{pid}/fd")) {
+        for fd in fds.flatten() {
+            if let Ok(l) = std::fs::read_link(fd.path()) {
+                let l = l.to_string_lossy().into_owned();
+                if let Some(n) = l.strip_prefix("socket:[").and_then(|x| x.strip_suffix(']')) {
+                    inodes.insert(n.to_string());
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for table in ["udp", "udp6"] {
+        let text = std::fs::read_to_string(format!("/proc/{pid}/net/{table}")).unwrap_or_default();
+        for line in text.lines().skip(1) {
+            let f: Vec<&str> = line.split_whitespace().collect();
+            if f.len() < 10 || !inodes.contains(f[9]) {
+                continue;
+            }
+            let (ip, port) = f[1].split_once(':').expect("addr:port");
+            let port = u16::from_str_radix(port, 16).expect("hex port");
+            // The kernel prints the address as 32-bit words in host order (little endian).
+            let words: Vec<u32> = (0..ip.len() / 8)
+                .map(|k| u32::from_str_radix(&ip[8 * k..8 * k + 8], 16).expect("hex address"))
+                .collect();
+            let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+            let addr = match bytes.len() {
+                4 => std::net::IpAddr::from([bytes[0], bytes[1], bytes[2], bytes[3]]),
+                _ => {
+                    let b: [u8; 16] = bytes.try_into().expect("16 bytes");
+                    std::net::IpAddr::from(b)
+                }
+            };
+            out.push(UdpSocket { addr, port });
+        }
+    }
+    out.sort_by_key(|s| s.port);
+    out
+}
+
+/// The resident set size of process `pid` in bytes (`VmRSS` of /proc/<pid>/status).
+pub fn rss(pid: u32) -> u64 {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).expect("process status");
+    let kb = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))
+        .and_then(|v| v.split_whitespace().next())
+        .and_then(|v| v.parse::<u64>().ok())
+        .expect("VmRSS");
+    kb * 1024
+}
+
+/// Waits (at most `limit`) until the process's log contains `what`; false if it never did.
+pub async fn wait_for_log(p: &Proc, what: &str, limit: Duration) -> bool {
+    let end = tokio::time::Instant::now() + limit;
+    while tokio::time::Instant::now() < end {
+        if p.log().contains(what) {
+            return true;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    false
 }

@@ -8,6 +8,8 @@ use gspn::runtime::{Backends, RuntimeBuilder};
 
 #[cfg(feature = "sim")]
 use crate::common::BadInput;
+#[cfg(feature = "ros2")]
+use anyhow::Context as _;
 
 /// The flags of `run` that belong to a backend.
 #[derive(clap::Args, Debug)]
@@ -36,6 +38,8 @@ pub(crate) fn check(plan: &Plan, args: &BackendArgs) -> anyhow::Result<()> {
             BadInput("--robots needs a plan with a [map] (see docs/plans.md)".into()).into(),
         );
     }
+    #[cfg(feature = "ros2")]
+    crate::ros2::check_plan(plan, &args.ros2)?;
     let _ = (plan, args);
     Ok(())
 }
@@ -82,7 +86,21 @@ pub(crate) async fn setup(
     }
     #[cfg(feature = "ros2")]
     if crate::ros2::wanted(&plan) {
-        backends.push(crate::ros2::connect(&plan, &args.ros2).await?);
+        // Ctrl-C while waiting for the robots ends at once (exit 130). The handler is
+        // installed before joining DDS (which blocks a while), so no Ctrl-C is missed.
+        #[cfg(unix)]
+        let mut int = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::interrupt())
+            .context("installing the Ctrl-C handler")?;
+        #[cfg(unix)]
+        let interrupted = int.recv();
+        #[cfg(not(unix))]
+        let interrupted = tokio::signal::ctrl_c();
+        tokio::select! {
+            b = crate::ros2::connect(&plan, &args.ros2) => backends.push(b?),
+            _ = interrupted => {
+                return Err(crate::common::Interrupted("while waiting for the robots").into());
+            }
+        }
     }
     #[cfg(feature = "web")]
     if let Some(addr) = args.web {

@@ -41,9 +41,17 @@ pub(crate) fn load_net(path: &Path, args: &NetArgs) -> anyhow::Result<Loaded> {
     Ok(read_net(path, &args.read_options())?)
 }
 
-/// Exit code for an error: 2 for bad input, 1 for anything else.
+/// Interrupted by Ctrl-C before the run could start (exit code 130).
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted {0}")]
+pub(crate) struct Interrupted(pub(crate) &'static str);
+
+/// Exit code for an error: 2 for bad input, 130 when interrupted, 1 for anything else.
 pub(crate) fn exit_code_for(e: &anyhow::Error) -> u8 {
     for cause in e.chain() {
+        if cause.is::<Interrupted>() {
+            return 130;
+        }
         if cause.is::<LoadError>() || cause.is::<BadInput>() {
             return 2;
         }

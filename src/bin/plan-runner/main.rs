@@ -58,6 +58,7 @@ enum Command {
 
 fn main() -> ExitCode {
     restore_sigpipe();
+    init_logging();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check(a) => check::main(a),
@@ -80,6 +81,27 @@ fn main() -> ExitCode {
             ExitCode::from(common::exit_code_for(&e))
         }
     }
+}
+
+/// The default log filter. RustDDS's writer warns "No locators" for every same-host reader
+/// reached over loopback (it does reach it), and ros2-client that `ROS_DISTRO` is unset:
+/// both would flood stderr, so only their errors show.
+const DEFAULT_LOG: &str =
+    "warn,gspn=info,rustdds::rtps::writer=error,ros2_client::distributions=error";
+
+/// Warnings and errors of the library and of its dependencies (RustDDS and ros2-client log
+/// through `log`, bridged) go to stderr; `RUST_LOG` overrides the default filter
+/// (`DEFAULT_LOG`: the library's notices, everyone's warnings but two noisy ones).
+fn init_logging() {
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(DEFAULT_LOG));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        .with_target(true)
+        .without_time()
+        .try_init();
 }
 
 /// Rust ignores SIGPIPE, so printing to a closed pipe (`plan-runner … | head`) would panic;

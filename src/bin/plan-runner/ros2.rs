@@ -21,10 +21,12 @@ use crate::common::{BadInput, NetArgs};
 /// DDS flags (override the plan's `[ros2]` table and the `GSPN_ROS2_*` environment).
 #[derive(clap::Args, Debug, Clone, Default)]
 pub(crate) struct DdsArgs {
-    /// DDS domain id (0–232) [default: the plan's, else $GSPN_ROS2_DOMAIN, else 0].
+    /// DDS domain id (0–232) [default: the plan's, else $GSPN_ROS2_DOMAIN, else
+    /// $ROS_DOMAIN_ID, else 0].
     #[arg(long, value_name = "ID", value_parser = domain)]
     ros2_domain: Option<u16>,
-    /// Local IP addresses DDS may use, comma-separated [default: 127.0.0.1].
+    /// The local IPv4 address every DDS socket binds to [default: the plan's, else
+    /// $GSPN_ROS2_NETWORKS, else 127.0.0.1; 0.0.0.0 = every interface].
     #[arg(long, value_name = "ADDRS")]
     ros2_networks: Option<String>,
 }
@@ -43,7 +45,9 @@ impl DdsArgs {
             c.networks = parse_networks(n)
                 .map_err(|why| BadInput(format!("--ros2-networks `{n}`: {why}")))?;
         }
-        Ok(c)
+        c.bind_address().map_err(|e| BadInput(e.to_string()))?;
+        // The supervisor, the robots and a viewer or two on one host: any start order.
+        Ok(c.for_fleet(plan.robots.len() + 2))
     }
 }
 
@@ -59,6 +63,36 @@ pub(crate) struct RunArgs {
     /// Seconds to stay on DDS after the run, so subscribers receive the last firings.
     #[arg(long, value_name = "SECS", default_value_t = 0.5)]
     ros2_linger: f64,
+    /// Accept time scale 0 (virtual time) with ros2 places: the robots still act in real
+    /// time, so model times mean nothing.
+    #[arg(long)]
+    allow_virtual_time: bool,
+}
+
+/// Refuses a plan with ros2 places the supervisor cannot run: no robots to send goals to,
+/// or virtual time (time scale 0, the default without one) without `--allow-virtual-time`
+/// (robots act in real time).
+pub(crate) fn check_plan(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
+    if !wanted(plan) {
+        return Ok(());
+    }
+    if plan.robots.is_empty() {
+        return Err(BadInput(format!(
+            "{}: the plan has ros2 places but no `robots = [...]` to send their goals to",
+            plan.path.display()
+        ))
+        .into());
+    }
+    if plan.time_scale.unwrap_or(0.0) == 0.0 && !args.allow_virtual_time {
+        return Err(BadInput(format!(
+            "{}: time scale 0 (virtual time) with ros2 places: the robots act in real time, so \
+             the run's model times would mean nothing; give --time-scale X > 0 (or the plan's \
+             time_scale), or --allow-virtual-time",
+            plan.path.display()
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 /// The plan's robots, when it has `ros2` places (else the ROS 2 backend stays off).
@@ -69,13 +103,6 @@ pub(crate) fn wanted(plan: &Plan) -> bool {
 /// Joins DDS and links to the plan's robots.
 pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2Run> {
     let cfg = args.dds.config(plan)?;
-    if plan.robots.is_empty() {
-        return Err(BadInput(format!(
-            "{}: the plan has ros2 places but no `robots = [...]` to send their goals to",
-            plan.path.display()
-        ))
-        .into());
-    }
     eprintln!(
         "ros2: domain {}, waiting for robot(s) {}",
         cfg.domain_id,
@@ -150,11 +177,16 @@ impl Backend for Ros2Run {
         Box::pin(async { Ok(()) })
     }
 
-    /// Lets the publisher finish and lingers; the counts go to stderr.
-    fn finish<'a>(&'a mut self, _summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
+    /// Tells the robots the run is over (why it stopped), lets the publisher finish and
+    /// lingers; the counts go to stderr.
+    fn finish<'a>(&'a mut self, summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
         Box::pin(async move {
             let backend = self.backend.take()?;
-            let p = backend.finish(self.linger).await;
+            let stopped = serde_json::to_value(&summary.stopped)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default();
+            let p = backend.finish(self.linger, &stopped).await;
             eprintln!(
                 "ros2: published {} firings ({} events lost, {} publish errors)",
                 p.firings, p.lagged, p.errors
@@ -183,13 +215,17 @@ pub(crate) struct RobotArgs {
     /// Append `seq stamp_ns received_ns` for every firing received to this file.
     #[arg(long, value_name = "FILE")]
     latency_log: Option<PathBuf>,
+    /// Keep serving after the supervisor says its run is over (default: exit then).
+    #[arg(long)]
+    stay: bool,
     #[command(flatten)]
     dds: DdsArgs,
     #[command(flatten)]
     net: NetArgs,
 }
 
-/// `plan-runner robot`: serve until Ctrl-C or SIGTERM.
+/// `plan-runner robot`: serve until the supervisor's run is over (with `--stay`: until
+/// Ctrl-C or SIGTERM).
 pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
     let plan = read_plan(&args.plan, &args.net.read_options())?;
     if !wanted(&plan) {
@@ -219,6 +255,7 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         seed: args.seed.or(plan.seed).unwrap_or(0),
         time_scale: scale,
         latency_log: args.latency_log.clone(),
+        stay: args.stay,
     };
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -234,6 +271,12 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         );
         serve(&plan.net, &plan.ros2, &cfg, opts, shutdown()).await
     })?;
+    if let Some(over) = &stats.run_over {
+        eprintln!(
+            "robot {}: the supervisor's run is over ({over}): leaving",
+            args.id
+        );
+    }
     eprintln!(
         "robot {}: {} goals, {} cancelled, {} firings received",
         args.id, stats.goals, stats.cancelled, stats.firings
