@@ -10,3 +10,4 @@ mod readme;
 mod run;
 mod run_on_robots;
 mod simulate;
+mod synthesize;

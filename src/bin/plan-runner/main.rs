@@ -15,6 +15,7 @@ mod run;
 #[cfg(feature = "web")]
 mod serve;
 mod simulate;
+mod synthesize;
 
 use std::process::ExitCode;
 
@@ -38,6 +39,8 @@ enum Command {
     Simulate(simulate::Args),
     /// Execute a plan (or a bare net) on agents.
     Run(run::Args),
+    /// The optimal policy of a net with rewards: decision model, objective, `[[policy]]` rules.
+    Synthesize(synthesize::Args),
     /// Convert a net between formats (chosen by the output's extension).
     Convert(convert::Args),
     /// Turn a thesis framework execution input (JSON) into a plan.toml next to its net.
@@ -62,6 +65,7 @@ fn main() -> ExitCode {
         Command::Analyze(a) => analyze::main(a),
         Command::Simulate(a) => simulate::main(a),
         Command::Run(a) => run::main(a),
+        Command::Synthesize(a) => synthesize::main(a),
         Command::Convert(a) => convert::main(a),
         Command::ImportThesis(a) => import_thesis::main(a),
         #[cfg(feature = "web")]
