@@ -6,6 +6,7 @@
 //! [`LoadError`] carrying the file, the line and column, and the offending name.
 
 pub mod dot;
+pub mod drn;
 pub mod expr;
 pub mod pipe;
 pub mod pnml;

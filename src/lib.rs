@@ -24,6 +24,8 @@
 //! - [`runtime`]: the actor runtime — supervisor, agents, places, actions, events, journal,
 //!   roles and stop conditions; `Runtime::builder(net)…spawn()` embeds a running plan in a
 //!   tokio service.
+//! - `actions` (unix): actions as programs in any language — a command per action or a
+//!   long-lived JSON Lines worker — registered on the runtime like any other action.
 //! - [`world`]: the robot world — the room a plan describes (`world::map`), built-in robot
 //!   programs (`goto L2; measure`), and (feature `sim`) simulated robots in a rapier2d room.
 //! - [`ros2`]: the ROS 2 backend (feature `ros2`) — robots as ExecPlace action servers,
@@ -42,6 +44,8 @@
 #![warn(missing_docs, missing_debug_implementations, unreachable_pub)]
 #![deny(unused_must_use)]
 
+#[cfg(unix)]
+pub mod actions;
 pub mod analysis;
 pub mod check;
 pub mod firing;

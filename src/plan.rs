@@ -38,11 +38,13 @@
 pub mod file;
 pub mod map;
 pub mod resolve;
+pub mod rewards;
 pub mod ros2;
 pub mod thesis;
 
 use std::path::{Path, PathBuf};
 
+use crate::analysis::decision::{Controls, RewardSpec};
 use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span, read_net};
 use crate::net::{Net, PlaceId};
 use crate::policy::Policy;
@@ -52,6 +54,7 @@ use crate::world::map::Map;
 use file::locate;
 
 pub use file::{ParamValue, PlaceFile, PlanFile, RuleFile, StopFile, json_schema};
+pub use rewards::RewardFile;
 pub use ros2::Ros2File;
 
 /// A plan ready to run: the net, what each place does, the policy and when to stop.
@@ -86,6 +89,10 @@ pub struct Plan {
     pub map: Option<Map>,
     /// The ROS 2 backend's settings and the places it serves (feature `ros2`).
     pub ros2: Ros2Settings,
+    /// Reward structures (`[rewards.NAME]`), in name order.
+    pub rewards: Vec<RewardSpec>,
+    /// What a policy controls: `controllable` transitions and `wait`.
+    pub controls: Controls,
 }
 
 impl Plan {
@@ -93,6 +100,7 @@ impl Plan {
     /// condition. `plan-runner run NET` uses it.
     pub fn for_net(net_path: &Path, loaded: Loaded) -> Plan {
         let n = loaded.net.place_count();
+        let controls = Controls::zero_weight(&loaded.net);
         Plan {
             path: net_path.to_path_buf(),
             net_path: net_path.to_path_buf(),
@@ -108,6 +116,8 @@ impl Plan {
             warnings: loaded.warnings,
             map: None,
             ros2: Ros2Settings::default(),
+            rewards: Vec::new(),
+            controls,
         }
     }
 

@@ -29,7 +29,7 @@
 //! ```
 
 pub(crate) mod explore;
-mod packing;
+pub(crate) mod packing;
 pub(crate) mod table;
 
 use std::sync::Arc;
@@ -250,6 +250,65 @@ fn km_limit(places: usize) -> usize {
     (5_000_000 / places.max(1)).clamp(1, 200_000)
 }
 
+/// Searches every reachable marking of `net` (structural bounds first, Karp–Miller when they
+/// do not bound every place). With `wait`, vanishing markings also list their enabled
+/// exponential transitions and those targets are searched ([`explore::explore_with`]).
+pub(crate) fn search(
+    net: &Net,
+    opts: &Options,
+    monitor: &Monitor,
+    wait: bool,
+) -> Result<explore::Raw, AnalysisError> {
+    if monitor.is_cancelled() {
+        return Err(AnalysisError::Cancelled { markings: 0 });
+    }
+    let mut bounds = structural_bounds(net);
+    if bounds.iter().any(Option::is_none) {
+        match karp_miller(net, km_limit(net.place_count()).min(opts.max_states)) {
+            Coverability::Unbounded(places) => {
+                return Err(AnalysisError::Unbounded {
+                    places: places
+                        .into_iter()
+                        .map(|p| net.place(p).name.clone())
+                        .collect(),
+                });
+            }
+            Coverability::Bounded(max) => {
+                bounds = max.into_iter().map(|b| Some(b as u64)).collect();
+            }
+            Coverability::Undecided => {}
+        }
+    }
+    if let Some((p, &Some(b))) = bounds
+        .iter()
+        .enumerate()
+        .find(|(_, b)| b.is_some_and(|b| b > MAX_TOKENS as u64))
+    {
+        return Err(AnalysisError::TooManyTokens {
+            place: net.places()[p].name.clone(),
+            tokens: b,
+        });
+    }
+    let initial: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
+    let layout = Layout::new(&bounds, &initial);
+    let threads = match opts.threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    };
+    explore::explore_with(
+        net,
+        layout,
+        explore::Limits {
+            states: opts.max_states,
+            memory: opts.max_memory,
+        },
+        threads,
+        opts.progress,
+        monitor,
+        wait,
+    )
+}
+
 impl StateSpace {
     /// Builds the state space of `net`.
     pub fn build(net: &Net, opts: &Options) -> Result<StateSpace, AnalysisError> {
@@ -263,53 +322,7 @@ impl StateSpace {
         opts: &Options,
         monitor: &Monitor,
     ) -> Result<StateSpace, AnalysisError> {
-        if monitor.is_cancelled() {
-            return Err(AnalysisError::Cancelled { markings: 0 });
-        }
-        let mut bounds = structural_bounds(net);
-        if bounds.iter().any(Option::is_none) {
-            match karp_miller(net, km_limit(net.place_count()).min(opts.max_states)) {
-                Coverability::Unbounded(places) => {
-                    return Err(AnalysisError::Unbounded {
-                        places: places
-                            .into_iter()
-                            .map(|p| net.place(p).name.clone())
-                            .collect(),
-                    });
-                }
-                Coverability::Bounded(max) => {
-                    bounds = max.into_iter().map(|b| Some(b as u64)).collect();
-                }
-                Coverability::Undecided => {}
-            }
-        }
-        if let Some((p, &Some(b))) = bounds
-            .iter()
-            .enumerate()
-            .find(|(_, b)| b.is_some_and(|b| b > MAX_TOKENS as u64))
-        {
-            return Err(AnalysisError::TooManyTokens {
-                place: net.places()[p].name.clone(),
-                tokens: b,
-            });
-        }
-        let initial: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
-        let layout = Layout::new(&bounds, &initial);
-        let threads = match opts.threads {
-            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-            n => n,
-        };
-        let raw = explore::explore(
-            net,
-            layout,
-            explore::Limits {
-                states: opts.max_states,
-                memory: opts.max_memory,
-            },
-            threads,
-            opts.progress,
-            monitor,
-        )?;
+        let raw = search(net, opts, monitor, false)?;
         Self::from_raw(net, raw)
     }
 

@@ -9,6 +9,7 @@ use toml::Spanned;
 
 use super::Plan;
 use super::file::{PlaceFile, PlanFile, RuleFile, locate};
+use super::rewards::{resolve_controls, resolve_rewards};
 use super::ros2::resolve_ros2;
 use crate::io::{LoadError, LoadErrorKind};
 use crate::net::predicate::Predicate;
@@ -162,6 +163,9 @@ impl PlanFile {
             }
         }
 
+        let rewards = resolve_rewards(&net, &self.rewards, &at)?;
+        let controls = resolve_controls(&net, self.controllable.as_ref(), self.wait, &at)?;
+
         Ok(Plan {
             path: path.to_path_buf(),
             net_path: self.net_path(path),
@@ -177,6 +181,8 @@ impl PlanFile {
             warnings,
             map,
             ros2,
+            rewards,
+            controls,
         })
     }
 }
@@ -193,7 +199,7 @@ fn string_content_offset(text: &str, start: usize) -> usize {
     }
 }
 
-fn unknown(what: &'static str, name: &str) -> LoadErrorKind {
+pub(super) fn unknown(what: &'static str, name: &str) -> LoadErrorKind {
     LoadErrorKind::UnknownNode {
         what,
         name: name.to_string(),

@@ -11,6 +11,7 @@ use tokio::sync::{broadcast, watch};
 
 use super::action::Action;
 use super::agent::AgentMode;
+use super::builtin::Builtin;
 use super::engine::Engine;
 use super::event::Events;
 use super::handle::{Progress, RuntimeHandle};
@@ -261,10 +262,31 @@ impl RuntimeBuilder {
                 robot,
             }) = &self.roles[p.index()]
             {
-                match self.actions.get(name) {
-                    Some(a) => setups.push(PlaceSetup {
+                let action = match self.actions.get(name) {
+                    Some(a) => Some(Arc::clone(a)),
+                    // Not registered: a built-in (`wait`, `log`, `fire`), when it is one.
+                    None => match Builtin::parse(name, &net, p) {
+                        Some(Ok(b)) => {
+                            let scale = if self.time_scale > 0.0 {
+                                self.time_scale
+                            } else {
+                                1.0
+                            };
+                            Some(Arc::new(b.action(scale)) as Arc<dyn Action>)
+                        }
+                        Some(Err(reason)) => {
+                            return Err(RuntimeError::BadBuiltin {
+                                place: net.place(p).name.clone(),
+                                reason,
+                            });
+                        }
+                        None => None,
+                    },
+                };
+                match action {
+                    Some(action) => setups.push(PlaceSetup {
                         place: p,
-                        action: Arc::clone(a),
+                        action,
                         timeout: *timeout,
                         on_failure: *on_failure,
                         robot: robot.as_deref().map(Arc::from),
@@ -349,6 +371,7 @@ impl RuntimeBuilder {
             grace: self.grace,
             agent_mode: self.agent_mode,
             robots: self.robots,
+            seed,
         });
         Ok(RuntimeHandle {
             sup,

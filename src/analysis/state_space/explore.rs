@@ -68,6 +68,7 @@ fn generate(
     deltas: &Deltas,
     frontier: &[u64],
     first: usize,
+    wait: bool,
 ) -> Block {
     let w = layout.words();
     let n = frontier.len() / w;
@@ -86,6 +87,15 @@ fn generate(
         let base = &frontier[i * w..(i + 1) * w];
         layout.unpack(base, &mut m);
         let tangible = firing::moves(net, rules, &m, &mut fire);
+        if wait && !tangible {
+            // Negative: an exponential rate out of a vanishing marking (see `Search::insert`).
+            for &t in rules.exponentials() {
+                let r = net.exp_rate(&m, t);
+                if r > 0.0 {
+                    fire.push((t, -r));
+                }
+            }
+        }
         let (items_len, keys_len) = (b.items.len(), b.keys.len());
         for &(t, v) in &fire {
             for &(p, d) in net.delta(t) {
@@ -171,7 +181,12 @@ impl Search<'_> {
                     self.check_memory()?;
                     self.raw.parent.push((src, t));
                 }
-                let (rate, prob) = if tangible { (v, 1.0) } else { (0.0, v) };
+                let (rate, prob) = match (tangible, v < 0.0) {
+                    (true, _) => (v, 1.0),
+                    // An exponential transition enabled in a vanishing marking (WAIT).
+                    (false, true) => (-v, 0.0),
+                    (false, false) => (0.0, v),
+                };
                 self.group.push(Move {
                     transition: TransitionId(t),
                     rate,
@@ -197,6 +212,7 @@ impl Search<'_> {
 }
 
 /// Searches the whole reachability graph from the initial marking.
+#[cfg(test)]
 pub(crate) fn explore(
     net: &Net,
     layout: Layout,
@@ -204,6 +220,21 @@ pub(crate) fn explore(
     threads: usize,
     progress: bool,
     monitor: &Monitor,
+) -> Result<Raw, AnalysisError> {
+    explore_with(net, layout, limits, threads, progress, monitor, false)
+}
+
+/// As [`explore`]; with `wait`, a vanishing marking's group also holds its enabled
+/// exponential transitions (`rate > 0`, `prob == 0`) and their targets are searched too: the
+/// markings a WAIT choice reaches.
+pub(crate) fn explore_with(
+    net: &Net,
+    layout: Layout,
+    limits: Limits,
+    threads: usize,
+    progress: bool,
+    monitor: &Monitor,
+    wait: bool,
 ) -> Result<Raw, AnalysisError> {
     let rules = Rules::new(net);
     let mut store = MarkingStore::new(layout, net.place_count());
@@ -250,7 +281,15 @@ pub(crate) fn explore(
         let overflow = if threads <= 1 || hi - cursor < PAR_MIN {
             let mut over = None;
             for (k, chunk) in frontier.chunks(BLOCK * w).enumerate() {
-                let b = generate(net, &rules, &layout, &deltas, chunk, cursor + k * BLOCK);
+                let b = generate(
+                    net,
+                    &rules,
+                    &layout,
+                    &deltas,
+                    chunk,
+                    cursor + k * BLOCK,
+                    wait,
+                );
                 over = s.insert(&b)?;
                 if over.is_some() {
                     break;
@@ -259,7 +298,7 @@ pub(crate) fn explore(
             over
         } else {
             let ctx = (net, &rules, &layout, &deltas);
-            expand_parallel(ctx, &frontier, cursor, threads, &mut s)?
+            expand_parallel(ctx, &frontier, cursor, threads, &mut s, wait)?
         };
         match overflow {
             Some((state, p, value)) => {
@@ -287,12 +326,14 @@ pub(crate) fn explore(
 
 /// Expands a large frontier: `threads - 1` workers compute blocks round-robin, the calling
 /// thread inserts them in order.
+#[allow(clippy::too_many_arguments)]
 fn expand_parallel(
     (net, rules, layout, deltas): (&Net, &Rules, &Layout, &Deltas),
     frontier: &[u64],
     first: usize,
     threads: usize,
     s: &mut Search<'_>,
+    wait: bool,
 ) -> Result<Option<(usize, usize, u32)>, AnalysisError> {
     let w = layout.words();
     let chunks: Vec<&[u64]> = frontier.chunks(BLOCK * w).collect();
@@ -305,7 +346,7 @@ fn expand_parallel(
             let chunks = &chunks;
             scope.spawn(move || {
                 for (j, chunk) in chunks.iter().enumerate().skip(k).step_by(workers) {
-                    let b = generate(net, rules, layout, deltas, chunk, first + j * BLOCK);
+                    let b = generate(net, rules, layout, deltas, chunk, first + j * BLOCK, wait);
                     let stop = b.overflow.is_some();
                     if tx.send(b).is_err() || stop {
                         return;
