@@ -39,6 +39,7 @@
 
 pub mod coverability;
 pub mod ctmc;
+pub mod decision;
 pub mod invariants;
 pub mod measures;
 pub mod properties;

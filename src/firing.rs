@@ -108,6 +108,11 @@ pub(crate) struct Rules {
 
 impl Rules {
     /// The rules of `net`.
+    /// The exponential transitions, in net order.
+    pub(crate) fn exponentials(&self) -> &[TransitionId] {
+        &self.exponentials
+    }
+
     pub(crate) fn new(net: &Net) -> Rules {
         let mut immediates = Vec::new();
         let mut exponentials = Vec::new();

@@ -6,6 +6,7 @@
 //! [`LoadError`] carrying the file, the line and column, and the offending name.
 
 pub mod dot;
+pub mod drn;
 pub mod expr;
 pub mod pipe;
 pub mod pnml;
@@ -57,6 +58,63 @@ impl Span {
     }
 }
 
+/// The start of every line of a text, and character counts at fixed steps, found once: then
+/// locating an offset costs a binary search and a short count, instead of a scan from the
+/// start of the text (or of a long line). Readers that locate every name — thesis inputs are
+/// one JSON object on a few lines, plans have many rules — were quadratic in the file's size.
+#[derive(Clone, Debug)]
+pub struct LineIndex {
+    starts: Vec<usize>,
+    /// Characters in `text[..k * STEP]`, per k.
+    chars: Vec<usize>,
+}
+
+impl LineIndex {
+    const STEP: usize = 4096;
+
+    /// Indexes the lines of `text`.
+    pub fn new(text: &[u8]) -> LineIndex {
+        let mut starts = vec![0];
+        starts.extend(
+            text.iter()
+                .enumerate()
+                .filter(|&(_, &b)| b == b'\n')
+                .map(|(i, _)| i + 1),
+        );
+        let mut chars = Vec::with_capacity(text.len() / Self::STEP + 1);
+        let mut n = 0;
+        chars.push(0);
+        for block in text.chunks(Self::STEP) {
+            n += char_starts(block);
+            chars.push(n);
+        }
+        LineIndex { starts, chars }
+    }
+
+    /// Characters in `text[..offset]`.
+    fn chars_before(&self, text: &[u8], offset: usize) -> usize {
+        let k = offset / Self::STEP;
+        self.chars[k] + char_starts(&text[k * Self::STEP..offset])
+    }
+
+    /// The same answer as [`Span::locate`] for the (UTF-8) text this index was built from.
+    pub fn locate(&self, text: &[u8], offset: usize) -> Span {
+        let offset = offset.min(text.len());
+        let line = self.starts.partition_point(|&s| s <= offset);
+        let start = self.starts[line - 1];
+        let column = self.chars_before(text, offset) - self.chars_before(text, start) + 1;
+        Span {
+            line: line as u32,
+            column: column as u32,
+        }
+    }
+}
+
+/// Characters that start in `bytes` (UTF-8: every byte but the continuation bytes).
+fn char_starts(bytes: &[u8]) -> usize {
+    bytes.iter().filter(|&&b| b & 0xC0 != 0x80).count()
+}
+
 impl fmt::Display for Span {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}:{}", self.line, self.column)
@@ -75,6 +133,24 @@ pub struct LoadError {
 }
 
 impl LoadError {
+    /// The template parameter this error is about, when it is about one given from outside
+    /// the net file (a plan's `[params]` or `--param`): the plan reader then points at it.
+    pub fn template_parameter(&self) -> Option<&str> {
+        match &self.kind {
+            LoadErrorKind::UnknownNode {
+                what: "template parameter",
+                name,
+            }
+            | LoadErrorKind::NotANumber {
+                what: "template parameter",
+                name,
+                ..
+            }
+            | LoadErrorKind::BadParam { name, .. } => Some(name),
+            _ => None,
+        }
+    }
+
     /// An error at a known position.
     pub fn at(path: impl Into<PathBuf>, span: Span, kind: LoadErrorKind) -> Self {
         LoadError {
@@ -177,6 +253,16 @@ pub enum LoadErrorKind {
         /// The node it belongs to.
         name: String,
         /// Why it failed (unknown identifier, syntax...).
+        reason: String,
+    },
+    /// A template parameter's value does not suit the parameter (a fraction for an INTEGER).
+    #[error("template parameter `{name}` = {value}: {reason}")]
+    BadParam {
+        /// The parameter.
+        name: String,
+        /// The value given.
+        value: String,
+        /// Why it does not suit.
         reason: String,
     },
     /// A semantic check on the finished net failed.
@@ -322,5 +408,25 @@ mod tests {
         // 'é' is two bytes but one column.
         assert_eq!(Span::locate(text, 7), Span { line: 2, column: 4 });
         assert_eq!(Span::locate(text, 9), Span { line: 3, column: 2 });
+        let index = LineIndex::new(text);
+        for at in 0..=text.len() + 1 {
+            assert_eq!(
+                index.locate(text, at),
+                Span::locate(text, at),
+                "offset {at}"
+            );
+        }
+        // Past the first step of the character table, on a long line.
+        let long = format!("é\n{}\nab", "xé".repeat(5000));
+        let (long, index) = (long.as_bytes(), LineIndex::new(long.as_bytes()));
+        for at in [0, 2, 3, 4097, 9000, 15_003, long.len()] {
+            if std::str::from_utf8(long).unwrap().is_char_boundary(at) {
+                assert_eq!(
+                    index.locate(long, at),
+                    Span::locate(long, at),
+                    "offset {at}"
+                );
+            }
+        }
     }
 }

@@ -24,11 +24,14 @@
 //! - [`runtime`]: the actor runtime — supervisor, agents, places, actions, events, journal,
 //!   roles and stop conditions; `Runtime::builder(net)…spawn()` embeds a running plan in a
 //!   tokio service.
+//! - `actions` (unix): actions as programs in any language — a command per action or a
+//!   long-lived JSON Lines worker — registered on the runtime like any other action.
 //! - [`world`]: the robot world — the room a plan describes (`world::map`), built-in robot
 //!   programs (`goto L2; measure`), and (feature `sim`) simulated robots in a rapier2d room.
 //! - [`ros2`]: the ROS 2 backend (feature `ros2`) — robots as ExecPlace action servers,
 //!   firings and the marking on topics, over DDS (`plan-runner robot`, `docs/ros2.md`);
 //!   `ros2::settings` (what a plan tells it) is compiled without the feature too.
+//! - [`limits`]: the largest token count and duration a user may ask for.
 //! - `web` (feature `web`): the viewer — an axum server with embedded assets that draws a
 //!   net, plays its token game and shows its analysis (`plan-runner serve`).
 //! - [`plan`]: the composition root — the plan file (TOML) read and resolved, import-thesis,
@@ -41,10 +44,13 @@
 #![warn(missing_docs, missing_debug_implementations, unreachable_pub)]
 #![deny(unused_must_use)]
 
+#[cfg(unix)]
+pub mod actions;
 pub mod analysis;
 pub mod check;
 pub mod firing;
 pub mod io;
+pub mod limits;
 pub mod net;
 pub mod plan;
 pub mod policy;

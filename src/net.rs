@@ -42,6 +42,27 @@ pub use element::{Arc, ArcKind, Place, Position, Servers, Timing, Transition};
 pub use id::{PlaceId, TransitionId};
 pub use marking::Marking;
 
+use rustc_hash::FxHashMap;
+
+/// The most tokens a place can hold: counts are `u32`, and a firing that would go past this
+/// is refused ([`Net::fire`]), a file that asks for more is refused with its position.
+pub const MAX_TOKENS: u32 = u32::MAX;
+
+/// How a reader or a driver says a count is too large (the sentence ends the message).
+pub const TOO_MANY_TOKENS: &str = "exceeds the maximum token count 4294967295";
+
+/// A firing that would put more than [`MAX_TOKENS`] tokens in a place.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("firing transition {} would put {tokens} tokens in place {}", transition.0, place.0)]
+pub struct TokenOverflow {
+    /// The transition.
+    pub transition: TransitionId,
+    /// The place that would overflow.
+    pub place: PlaceId,
+    /// The count it would reach.
+    pub tokens: u64,
+}
+
 /// A validated, immutable Petri net with the indices that make firing cheap.
 #[derive(Clone, Debug)]
 pub struct Net {
@@ -64,6 +85,10 @@ pub struct Net {
     capacity: Vec<u32>,
     has_capacity: bool,
     has_immediate: bool,
+    /// Place names → ids, built once so lookups by name cost O(1).
+    place_index: FxHashMap<Box<str>, u32>,
+    /// Transition names → ids.
+    transition_index: FxHashMap<Box<str>, u32>,
 }
 
 impl Net {
@@ -119,18 +144,12 @@ impl Net {
 
     /// Looks a place up by name (edges only: files, CLI, viewer).
     pub fn place_by_name(&self, name: &str) -> Option<PlaceId> {
-        self.places
-            .iter()
-            .position(|p| p.name == name)
-            .map(|i| PlaceId(i as u32))
+        self.place_index.get(name).map(|&i| PlaceId(i))
     }
 
     /// Looks a transition up by name (edges only: files, CLI, viewer).
     pub fn transition_by_name(&self, name: &str) -> Option<TransitionId> {
-        self.transitions
-            .iter()
-            .position(|t| t.name == name)
-            .map(|i| TransitionId(i as u32))
+        self.transition_index.get(name).map(|&i| TransitionId(i))
     }
 
     /// The initial marking.
@@ -245,25 +264,55 @@ impl Net {
         }
     }
 
-    /// Fires `t` in place: subtracts inputs, adds outputs. The caller checks enabling; firing
-    /// a disabled transition is a logic error (checked in debug builds).
+    /// The first place that firing `t` in `m` would push past [`MAX_TOKENS`], if any: every
+    /// driver asks before it changes a marking, so a count never wraps.
     #[inline]
-    pub fn fire(&self, m: &mut [u32], t: TransitionId) {
+    pub fn overflow(&self, m: &[u32], t: TransitionId) -> Option<TokenOverflow> {
+        self.delta[t.index()]
+            .iter()
+            .find(|&&(p, d)| d > 0 && m[p.index()] as i64 + d > MAX_TOKENS as i64)
+            .map(|&(place, d)| TokenOverflow {
+                transition: t,
+                place,
+                tokens: m[place.index()] as u64 + d as u64,
+            })
+    }
+
+    /// Fires `t` in place: subtracts inputs, adds outputs; a firing that would put more than
+    /// [`MAX_TOKENS`] in a place changes nothing and is refused. The caller checks enabling;
+    /// firing a disabled transition is a logic error (checked in debug builds).
+    #[inline]
+    pub fn fire(&self, m: &mut [u32], t: TransitionId) -> Result<(), TokenOverflow> {
         debug_assert!(self.is_enabled(m, t), "fired a disabled transition");
+        if let Some(o) = self.overflow(m, t) {
+            return Err(o);
+        }
         for &(p, d) in &self.delta[t.index()] {
             let v = &mut m[p.index()];
             *v = (*v as i64 + d) as u32;
         }
+        Ok(())
     }
 
-    /// The marking reached by firing `t` from `m`, or `None` when `t` is not enabled.
+    /// The marking reached by firing `t` from `m`, or `None` when `t` is not enabled or the
+    /// firing would overflow a place.
     pub fn fire_checked(&self, m: &Marking, t: TransitionId) -> Option<Marking> {
         if !self.is_enabled(m, t) {
             return None;
         }
         let mut next = m.clone();
-        self.fire(&mut next, t);
+        self.fire(&mut next, t).ok()?;
         Some(next)
+    }
+
+    /// The sentence for an overflow, with the names.
+    pub fn describe_overflow(&self, o: &TokenOverflow) -> String {
+        format!(
+            "firing `{}` would put {} tokens in place `{}`, which {TOO_MANY_TOKENS}",
+            self.transition(o.transition).name,
+            o.tokens,
+            self.place(o.place).name
+        )
     }
 
     /// True when some immediate transition is enabled in `m` (time cannot pass there).

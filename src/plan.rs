@@ -38,11 +38,13 @@
 pub mod file;
 pub mod map;
 pub mod resolve;
+pub mod rewards;
 pub mod ros2;
 pub mod thesis;
 
 use std::path::{Path, PathBuf};
 
+use crate::analysis::decision::{Controls, RewardSpec};
 use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span, read_net};
 use crate::net::{Net, PlaceId};
 use crate::policy::Policy;
@@ -52,6 +54,7 @@ use crate::world::map::Map;
 use file::locate;
 
 pub use file::{ParamValue, PlaceFile, PlanFile, RuleFile, StopFile, json_schema};
+pub use rewards::RewardFile;
 pub use ros2::Ros2File;
 
 /// A plan ready to run: the net, what each place does, the policy and when to stop.
@@ -86,6 +89,10 @@ pub struct Plan {
     pub map: Option<Map>,
     /// The ROS 2 backend's settings and the places it serves (feature `ros2`).
     pub ros2: Ros2Settings,
+    /// Reward structures (`[rewards.NAME]`), in name order.
+    pub rewards: Vec<RewardSpec>,
+    /// What a policy controls: `controllable` transitions and `wait`.
+    pub controls: Controls,
 }
 
 impl Plan {
@@ -93,6 +100,7 @@ impl Plan {
     /// condition. `plan-runner run NET` uses it.
     pub fn for_net(net_path: &Path, loaded: Loaded) -> Plan {
         let n = loaded.net.place_count();
+        let controls = Controls::zero_weight(&loaded.net);
         Plan {
             path: net_path.to_path_buf(),
             net_path: net_path.to_path_buf(),
@@ -108,6 +116,8 @@ impl Plan {
             warnings: loaded.warnings,
             map: None,
             ros2: Ros2Settings::default(),
+            rewards: Vec::new(),
+            controls,
         }
     }
 
@@ -151,8 +161,20 @@ impl From<Plan> for crate::world::fleet::FleetPlan {
 /// `--page`) overrides the plan's `page`; `opts.params` override the plan's `params` of the
 /// same name, and both go to the net reader.
 pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let bytes = e.as_bytes();
+        let at = e.utf8_error().valid_up_to();
+        LoadError::at(
+            path,
+            crate::io::Span::locate(bytes, at),
+            LoadErrorKind::Invalid(format!(
+                "the file is not UTF-8: byte 0x{:02x} cannot start a character here",
+                bytes[at]
+            )),
+        )
+    })?;
     if text.trim().is_empty() {
         return Err(LoadError::file(path, LoadErrorKind::Empty));
     }
@@ -162,8 +184,8 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
     let mut params: Vec<(String, String)> = file
         .params
         .iter()
-        .filter(|(k, _)| !opts.params.iter().any(|(o, _)| o == *k))
-        .map(|(k, v)| (k.clone(), v.to_string()))
+        .filter(|(k, _)| !opts.params.iter().any(|(o, _)| o == k.get_ref()))
+        .map(|(k, v)| (k.get_ref().clone(), v.to_string()))
         .collect();
     params.extend(opts.params.iter().cloned());
     let net_opts = ReadOptions {
@@ -181,7 +203,18 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
             )),
         ));
     }
-    let loaded = read_net(&net_path, &net_opts)?;
+    let loaded = read_net(&net_path, &net_opts).map_err(|e| {
+        // A bad `[params]` entry is the plan's mistake: point at it, not at the net file.
+        let entry = e.template_parameter().and_then(|name| {
+            let from_cli = opts.params.iter().any(|(o, _)| o == name);
+            let key = file.params.keys().find(|k| k.get_ref() == name)?;
+            (!from_cli && e.span.is_none()).then(|| key.span())
+        });
+        match entry {
+            Some(span) => LoadError::at(path, locate(&text, span), e.kind),
+            None => e,
+        }
+    })?;
     let mut plan = file.resolve(path, &text, loaded.net)?;
     plan.net_path = net_path;
     plan.page = page;

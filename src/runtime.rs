@@ -5,7 +5,8 @@
 //! - [`agent`]: one agent per token in an action place (stable [`AgentId`]), spawned and
 //!   ended with the tokens; optionally a kameo actor each ([`AgentMode`]).
 //! - [`place`]: one actor per action place, running each agent's [`Action`] concurrently.
-//! - [`action`]: the [`Action`] trait and its [`Outcome`].
+//! - [`action`]: the [`Action`] trait and its [`Outcome`]; [`builtin`]: `wait`, `log`,
+//!   `fire`, the actions every plan has.
 //! - [`event`]: the broadcast bus of [`Event`]s; [`journal`]: the JSON Lines journal.
 //! - [`RuntimeBuilder`] / [`RuntimeHandle`]: embedding in an existing tokio runtime.
 //! - [`Role`] and [`FailurePolicy`] (what a place does), [`StopConditions`] (when a run ends).
@@ -48,6 +49,7 @@ pub mod action;
 pub mod agent;
 mod backend;
 mod builder;
+pub mod builtin;
 mod clock;
 mod conservation;
 mod engine;
@@ -66,10 +68,14 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-pub use action::{Action, ActionContext, ActionFuture, CancelToken, FnAction, Outcome, action_fn};
+pub use action::{
+    Action, ActionContext, ActionFuture, CancelToken, FnAction, MAX_OUTPUT_LINE, Outcome,
+    OutputSink, OutputStream, action_fn,
+};
 pub use agent::{AgentMode, AgentState};
 pub use backend::{Backend, BackendError, BackendFuture, Backends, RunError, Section};
 pub use builder::RuntimeBuilder;
+pub use builtin::{BUILTIN_WORDS, Builtin};
 pub use event::{Event, EventKind, Events, Received};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};
 pub use id::AgentId;
@@ -152,9 +158,25 @@ pub enum RuntimeError {
     /// `spawn` was called outside a tokio runtime.
     #[error("the runtime must be spawned inside a tokio runtime")]
     NoTokio,
-    /// A time scale that is negative or not finite.
-    #[error("time scale {0} must be finite and ≥ 0")]
+    /// A time scale that is negative, not finite, or above
+    /// [`MAX_SECONDS`](crate::limits::MAX_SECONDS).
+    #[error("time scale {0} must be finite, ≥ 0 and ≤ 315576000")]
     BadTimeScale(f64),
+    /// In real time, an exponential transition whose mean delay is longer than
+    /// [`MAX_SECONDS`](crate::limits::MAX_SECONDS) (10 years): the run would sit still.
+    #[error(
+        "transition `{transition}`: rate {rate} at time scale {scale} gives a mean delay of {seconds:e} s of real time, more than the maximum 315576000 s (10 years)"
+    )]
+    DelayTooLong {
+        /// The transition.
+        transition: String,
+        /// Its rate.
+        rate: f64,
+        /// The time scale.
+        scale: f64,
+        /// Its mean delay in real seconds.
+        seconds: f64,
+    },
     /// `bind` named a place the net does not have.
     #[error("no place named `{0}`")]
     UnknownPlace(String),
@@ -177,6 +199,14 @@ pub enum RuntimeError {
         robots: usize,
         /// Initial tokens in action places (places with a registered action).
         agents: u64,
+    },
+    /// A place's action is a built-in (`wait`, `log`, `fire`) written wrongly.
+    #[error("place `{place}`: {reason}")]
+    BadBuiltin {
+        /// The place.
+        place: String,
+        /// What is wrong, with the action's text.
+        reason: String,
     },
     /// The journal file could not be created.
     #[error("journal {path}: {reason}")]

@@ -85,6 +85,15 @@ pub enum SimError {
     /// A time limit, run count or similar argument out of range.
     #[error("{0}")]
     BadArgument(String),
+    /// A firing would put more tokens in a place than a count can hold
+    /// ([`MAX_TOKENS`](crate::net::MAX_TOKENS)); the marking is left as it was.
+    #[error("at time {time}: {message}")]
+    TokenOverflow {
+        /// When.
+        time: f64,
+        /// Which transition and place, by name.
+        message: String,
+    },
 }
 
 /// One firing.
@@ -276,7 +285,7 @@ impl Simulator {
                 &mut self.rng,
             );
             self.instant += 1;
-            self.fire(t);
+            self.fire(t)?;
             return Ok(Some(Step {
                 time: self.time,
                 transition: t,
@@ -299,7 +308,7 @@ impl Simulator {
         };
         self.time = at;
         self.instant = 0;
-        self.fire(t);
+        self.fire(t)?;
         Ok(Some(Step {
             time: at,
             transition: t,
@@ -313,13 +322,19 @@ impl Simulator {
     }
 
     #[inline]
-    fn fire(&mut self, t: TransitionId) {
+    fn fire(&mut self, t: TransitionId) -> Result<(), SimError> {
         let net = &*self.net;
-        self.tally.fire(net, &mut self.marking, t, self.time);
+        self.tally
+            .fire(net, &mut self.marking, t, self.time)
+            .map_err(|o| SimError::TokenOverflow {
+                time: self.time,
+                message: net.describe_overflow(&o),
+            })?;
         self.firings += 1;
         self.last = Some(t);
         for &u in net.affected_by(t) {
             self.firable.refresh(net, &self.marking, u);
         }
+        Ok(())
     }
 }

@@ -29,12 +29,93 @@ use crate::net::{Net, PlaceId, TransitionId};
 /// Rows kept during Farkas' algorithm before it gives up (the answer is then incomplete).
 pub const DEFAULT_CAP: usize = 2000;
 
+/// One invariant: a non-negative integer vector kept as its non-zero entries in index order,
+/// so a net of n places with n invariants (n isolated places) takes O(n) memory, not O(n²).
+/// It compares equal to the dense vector with the same entries (`inv == vec![1, 1, 0]`), and
+/// orders like the dense vectors would.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Default)]
+pub struct Invariant(Vec<(u32, u64)>);
+
+impl Invariant {
+    /// The non-zero entries `(index, weight)`, by increasing index.
+    pub fn entries(&self) -> &[(u32, u64)] {
+        &self.0
+    }
+
+    /// The weight at `index` (0 off the support).
+    pub fn get(&self, index: usize) -> u64 {
+        self.0
+            .binary_search_by_key(&(index as u32), |&(i, _)| i)
+            .map_or(0, |k| self.0[k].1)
+    }
+
+    /// The indices with a non-zero weight, in order.
+    pub fn support(&self) -> impl Iterator<Item = usize> + '_ {
+        self.0.iter().map(|&(i, _)| i as usize)
+    }
+
+    /// The dense vector of length `n`.
+    pub fn to_dense(&self, n: usize) -> Vec<u64> {
+        let mut v = vec![0; n];
+        for &(i, w) in &self.0 {
+            v[i as usize] = w;
+        }
+        v
+    }
+}
+
+impl PartialEq<Vec<u64>> for Invariant {
+    fn eq(&self, dense: &Vec<u64>) -> bool {
+        self.0
+            .iter()
+            .all(|&(i, w)| dense.get(i as usize) == Some(&w))
+            && dense.iter().filter(|&&w| w != 0).count() == self.0.len()
+    }
+}
+
+impl Ord for Invariant {
+    /// The order of the dense vectors: at the first index where they differ, the larger
+    /// weight is the larger vector.
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        let (a, b) = (&self.0, &other.0);
+        let (mut i, mut k) = (0, 0);
+        loop {
+            match (a.get(i), b.get(k)) {
+                (None, None) => return std::cmp::Ordering::Equal,
+                // Past its end a vector is 0 where the other is non-zero.
+                (None, Some(_)) => return std::cmp::Ordering::Less,
+                (Some(_), None) => return std::cmp::Ordering::Greater,
+                (Some(&(x, v)), Some(&(y, w))) => {
+                    if x == y {
+                        if v != w {
+                            return v.cmp(&w);
+                        }
+                        i += 1;
+                        k += 1;
+                    } else if x < y {
+                        // `a` is non-zero at x, `b` is 0 there.
+                        return std::cmp::Ordering::Greater;
+                    } else {
+                        return std::cmp::Ordering::Less;
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl PartialOrd for Invariant {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
 /// Minimal-support invariants.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Invariants {
-    /// Each invariant as a dense non-negative vector (per place for P-invariants, per
-    /// transition for T-invariants), entries with gcd 1, sorted.
-    pub vectors: Vec<Vec<u64>>,
+    /// Each invariant (per place for P-invariants, per transition for T-invariants), entries
+    /// with gcd 1, sorted.
+    pub vectors: Vec<Invariant>,
     /// False when the computation hit its size cap or overflowed; `vectors` is then empty.
     pub complete: bool,
 }
@@ -42,7 +123,15 @@ pub struct Invariants {
 impl Invariants {
     /// True when every index `0..n` lies in the support of some invariant (the net is covered).
     pub fn covers_all(&self, n: usize) -> bool {
-        (0..n).all(|i| self.vectors.iter().any(|v| v[i] > 0))
+        let mut covered = vec![false; n];
+        for v in &self.vectors {
+            for i in v.support() {
+                if let Some(c) = covered.get_mut(i) {
+                    *c = true;
+                }
+            }
+        }
+        covered.into_iter().all(|c| c)
     }
 }
 
@@ -58,26 +147,23 @@ pub struct TokenLeak {
 /// P-invariants of `net`: non-negative `y` with `yᵀC = 0`, minimal supports. `cap` bounds the
 /// rows kept during the computation.
 pub fn p_invariants(net: &Net, cap: usize) -> Invariants {
-    let (np, nt) = (net.place_count(), net.transition_count());
-    let mut c = vec![vec![0i64; nt]; np];
+    let np = net.place_count();
+    let mut c: Vec<Vec<(u32, i64)>> = vec![Vec::new(); np];
     for t in net.transition_ids() {
         for &(p, d) in net.delta(t) {
-            c[p.index()][t.index()] = d;
+            c[p.index()].push((t.0, d));
         }
     }
-    farkas(c, nt, cap)
+    farkas(c, net.transition_count(), cap)
 }
 
 /// T-invariants of `net`: non-negative `x` with `Cx = 0`, minimal supports.
 pub fn t_invariants(net: &Net, cap: usize) -> Invariants {
-    let (np, nt) = (net.place_count(), net.transition_count());
-    let mut c = vec![vec![0i64; np]; nt];
-    for t in net.transition_ids() {
-        for &(p, d) in net.delta(t) {
-            c[t.index()][p.index()] = d;
-        }
-    }
-    farkas(c, np, cap)
+    let c: Vec<Vec<(u32, i64)>> = net
+        .transition_ids()
+        .map(|t| net.delta(t).iter().map(|&(p, d)| (p.0, d)).collect())
+        .collect();
+    farkas(c, net.place_count(), cap)
 }
 
 fn gcd(mut a: u64, mut b: u64) -> u64 {
@@ -87,86 +173,160 @@ fn gcd(mut a: u64, mut b: u64) -> u64 {
     a
 }
 
-/// One row of the Farkas tableau: the remaining matrix part and the combination of
-/// original rows (non-negative), with its support as a bitset.
+/// One row of the Farkas tableau, sparse: the remaining matrix part (non-zero columns, in
+/// order) and the combination of original rows (non-negative, its indices are the support).
 #[derive(Clone, Debug)]
 struct Row {
-    c: Vec<i64>,
-    y: Vec<u64>,
-    support: Vec<u64>,
+    c: Vec<(u32, i64)>,
+    y: Vec<(u32, u64)>,
 }
 
-fn support_of(y: &[u64]) -> Vec<u64> {
-    let mut s = vec![0u64; y.len().div_ceil(64)];
-    for (i, &v) in y.iter().enumerate() {
-        if v > 0 {
-            s[i / 64] |= 1 << (i % 64);
+impl Row {
+    fn at(&self, j: u32) -> i64 {
+        self.c
+            .binary_search_by_key(&j, |&(k, _)| k)
+            .map_or(0, |k| self.c[k].1)
+    }
+}
+
+/// True when the support of `a` lies within the support of `b` (both sorted).
+fn subset(a: &[(u32, u64)], b: &[(u32, u64)]) -> bool {
+    if a.len() > b.len() {
+        return false;
+    }
+    if a.len() * 16 < b.len() {
+        // A small support against a large one: look each index up.
+        return a
+            .iter()
+            .all(|&(i, _)| b.binary_search_by_key(&i, |&(k, _)| k).is_ok());
+    }
+    let mut it = b.iter().map(|&(i, _)| i);
+    a.iter().all(|&(i, _)| it.by_ref().any(|k| k == i))
+}
+
+/// `x·a + z·b` over two sparse vectors, zeros dropped; `None` on overflow.
+fn merge<T: Copy>(
+    a: &[(u32, T)],
+    b: &[(u32, T)],
+    f: impl Fn(Option<T>, Option<T>) -> Option<i128>,
+    back: impl Fn(i128) -> Option<T>,
+) -> Option<Vec<(u32, T)>> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut k) = (0, 0);
+    while i < a.len() || k < b.len() {
+        let (j, x, z) = match (a.get(i), b.get(k)) {
+            (Some(&(p, x)), Some(&(q, z))) if p == q => {
+                i += 1;
+                k += 1;
+                (p, Some(x), Some(z))
+            }
+            (Some(&(p, x)), Some(&(q, _))) if p < q => {
+                i += 1;
+                (p, Some(x), None)
+            }
+            (Some(&(p, x)), None) => {
+                i += 1;
+                (p, Some(x), None)
+            }
+            (_, Some(&(q, z))) => {
+                k += 1;
+                (q, None, Some(z))
+            }
+            (None, None) => unreachable!("loop condition"),
+        };
+        let v = f(x, z)?;
+        if v != 0 {
+            out.push((j, back(v)?));
         }
     }
-    s
-}
-
-fn subset(a: &[u64], b: &[u64]) -> bool {
-    a.iter().zip(b).all(|(&x, &y)| x & !y == 0)
+    Some(out)
 }
 
 /// Combines rows `p` (positive in column j) and `n` (negative) so column j cancels.
-fn combine(p: &Row, n: &Row, j: usize) -> Option<Row> {
-    let (a, b) = (n.c[j].unsigned_abs(), p.c[j] as u64);
+fn combine(p: &Row, n: &Row, j: u32) -> Option<Row> {
+    let (a, b) = (n.at(j).unsigned_abs(), p.at(j) as u64);
     let (a, b) = (a / gcd(a, b), b / gcd(a, b));
-    let mut c = Vec::with_capacity(p.c.len());
-    for (&x, &z) in p.c.iter().zip(&n.c) {
-        let v = (x as i128) * a as i128 + (z as i128) * b as i128;
-        c.push(i64::try_from(v).ok()?);
-    }
-    let mut y = Vec::with_capacity(p.y.len());
-    for (&x, &z) in p.y.iter().zip(&n.y) {
-        y.push(x.checked_mul(a)?.checked_add(z.checked_mul(b)?)?);
-    }
+    let lin = |x: Option<i64>, z: Option<i64>| {
+        Some(x.unwrap_or(0) as i128 * a as i128 + z.unwrap_or(0) as i128 * b as i128)
+    };
+    let mut c = merge(&p.c, &n.c, lin, |v| i64::try_from(v).ok())?;
+    let lin_y = |x: Option<u64>, z: Option<u64>| {
+        Some(x.unwrap_or(0) as i128 * a as i128 + z.unwrap_or(0) as i128 * b as i128)
+    };
+    let mut y = merge(&p.y, &n.y, lin_y, |v| u64::try_from(v).ok())?;
     let g = c
         .iter()
-        .map(|v| v.unsigned_abs())
-        .chain(y.iter().copied())
+        .map(|&(_, v)| v.unsigned_abs())
+        .chain(y.iter().map(|&(_, v)| v))
         .fold(0, gcd);
     if g > 1 {
-        c.iter_mut().for_each(|v| *v /= g as i64);
-        y.iter_mut().for_each(|v| *v /= g);
+        c.iter_mut().for_each(|(_, v)| *v /= g as i64);
+        y.iter_mut().for_each(|(_, v)| *v /= g);
     }
-    let support = support_of(&y);
-    Some(Row { c, y, support })
+    Some(Row { c, y })
 }
 
-/// Farkas' algorithm on the `n × m` matrix `c`: non-negative integer `y` with `yᵀc = 0`.
-fn farkas(c: Vec<Vec<i64>>, m: usize, cap: usize) -> Invariants {
-    let n = c.len();
+/// Farkas' algorithm on the sparse `n × m` matrix `c` (row i: its non-zero columns in
+/// order): non-negative integer `y` with `yᵀc = 0`. Memory and time per step follow the
+/// non-zero entries, not n × m.
+fn farkas(c: Vec<Vec<(u32, i64)>>, m: usize, cap: usize) -> Invariants {
     let mut rows: Vec<Row> = c
         .into_iter()
         .enumerate()
-        .map(|(i, c)| {
-            let mut y = vec![0u64; n];
-            y[i] = 1;
-            let support = support_of(&y);
-            Row { c, y, support }
+        .map(|(i, mut c)| {
+            c.sort_unstable_by_key(|&(j, _)| j);
+            Row {
+                c,
+                y: vec![(i as u32, 1)],
+            }
         })
         .collect();
     let mut done = vec![false; m];
-    for _ in 0..m {
-        // Next column: the one creating the fewest combinations.
-        let Some(j) = (0..m).filter(|&j| !done[j]).min_by_key(|&j| {
-            let pos = rows.iter().filter(|r| r.c[j] > 0).count();
-            let neg = rows.iter().filter(|r| r.c[j] < 0).count();
-            pos * neg
-        }) else {
+    // Per column: rows positive and negative there (reset after each step).
+    let (mut pos_count, mut neg_count) = (vec![0usize; m], vec![0usize; m]);
+    let mut touched: Vec<u32> = Vec::new();
+    loop {
+        // Next column: among those some row still has, the one creating the fewest
+        // combinations (ties: the lowest index).
+        for r in &rows {
+            for &(j, v) in &r.c {
+                let j = j as usize;
+                if pos_count[j] == 0 && neg_count[j] == 0 {
+                    touched.push(j as u32);
+                }
+                if v > 0 {
+                    pos_count[j] += 1;
+                } else {
+                    neg_count[j] += 1;
+                }
+            }
+        }
+        let next = touched
+            .iter()
+            .copied()
+            .filter(|&j| !done[j as usize])
+            .min_by_key(|&j| (pos_count[j as usize] * neg_count[j as usize], j));
+        for &j in &touched {
+            pos_count[j as usize] = 0;
+            neg_count[j as usize] = 0;
+        }
+        touched.clear();
+        let Some(j) = next else {
             break;
         };
-        done[j] = true;
+        done[j as usize] = true;
         let (mut keep, mut pos, mut neg) = (Vec::new(), Vec::new(), Vec::new());
         for r in rows {
-            match r.c[j].signum() {
+            match r.at(j).signum() {
                 0 => keep.push(r),
                 1 => pos.push(r),
                 _ => neg.push(r),
             }
+        }
+        // Every combination is held until the minimality check: refuse before allocating
+        // far more of them than the cap allows to keep.
+        if pos.len().saturating_mul(neg.len()) > 4 * cap.max(16) {
+            return Invariants::default();
         }
         let base = keep.len();
         for p in &pos {
@@ -184,8 +344,8 @@ fn farkas(c: Vec<Vec<i64>>, m: usize, cap: usize) -> Invariants {
                 if k == i || !alive[k] {
                     continue;
                 }
-                let (si, sk) = (&keep[i].support, &keep[k].support);
-                if subset(sk, si) && (si != sk || k < i) {
+                let (si, sk) = (&keep[i].y, &keep[k].y);
+                if subset(sk, si) && (sk.len() != si.len() || k < i) {
                     alive[i] = false;
                     break;
                 }
@@ -200,10 +360,10 @@ fn farkas(c: Vec<Vec<i64>>, m: usize, cap: usize) -> Invariants {
             return Invariants::default();
         }
     }
-    let mut vectors: Vec<Vec<u64>> = rows
+    let mut vectors: Vec<Invariant> = rows
         .into_iter()
-        .map(|r| r.y)
-        .filter(|y| y.iter().any(|&v| v > 0))
+        .filter(|r| !r.y.is_empty())
+        .map(|r| Invariant(r.y))
         .collect();
     vectors.sort();
     vectors.dedup();
@@ -225,15 +385,14 @@ pub fn structural_bounds(net: &Net) -> Vec<Option<u64>> {
         .collect();
     for y in &inv.vectors {
         let total: u128 = y
+            .entries()
             .iter()
-            .zip(&m0)
-            .map(|(&a, &b)| a as u128 * b as u128)
+            .map(|&(p, a)| a as u128 * m0[p as usize] as u128)
             .sum();
-        for (p, &w) in y.iter().enumerate() {
-            if w > 0 {
-                let b = u64::try_from(total / w as u128).unwrap_or(u64::MAX);
-                bounds[p] = Some(bounds[p].map_or(b, |old| old.min(b)));
-            }
+        for &(p, w) in y.entries() {
+            let p = p as usize;
+            let b = u64::try_from(total / w as u128).unwrap_or(u64::MAX);
+            bounds[p] = Some(bounds[p].map_or(b, |old| old.min(b)));
         }
     }
     bounds

@@ -56,8 +56,8 @@ pub struct Solver<'a> {
 pub struct Measures {
     /// E[tokens] per place.
     pub mean_tokens: Vec<f64>,
-    /// `token_distribution[p][k]` = P(place p holds k tokens), k up to the largest count seen.
-    pub token_distribution: Vec<Vec<f64>>,
+    /// `token_distribution[p].get(k)` = P(place p holds k tokens).
+    pub token_distribution: Vec<TokenDistribution>,
     /// P(place holds at least one token).
     pub prob_nonempty: Vec<f64>,
     /// Firings per unit time of each transition.
@@ -65,6 +65,53 @@ pub struct Measures {
     /// Mean time a token spends in each place: E[tokens] / Σ throughput of the place's output
     /// transitions (`None` when that sum is 0).
     pub mean_wait: Vec<Option<f64>>,
+}
+
+/// The distribution of one place's token count: P(k tokens) for each count seen. Its size
+/// follows the counts that occur, not the largest one (one state with 2³¹ tokens asked for
+/// a 16 GiB table when it was a dense vector).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TokenDistribution {
+    /// P(k) for k < `DENSE`, by k.
+    dense: Vec<f64>,
+    /// P(k) for larger counts.
+    sparse: std::collections::BTreeMap<u32, f64>,
+}
+
+impl TokenDistribution {
+    /// Counts below this live in a plain vector.
+    const DENSE: u32 = 1024;
+
+    fn add(&mut self, k: u32, p: f64) {
+        if k < Self::DENSE {
+            let k = k as usize;
+            if self.dense.len() <= k {
+                self.dense.resize(k + 1, 0.0);
+            }
+            self.dense[k] += p;
+        } else {
+            *self.sparse.entry(k).or_insert(0.0) += p;
+        }
+    }
+
+    /// P(k tokens); `None` for a count never seen.
+    pub fn get(&self, k: usize) -> Option<&f64> {
+        if k < Self::DENSE as usize {
+            self.dense.get(k)
+        } else {
+            self.sparse.get(&u32::try_from(k).ok()?)
+        }
+    }
+
+    /// `(k, P(k))` for every count seen (and the zero-probability counts below the largest
+    /// small one), by increasing k.
+    pub fn iter(&self) -> impl Iterator<Item = (u32, f64)> + '_ {
+        self.dense
+            .iter()
+            .enumerate()
+            .map(|(k, &p)| (k as u32, p))
+            .chain(self.sparse.iter().map(|(&k, &p)| (k, p)))
+    }
 }
 
 impl<'a> Solver<'a> {
@@ -222,17 +269,13 @@ impl<'a> Solver<'a> {
         let net = self.net;
         let places = net.place_count();
         let mut mean = vec![0.0; places];
-        let mut dist: Vec<Vec<f64>> = vec![Vec::new(); places];
+        let mut dist: Vec<TokenDistribution> = vec![TokenDistribution::default(); places];
         let mut throughput = vec![0.0; net.transition_count()];
         let mut m = vec![0u32; places];
         for (s, &p) in pi.iter().enumerate() {
             self.space.marking_into(s, &mut m);
             for (i, &k) in m.iter().enumerate() {
-                let d = &mut dist[i];
-                if d.len() <= k as usize {
-                    d.resize(k as usize + 1, 0.0);
-                }
-                d[k as usize] += p;
+                dist[i].add(k, p);
                 mean[i] += p * k as f64;
             }
             if p == 0.0 {
@@ -269,7 +312,11 @@ impl<'a> Solver<'a> {
         }
         let prob_nonempty = dist
             .iter()
-            .map(|d| d.iter().skip(1).fold(0.0, |a, b| a + b))
+            .map(|d| {
+                d.iter()
+                    .filter(|&(k, _)| k > 0)
+                    .fold(0.0, |a, (_, p)| a + p)
+            })
             .collect();
         let mut out_rate = vec![0.0; places];
         for t in net.transition_ids() {

@@ -98,10 +98,9 @@ fn invariants(inv: &Invariants, names: &[&str]) -> Vec<ByName<u64>> {
     inv.vectors
         .iter()
         .map(|v| {
-            v.iter()
-                .zip(names)
-                .filter(|(w, _)| **w != 0)
-                .map(|(w, n)| (n.to_string(), *w))
+            v.entries()
+                .iter()
+                .map(|&(i, w)| (names[i as usize].to_string(), w))
                 .collect()
         })
         .collect()

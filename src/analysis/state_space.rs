@@ -29,7 +29,7 @@
 //! ```
 
 pub(crate) mod explore;
-mod packing;
+pub(crate) mod packing;
 pub(crate) mod table;
 
 use std::sync::Arc;
@@ -40,7 +40,7 @@ use thiserror::Error;
 use crate::analysis::coverability::{Coverability, karp_miller};
 use crate::analysis::invariants::structural_bounds;
 use crate::analysis::vanishing::eliminate;
-use crate::net::{Net, TransitionId};
+use crate::net::{MAX_TOKENS, Net, TransitionId};
 use packing::{Layout, MarkingStore};
 use table::MoveTable;
 
@@ -53,7 +53,13 @@ pub struct Options {
     pub progress: bool,
     /// Threads to use; 0 = all available cores.
     pub threads: usize,
+    /// Most bytes the search may hold (markings, their index and their moves), estimated
+    /// before each allocation (default 4 GiB).
+    pub max_memory: usize,
 }
+
+/// [`Options::max_memory`]'s default: 4 GiB.
+pub const DEFAULT_MAX_MEMORY: usize = 4 << 30;
 
 impl Default for Options {
     fn default() -> Self {
@@ -61,6 +67,7 @@ impl Default for Options {
             max_states: 10_000_000,
             progress: false,
             threads: 0,
+            max_memory: DEFAULT_MAX_MEMORY,
         }
     }
 }
@@ -94,6 +101,31 @@ pub enum AnalysisError {
     VanishingLoopTooLarge {
         /// Markings in the loop.
         markings: usize,
+    },
+    /// A place can hold more tokens than a count can ([`MAX_TOKENS`]): refused before the
+    /// search when a structural bound says so, or when the search first meets such a count.
+    #[error(
+        "place `{place}` can reach {tokens} tokens, which {}",
+        crate::net::TOO_MANY_TOKENS
+    )]
+    TooManyTokens {
+        /// The place.
+        place: String,
+        /// Its bound, or the count the search met.
+        tokens: u64,
+    },
+    /// The search would need more memory than `Options::max_memory`: refused before the
+    /// allocation, from the size of one packed marking and of its moves.
+    #[error(
+        "the state space needs more than {limit_mib} MiB: {markings} markings of {bytes_per_marking} bytes each so far (raise --max-memory or lower --max-states)"
+    )]
+    TooMuchMemory {
+        /// The memory limit, in MiB.
+        limit_mib: usize,
+        /// Markings stored when the estimate crossed the limit.
+        markings: usize,
+        /// Estimated bytes per marking (packed words, index, parent, moves).
+        bytes_per_marking: usize,
     },
     /// [`Monitor::cancel`] was called while the search ran.
     #[error("cancelled after {markings} markings")]
@@ -211,9 +243,70 @@ pub struct StateSpace {
 }
 
 /// Coverability nodes to try before searching a net that has places without a structural
-/// bound: scaled so the Karp–Miller tree stays around 20 MB.
+/// bound: scaled so the Karp–Miller tree (each node a marking, stored twice) stays around
+/// 40 MB whatever the number of places. A million-place net gets 5 nodes, not 1000 (which
+/// took 8 GB).
 fn km_limit(places: usize) -> usize {
-    (5_000_000 / places.max(1)).clamp(1000, 200_000)
+    (5_000_000 / places.max(1)).clamp(1, 200_000)
+}
+
+/// Searches every reachable marking of `net` (structural bounds first, Karp–Miller when they
+/// do not bound every place). With `wait`, vanishing markings also list their enabled
+/// exponential transitions and those targets are searched ([`explore::explore_with`]).
+pub(crate) fn search(
+    net: &Net,
+    opts: &Options,
+    monitor: &Monitor,
+    wait: bool,
+) -> Result<explore::Raw, AnalysisError> {
+    if monitor.is_cancelled() {
+        return Err(AnalysisError::Cancelled { markings: 0 });
+    }
+    let mut bounds = structural_bounds(net);
+    if bounds.iter().any(Option::is_none) {
+        match karp_miller(net, km_limit(net.place_count()).min(opts.max_states)) {
+            Coverability::Unbounded(places) => {
+                return Err(AnalysisError::Unbounded {
+                    places: places
+                        .into_iter()
+                        .map(|p| net.place(p).name.clone())
+                        .collect(),
+                });
+            }
+            Coverability::Bounded(max) => {
+                bounds = max.into_iter().map(|b| Some(b as u64)).collect();
+            }
+            Coverability::Undecided => {}
+        }
+    }
+    if let Some((p, &Some(b))) = bounds
+        .iter()
+        .enumerate()
+        .find(|(_, b)| b.is_some_and(|b| b > MAX_TOKENS as u64))
+    {
+        return Err(AnalysisError::TooManyTokens {
+            place: net.places()[p].name.clone(),
+            tokens: b,
+        });
+    }
+    let initial: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
+    let layout = Layout::new(&bounds, &initial);
+    let threads = match opts.threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    };
+    explore::explore_with(
+        net,
+        layout,
+        explore::Limits {
+            states: opts.max_states,
+            memory: opts.max_memory,
+        },
+        threads,
+        opts.progress,
+        monitor,
+        wait,
+    )
 }
 
 impl StateSpace {
@@ -229,40 +322,7 @@ impl StateSpace {
         opts: &Options,
         monitor: &Monitor,
     ) -> Result<StateSpace, AnalysisError> {
-        if monitor.is_cancelled() {
-            return Err(AnalysisError::Cancelled { markings: 0 });
-        }
-        let mut bounds = structural_bounds(net);
-        if bounds.iter().any(Option::is_none) {
-            match karp_miller(net, km_limit(net.place_count()).min(opts.max_states)) {
-                Coverability::Unbounded(places) => {
-                    return Err(AnalysisError::Unbounded {
-                        places: places
-                            .into_iter()
-                            .map(|p| net.place(p).name.clone())
-                            .collect(),
-                    });
-                }
-                Coverability::Bounded(max) => {
-                    bounds = max.into_iter().map(|b| Some(b as u64)).collect();
-                }
-                Coverability::Undecided => {}
-            }
-        }
-        let initial: Vec<u32> = net.places().iter().map(|p| p.initial).collect();
-        let layout = Layout::new(&bounds, &initial);
-        let threads = match opts.threads {
-            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-            n => n,
-        };
-        let raw = explore::explore(
-            net,
-            layout,
-            opts.max_states,
-            threads,
-            opts.progress,
-            monitor,
-        )?;
+        let raw = search(net, opts, monitor, false)?;
         Self::from_raw(net, raw)
     }
 

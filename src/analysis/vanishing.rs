@@ -284,7 +284,7 @@ fn solve_loop(
 
 /// Solves `A X = B` in place (`A` is `k×k`, `B` is `k×nc`, row-major), Gaussian elimination
 /// with partial pivoting. `A = I − P` with `P` substochastic and transient, so it is regular.
-fn lu_solve(a: &mut [f64], k: usize, b: &mut [f64], nc: usize) {
+pub(crate) fn lu_solve(a: &mut [f64], k: usize, b: &mut [f64], nc: usize) {
     for col in 0..k {
         let piv = (col..k)
             .max_by(|&x, &y| a[x * k + col].abs().total_cmp(&a[y * k + col].abs()))

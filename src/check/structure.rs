@@ -27,6 +27,11 @@ pub struct Structure {
 impl Structure {
     /// Analyses `net`: P-invariants (when the elimination stays small), then the least fixed
     /// point of "transitions that may fire" with the bounds it implies.
+    ///
+    /// The fixed point is a worklist over arcs: a transition is looked at again only when one
+    /// of its input places may gain tokens or one of its inhibitor places may lose some, so
+    /// the whole analysis is linear in the net's size (a 100,000-place chain used to take one
+    /// full pass per transition).
     pub fn of(net: &Net) -> Structure {
         let invariants = p_invariants(net).unwrap_or_default();
         let m0: Vec<u64> = net.places().iter().map(|p| p.initial as u64).collect();
@@ -48,67 +53,73 @@ impl Structure {
         }
 
         let n = net.place_count();
+        // Per place: the transitions reading it through an input or an inhibitor arc.
+        let mut readers: Vec<Vec<TransitionId>> = vec![Vec::new(); n];
+        for t in net.transition_ids() {
+            for &(p, _) in net.inputs(t).iter().chain(net.inhibitors(t)) {
+                readers[p.index()].push(t);
+            }
+        }
         let mut may_fire = vec![false; net.transition_count()];
-        let mut increased = vec![false; n];
-        let mut decreased = vec![false; n];
-        loop {
-            let upper: Vec<Option<u64>> = (0..n)
-                .map(|p| {
-                    if increased[p] {
-                        inv_bound[p]
-                    } else {
-                        Some(m0[p])
-                    }
-                })
-                .collect();
-            let lower: Vec<u64> = (0..n)
-                .map(|p| if decreased[p] { 0 } else { m0[p] })
-                .collect();
-            let mut changed = false;
-            for t in net.transition_ids() {
-                if may_fire[t.index()] || !could_fire(net, t, &upper, &lower) {
+        let mut upper: Vec<Option<u64>> = m0.iter().map(|&k| Some(k)).collect();
+        let mut lower: Vec<u64> = m0.clone();
+        let (mut increased, mut decreased) = (vec![false; n], vec![false; n]);
+        let mut queued = vec![true; net.transition_count()];
+        let mut work: Vec<TransitionId> = net.transition_ids().collect();
+        work.reverse();
+        while let Some(t) = work.pop() {
+            queued[t.index()] = false;
+            if may_fire[t.index()] || !could_fire(net, t, &upper, &lower) {
+                continue;
+            }
+            may_fire[t.index()] = true;
+            for &(p, d) in net.delta(t) {
+                let i = p.index();
+                let changed = if d > 0 {
+                    !std::mem::replace(&mut increased[i], true)
+                } else {
+                    !std::mem::replace(&mut decreased[i], true)
+                };
+                if !changed {
                     continue;
                 }
-                may_fire[t.index()] = true;
-                changed = true;
-                for &(p, d) in net.delta(t) {
-                    if d > 0 {
-                        increased[p.index()] = true;
-                    } else {
-                        decreased[p.index()] = true;
+                if d > 0 {
+                    upper[i] = inv_bound[i];
+                } else {
+                    lower[i] = 0;
+                }
+                for &u in &readers[i] {
+                    if !may_fire[u.index()] && !queued[u.index()] {
+                        queued[u.index()] = true;
+                        work.push(u);
                     }
                 }
             }
-            if !changed {
-                // Lower bounds from invariants: y·m = y·m0 with the other places at their
-                // upper bounds gives y_p·m(p) ≥ y·m0 − Σ_{q≠p} y_q·ub(q).
-                let mut lower = lower;
-                for y in &invariants {
-                    let total = weighted(y, &m0);
-                    for p in 0..n {
-                        if y[p] == 0 {
-                            continue;
-                        }
-                        let mut others = 0u64;
-                        let mut bounded = true;
-                        for q in (0..n).filter(|&q| q != p && y[q] > 0) {
-                            match upper[q] {
-                                Some(u) => others = others.saturating_add(y[q].saturating_mul(u)),
-                                None => bounded = false,
-                            }
-                        }
-                        if bounded && total > others {
-                            lower[p] = lower[p].max((total - others).div_ceil(y[p]));
-                        }
+        }
+        // Lower bounds from invariants: y·m = y·m0 with the other places at their upper
+        // bounds gives y_p·m(p) ≥ y·m0 − Σ_{q≠p} y_q·ub(q).
+        for y in &invariants {
+            let total = weighted(y, &m0);
+            let support: Vec<usize> = (0..n).filter(|&q| y[q] > 0).collect();
+            for &p in &support {
+                let mut others = 0u64;
+                let mut bounded = true;
+                for &q in support.iter().filter(|&&q| q != p) {
+                    match upper[q] {
+                        Some(u) => others = others.saturating_add(y[q].saturating_mul(u)),
+                        None => bounded = false,
                     }
                 }
-                return Structure {
-                    upper,
-                    lower,
-                    may_fire,
-                    invariants,
-                };
+                if bounded && total > others {
+                    lower[p] = lower[p].max((total - others).div_ceil(y[p]));
+                }
             }
+        }
+        Structure {
+            upper,
+            lower,
+            may_fire,
+            invariants,
         }
     }
 

@@ -5,7 +5,7 @@
 //! count changes (and when the statistics are read), so a firing costs `O(|delta(t)|)`, not
 //! `O(places)`.
 
-use crate::net::{Net, PlaceId, TransitionId};
+use crate::net::{Net, PlaceId, TokenOverflow, TransitionId};
 
 /// Running integrals, updated by the simulator at each firing.
 #[derive(Clone, Debug)]
@@ -30,8 +30,17 @@ impl Tally {
     /// Fires `t` at `time` on `m`, bringing the areas of the places it changes up to date
     /// first (one pass over `delta(t)` for both).
     #[inline]
-    pub(crate) fn fire(&mut self, net: &Net, m: &mut [u32], t: TransitionId, time: f64) {
+    pub(crate) fn fire(
+        &mut self,
+        net: &Net,
+        m: &mut [u32],
+        t: TransitionId,
+        time: f64,
+    ) -> Result<(), TokenOverflow> {
         debug_assert!(net.is_enabled(m, t), "fired a disabled transition");
+        if let Some(o) = net.overflow(m, t) {
+            return Err(o);
+        }
         for &(p, d) in net.delta(t) {
             let i = p.index();
             let k = m[i];
@@ -40,6 +49,7 @@ impl Tally {
             m[i] = (k as i64 + d) as u32;
         }
         self.fired[t.index()] += 1;
+        Ok(())
     }
 
     /// The statistics over `[0, time]` with `m` the marking since the last firing.

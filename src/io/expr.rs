@@ -316,7 +316,8 @@ fn call(f: Func, x: f64, y: f64) -> Result<f64, String> {
         Round => x.round(),
         Sqrt => x.sqrt(),
         Exp => x.exp(),
-        Log => x.ln(),
+        // Software libm: the same bits on every machine, like the sampler (`gspn::sample`).
+        Log => libm::log(x),
         Sin => x.sin(),
         Cos => x.cos(),
         Tan => x.tan(),

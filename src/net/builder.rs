@@ -42,6 +42,17 @@ pub enum NetError {
         /// What was zero.
         what: &'static str,
     },
+    /// Parallel arcs whose weights add up to more than the maximum token count.
+    #[error(
+        "arcs between `{place}` and `{transition}` add up to more than the maximum token count {max}",
+        max = u32::MAX
+    )]
+    WeightOverflow {
+        /// The place end.
+        place: String,
+        /// The transition end.
+        transition: String,
+    },
     /// An arc with multiplicity 0.
     #[error("arc between `{place}` and `{transition}` has weight 0")]
     ZeroWeight {
@@ -224,8 +235,9 @@ impl NetBuilder {
             transitions,
             arcs,
         } = self;
-        check_unique("place", places.iter().map(|p| p.name.as_str()))?;
-        check_unique("transition", transitions.iter().map(|t| t.name.as_str()))?;
+        let place_index = index_names("place", places.iter().map(|p| p.name.as_str()))?;
+        let transition_index =
+            index_names("transition", transitions.iter().map(|t| t.name.as_str()))?;
         for p in &places {
             if let Some(c) = p.capacity
                 && p.initial > c
@@ -289,7 +301,14 @@ impl NetBuilder {
             // Parallel arcs of the same kind add up (inhibitors: the tightest threshold).
             match list.iter_mut().find(|(p, _)| *p == a.place) {
                 Some((_, w)) if a.kind == ArcKind::Inhibitor => *w = (*w).min(a.weight),
-                Some((_, w)) => *w += a.weight,
+                Some((_, w)) => {
+                    *w = w
+                        .checked_add(a.weight)
+                        .ok_or_else(|| NetError::WeightOverflow {
+                            place: places[a.place.index()].name.clone(),
+                            transition: transitions[a.transition.index()].name.clone(),
+                        })?
+                }
                 None => list.push((a.place, a.weight)),
             }
         }
@@ -359,24 +378,27 @@ impl NetBuilder {
             capacity,
             has_capacity,
             has_immediate,
+            place_index,
+            transition_index,
         })
     }
 }
 
-fn check_unique<'a>(
+/// The names' index (name → position), or the first repeated name.
+fn index_names<'a>(
     kind: &'static str,
     names: impl Iterator<Item = &'a str>,
-) -> Result<(), NetError> {
+) -> Result<FxHashMap<Box<str>, u32>, NetError> {
     let mut seen = FxHashMap::default();
-    for n in names {
-        if seen.insert(n, ()).is_some() {
+    for (i, n) in names.enumerate() {
+        if seen.insert(Box::from(n), i as u32).is_some() {
             return Err(NetError::Duplicate {
                 kind,
                 name: n.to_string(),
             });
         }
     }
-    Ok(())
+    Ok(seen)
 }
 
 impl Net {

@@ -11,6 +11,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::map::MapFile;
+use super::rewards::RewardFile;
 use super::ros2::Ros2File;
 use crate::io::{LoadError, LoadErrorKind, Span};
 
@@ -28,7 +29,8 @@ pub struct PlanFile {
     /// Template parameters of the net (PNPRO `<template>`), overriding the file's
     /// `last-binding`; `--param NAME=VALUE` on the command line overrides these.
     #[serde(default)]
-    pub params: BTreeMap<String, ParamValue>,
+    #[schemars(with = "BTreeMap<String, ParamValue>")]
+    pub params: BTreeMap<Spanned<String>, ParamValue>,
     /// Seed for every random choice; the same seed repeats a run exactly.
     pub seed: Option<u64>,
     /// Scale of time: 0 = virtual time as fast as possible, 1 = real time, 0.5 = twice as fast.
@@ -58,6 +60,17 @@ pub struct PlanFile {
     pub map: Option<Spanned<MapFile>>,
     /// ROS 2 backend settings (feature `ros2`; see `docs/ros2.md`).
     pub ros2: Option<Ros2File>,
+    /// Reward structures for policy synthesis and evaluation, by name (see
+    /// `docs/synthesis.md`).
+    #[serde(default)]
+    #[schemars(with = "BTreeMap<String, RewardFile>")]
+    pub rewards: BTreeMap<Spanned<String>, Spanned<RewardFile>>,
+    /// The immediate transitions a policy controls (default: the net's zero-weight ones).
+    #[schemars(with = "Option<Vec<String>>")]
+    pub controllable: Option<Vec<Spanned<String>>>,
+    /// Let a policy WAIT in markings where exponential transitions are enabled besides the
+    /// controllable ones (the GSPNR toolbox's `toMDP`); default false.
+    pub wait: Option<bool>,
 }
 
 /// The value of a net parameter: a number or an expression the net reader evaluates.

@@ -328,7 +328,21 @@ impl MapFile {
             None => 20.0,
         };
         let stuck_after = match &self.stuck_after {
-            Some(s) => positive(Some(*s.get_ref()), 30.0, "stuck_after", s.span(), at)?,
+            Some(s) => {
+                let v = *s.get_ref();
+                if !crate::limits::valid_seconds(v) {
+                    return Err(at(
+                        s.span(),
+                        LoadErrorKind::OutOfRange {
+                            what: "stuck_after",
+                            name: "map".into(),
+                            value: v.to_string(),
+                            expected: crate::limits::SECONDS_EXPECTED,
+                        },
+                    ));
+                }
+                v
+            }
             None => 30.0,
         };
         Ok(Map {

@@ -9,6 +9,7 @@ use toml::Spanned;
 
 use super::Plan;
 use super::file::{PlaceFile, PlanFile, RuleFile, locate};
+use super::rewards::{resolve_controls, resolve_rewards};
 use super::ros2::resolve_ros2;
 use crate::io::{LoadError, LoadErrorKind};
 use crate::net::predicate::Predicate;
@@ -26,10 +27,33 @@ impl PlanFile {
 
         if let Some(ts) = &self.time_scale {
             let v = *ts.get_ref();
-            if !(v.is_finite() && v >= 0.0) {
+            if !(v.is_finite() && (0.0..=crate::limits::MAX_SECONDS).contains(&v)) {
                 return Err(at(
                     ts.span(),
-                    out_of_range("time_scale", "plan", v, "must be a finite number ≥ 0"),
+                    out_of_range("time_scale", "plan", v, TIME_SCALE_EXPECTED),
+                ));
+            }
+            // In real time a rate is a wait on the clock: refuse one that would never end.
+            if v > 0.0
+                && let Some((t, rate)) = net.transitions().iter().find_map(|t| match t.timing {
+                    crate::net::Timing::Exponential { rate, .. }
+                        if v / rate > crate::limits::MAX_SECONDS =>
+                    {
+                        Some((t, rate))
+                    }
+                    _ => None,
+                })
+            {
+                return Err(at(
+                    ts.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "time_scale = {}: transition `{}` (rate {}) would wait {:.1e} s of real time on average, more than the maximum {} s (10 years)",
+                        show(v),
+                        t.name,
+                        show(rate),
+                        v / rate,
+                        crate::limits::MAX_SECONDS
+                    )),
                 ));
             }
         }
@@ -54,9 +78,10 @@ impl PlanFile {
 
         let mut rules = Vec::with_capacity(self.policy.len());
         let mut rule_spans = Vec::with_capacity(self.policy.len());
+        let lines = crate::io::LineIndex::new(text.as_bytes());
         for rule in &self.policy {
             rules.push(resolve_rule(&net, rule.get_ref(), &at)?);
-            rule_spans.push(locate(text, rule.span()));
+            rule_spans.push(lines.locate(text.as_bytes(), rule.span().start));
         }
         let policy = Policy::new(&net, rules).map_err(|e| {
             let rule = self.policy[e.rule()].get_ref();
@@ -138,6 +163,9 @@ impl PlanFile {
             }
         }
 
+        let rewards = resolve_rewards(&net, &self.rewards, &at)?;
+        let controls = resolve_controls(&net, self.controllable.as_ref(), self.wait, &at)?;
+
         Ok(Plan {
             path: path.to_path_buf(),
             net_path: self.net_path(path),
@@ -153,6 +181,8 @@ impl PlanFile {
             warnings,
             map,
             ros2,
+            rewards,
+            controls,
         })
     }
 }
@@ -169,7 +199,7 @@ fn string_content_offset(text: &str, start: usize) -> usize {
     }
 }
 
-fn unknown(what: &'static str, name: &str) -> LoadErrorKind {
+pub(super) fn unknown(what: &'static str, name: &str) -> LoadErrorKind {
     LoadErrorKind::UnknownNode {
         what,
         name: name.to_string(),
@@ -185,8 +215,21 @@ pub(super) fn out_of_range(
     LoadErrorKind::OutOfRange {
         what,
         name: name.to_string(),
-        value: v.to_string(),
+        value: show(v),
         expected,
+    }
+}
+
+/// What a time scale must be (seconds per unit of model time).
+pub const TIME_SCALE_EXPECTED: &str =
+    "must be a finite number ≥ 0 and ≤ 315576000 (seconds of real time per unit of model time)";
+
+/// A number as a person writes it: `1e300`, not three hundred digits.
+fn show(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-6..1e15).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
     }
 }
 
@@ -269,10 +312,10 @@ fn resolve_role(
         None => None,
         Some(t) => {
             let v = *t.get_ref();
-            if !(v.is_finite() && v > 0.0) {
+            if !crate::limits::valid_seconds(v) {
                 return Err(at(
                     t.span(),
-                    out_of_range("timeout", place, v, "must be a finite number > 0"),
+                    out_of_range("timeout", place, v, crate::limits::SECONDS_EXPECTED),
                 ));
             }
             Some(v)

@@ -78,10 +78,10 @@ pub(super) fn resolve_ros2(
         ] {
             if let Some(v) = v {
                 let x = *v.get_ref();
-                if !(x.is_finite() && x > 0.0) {
+                if !crate::limits::valid_seconds(x) {
                     return Err(at(
                         v.span(),
-                        out_of_range(key, "ros2", x, "must be a finite number > 0"),
+                        out_of_range(key, "ros2", x, crate::limits::SECONDS_EXPECTED),
                     ));
                 }
                 *slot = Some(x);

@@ -37,6 +37,7 @@ use std::path::{Path, PathBuf};
 use super::{Plan, read_plan};
 use crate::io::{LoadError, LoadErrorKind, ReadOptions, Span, read_net};
 use crate::net::{Net, Timing};
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// A name in the input and where it is.
 #[derive(Clone, Debug, PartialEq)]
@@ -48,7 +49,7 @@ pub struct Named {
 }
 
 /// One element of a policy key: a token count or `'-'` (free).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum KeyItem {
     /// `'-'`: any count.
     Free,
@@ -143,7 +144,12 @@ pub fn parse_input(path: &Path, bytes: &[u8]) -> Result<ThesisInput, LoadError> 
             LoadErrorKind::Invalid("the file is not UTF-8".into()),
         )
     })?;
-    input::Reader { path, text: &text }.input()
+    input::Reader {
+        path,
+        text: &text,
+        lines: Default::default(),
+    }
+    .input()
 }
 
 /// Reads the input at `path`, checks it against its net, and writes `plan.toml` and a copy of
@@ -228,8 +234,9 @@ pub fn plan_text(
     };
     let mut warnings = Vec::new();
     let mut order = Vec::with_capacity(input.places.len());
-    for (i, p) in input.places.iter().enumerate() {
-        if input.places[..i].iter().any(|q| q.name == p.name) {
+    let mut listed: FxHashSet<&str> = FxHashSet::default();
+    for p in &input.places {
+        if !listed.insert(&p.name) {
             return Err(err(
                 p.span,
                 LoadErrorKind::Duplicate {
@@ -264,26 +271,26 @@ pub fn plan_text(
 
     // Roles.
     let mut resources: Vec<&Named> = Vec::new();
+    let mut resource_names: FxHashSet<&str> = FxHashSet::default();
     for r in &input.resources {
         net.place_by_name(&r.name)
             .ok_or_else(|| unknown("place", r))?;
-        if !resources.iter().any(|q| q.name == r.name) {
+        if resource_names.insert(&r.name) {
             resources.push(r);
         }
     }
-    let mut seen: Vec<&str> = Vec::new();
+    let mut seen: FxHashSet<&str> = FxHashSet::default();
     for a in &input.actions {
         net.place_by_name(&a.place.name)
             .ok_or_else(|| unknown("place", &a.place))?;
-        if seen.contains(&a.place.name.as_str()) {
+        if !seen.insert(&a.place.name) {
             warnings.push(format!(
                 "place `{}` is mapped twice; the first mapping is used",
                 a.place.name
             ));
             continue;
         }
-        seen.push(&a.place.name);
-        if resources.iter().any(|r| r.name == a.place.name) {
+        if resource_names.contains(a.place.name.as_str()) {
             warnings.push(format!(
                 "place `{}` is in resources_list and also has action `{}`: it is a resource",
                 a.place.name, a.action
@@ -311,6 +318,7 @@ pub fn plan_text(
 
     // Policy: Python dicts keep the first position of a key and the last value.
     let mut rules: Vec<(&PolicyEntry, Vec<(String, f64)>)> = Vec::new();
+    let mut rule_of: FxHashMap<&[KeyItem], usize> = FxHashMap::default();
     for (n, e) in input.policy.iter().enumerate() {
         if e.key.len() != order.len() {
             return Err(err(
@@ -323,13 +331,14 @@ pub fn plan_text(
             ));
         }
         let choose = resolve_choice(input, net, e, n + 1, &mut warnings)?;
-        if let Some(first) = rules.iter_mut().find(|(f, _)| f.key == e.key) {
+        if let Some(first) = rule_of.get(e.key.as_slice()).map(|&i| &mut rules[i]) {
             warnings.push(format!(
                 "policy key at {} repeats the key at {}: the later value is used (as in Python)",
                 e.span, first.0.span
             ));
             first.1 = choose;
         } else {
+            rule_of.insert(&e.key, rules.len());
             rules.push((e, choose));
         }
     }

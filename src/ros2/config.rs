@@ -107,13 +107,13 @@ impl DdsConfig {
             c.networks.clone_from(&plan.networks);
         }
         if let Some(s) = plan.heartbeat {
-            c.heartbeat = Duration::from_secs_f64(s);
+            c.heartbeat = crate::limits::duration(s);
         }
         if let Some(s) = plan.lost_after {
-            c.lost_after = Duration::from_secs_f64(s);
+            c.lost_after = crate::limits::duration(s);
         }
         if let Some(s) = plan.startup {
-            c.startup = Duration::from_secs_f64(s);
+            c.startup = crate::limits::duration(s);
         }
         c.bind_address()?;
         Ok(c)

@@ -344,7 +344,7 @@ async fn run_decision(
     shared: &Shared,
 ) -> (GoalEndStatus, ExecPlaceResult) {
     let start = tokio::time::Instant::now();
-    let done = tokio::time::sleep(Duration::from_secs_f64(decision.delay.max(0.0)));
+    let done = tokio::time::sleep(crate::limits::duration(decision.delay));
     tokio::pin!(done);
     let mut feedback =
         tokio::time::interval_at(start + Duration::from_secs(1), Duration::from_secs(1));

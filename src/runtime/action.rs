@@ -13,7 +13,7 @@ use std::task::{Context, Poll};
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
-use tokio::sync::watch;
+use tokio::sync::{mpsc, watch};
 
 use super::id::AgentId;
 use crate::net::{Marking, Net, PlaceId, TransitionId};
@@ -104,6 +104,13 @@ pub struct ActionContext {
     pub cancel: CancelToken,
     /// The net, to turn names into ids.
     pub net: Arc<Net>,
+    /// The seed of the run (what a program action sees as `GSPN_SEED`).
+    pub seed: u64,
+    /// Model time (seconds) when the action started.
+    pub time: f64,
+    /// Where the action's output lines go ([`EventKind::ActionOutput`](super::EventKind::ActionOutput)
+    /// events in the journal and the viewer's log).
+    pub output: OutputSink,
 }
 
 impl ActionContext {
@@ -125,12 +132,79 @@ impl ActionContext {
             .collect()
     }
 
+    /// Records one line the action printed, as an
+    /// [`ActionOutput`](super::EventKind::ActionOutput) event of this agent and place. Lines
+    /// longer than [`MAX_OUTPUT_LINE`] bytes are cut.
+    pub fn output_line(&self, stream: OutputStream, line: impl Into<String>) {
+        self.output
+            .send(self.agent, self.place, stream, line.into());
+    }
+
     /// `Fire(name)`, or `Failed` when the net has no such transition.
     pub fn fire(&self, name: &str) -> Outcome {
         match self.transition(name) {
             Some(t) => Outcome::Fire(t),
             None => Outcome::Failed(format!("no transition named `{name}`")),
         }
+    }
+}
+
+/// Which output stream a line came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputStream {
+    /// Standard output (or a worker's reply of kind `output`).
+    Stdout,
+    /// Standard error.
+    Stderr,
+}
+
+/// The longest output line kept in an event, in bytes (longer lines are cut at a character
+/// boundary and end with `…`).
+pub const MAX_OUTPUT_LINE: usize = 1024;
+
+/// One line of an action's output on its way to the supervisor.
+#[derive(Debug)]
+pub(crate) struct OutputLine {
+    pub(crate) agent: AgentId,
+    pub(crate) place: PlaceId,
+    pub(crate) stream: OutputStream,
+    pub(crate) line: String,
+}
+
+/// Where an action's output lines go; see [`ActionContext::output_line`]. A sink made with
+/// [`OutputSink::discard`] drops them.
+#[derive(Clone, Debug, Default)]
+pub struct OutputSink(Option<mpsc::UnboundedSender<OutputLine>>);
+
+impl OutputSink {
+    pub(crate) fn new(tx: mpsc::UnboundedSender<OutputLine>) -> Self {
+        OutputSink(Some(tx))
+    }
+
+    /// A sink that drops every line (for actions run outside a runtime, as in tests).
+    pub fn discard() -> Self {
+        OutputSink(None)
+    }
+
+    fn send(&self, agent: AgentId, place: PlaceId, stream: OutputStream, mut line: String) {
+        let Some(tx) = &self.0 else {
+            return;
+        };
+        if line.len() > MAX_OUTPUT_LINE {
+            let mut cut = MAX_OUTPUT_LINE;
+            while !line.is_char_boundary(cut) {
+                cut -= 1;
+            }
+            line.truncate(cut);
+            line.push('…');
+        }
+        let _ = tx.send(OutputLine {
+            agent,
+            place,
+            stream,
+            line,
+        });
     }
 }
 

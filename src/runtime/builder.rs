@@ -11,6 +11,7 @@ use tokio::sync::{broadcast, watch};
 
 use super::action::Action;
 use super::agent::AgentMode;
+use super::builtin::Builtin;
 use super::engine::Engine;
 use super::event::Events;
 use super::handle::{Progress, RuntimeHandle};
@@ -18,7 +19,7 @@ use super::journal::Journal;
 use super::supervisor::{PlaceSetup, Supervisor, SupervisorArgs};
 use super::{FailurePolicy, Role, RuntimeError, StopConditions, conservation};
 use crate::net::predicate::Predicate;
-use crate::net::{Net, NetError, PlaceId};
+use crate::net::{Net, NetError, PlaceId, Timing};
 use crate::policy::Policy;
 
 /// Configures a run; [`RuntimeBuilder::spawn`] starts it inside the current tokio runtime.
@@ -213,8 +214,23 @@ impl RuntimeBuilder {
         if tokio::runtime::Handle::try_current().is_err() {
             return Err(RuntimeError::NoTokio);
         }
-        if !(self.time_scale.is_finite() && self.time_scale >= 0.0) {
-            return Err(RuntimeError::BadTimeScale(self.time_scale));
+        let scale = self.time_scale;
+        if !(scale.is_finite() && (0.0..=crate::limits::MAX_SECONDS).contains(&scale)) {
+            return Err(RuntimeError::BadTimeScale(scale));
+        }
+        if scale > 0.0 {
+            for t in self.net.transitions() {
+                if let Timing::Exponential { rate, .. } = t.timing
+                    && scale / rate > crate::limits::MAX_SECONDS
+                {
+                    return Err(RuntimeError::DelayTooLong {
+                        transition: t.name.clone(),
+                        rate,
+                        scale,
+                        seconds: scale / rate,
+                    });
+                }
+            }
         }
         let net = Arc::clone(&self.net);
         for (place, action) in std::mem::take(&mut self.binds) {
@@ -246,10 +262,31 @@ impl RuntimeBuilder {
                 robot,
             }) = &self.roles[p.index()]
             {
-                match self.actions.get(name) {
-                    Some(a) => setups.push(PlaceSetup {
+                let action = match self.actions.get(name) {
+                    Some(a) => Some(Arc::clone(a)),
+                    // Not registered: a built-in (`wait`, `log`, `fire`), when it is one.
+                    None => match Builtin::parse(name, &net, p) {
+                        Some(Ok(b)) => {
+                            let scale = if self.time_scale > 0.0 {
+                                self.time_scale
+                            } else {
+                                1.0
+                            };
+                            Some(Arc::new(b.action(scale)) as Arc<dyn Action>)
+                        }
+                        Some(Err(reason)) => {
+                            return Err(RuntimeError::BadBuiltin {
+                                place: net.place(p).name.clone(),
+                                reason,
+                            });
+                        }
+                        None => None,
+                    },
+                };
+                match action {
+                    Some(action) => setups.push(PlaceSetup {
                         place: p,
-                        action: Arc::clone(a),
+                        action,
                         timeout: *timeout,
                         on_failure: *on_failure,
                         robot: robot.as_deref().map(Arc::from),
@@ -334,6 +371,7 @@ impl RuntimeBuilder {
             grace: self.grace,
             agent_mode: self.agent_mode,
             robots: self.robots,
+            seed,
         });
         Ok(RuntimeHandle {
             sup,

@@ -75,7 +75,7 @@ impl Clock {
 
     /// A model-time span in tokio time.
     pub(crate) fn to_tokio(&self, seconds: f64) -> Duration {
-        Duration::from_secs_f64(seconds * self.scale)
+        crate::limits::duration(seconds * self.scale)
     }
 
     /// True when a timer is pending for race version `version` (its sample stays valid: the
@@ -92,7 +92,7 @@ impl Clock {
         let wait = ((at - self.read()) * self.scale).max(0.0);
         let generation = self.generation;
         let h = tokio::spawn(async move {
-            tokio::time::sleep(Duration::from_secs_f64(wait)).await;
+            tokio::time::sleep(crate::limits::duration(wait)).await;
             wake(generation);
         });
         self.timer = Some((h, version));

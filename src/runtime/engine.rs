@@ -15,7 +15,7 @@ use rustc_hash::FxHashMap;
 use super::agent::AgentState;
 use super::id::AgentId;
 use crate::firing::{Firable, Statistics, Tally};
-use crate::net::{Marking, Net, PlaceId, TransitionId};
+use crate::net::{Marking, Net, PlaceId, TokenOverflow, TransitionId};
 use crate::policy::Policy;
 use crate::sample::Rng;
 
@@ -329,7 +329,17 @@ impl Engine {
     /// Fires `t` at model time `now`, moving agents by the identity rules: consumed agents
     /// continue in arc order into the produced action-place tokens, surplus ones end, extra
     /// tokens are new agents.
-    pub(crate) fn fire(&mut self, t: TransitionId, now: f64, out: &mut Firing) {
+    ///
+    /// A firing that would overflow a place's count changes nothing and is refused.
+    pub(crate) fn fire(
+        &mut self,
+        t: TransitionId,
+        now: f64,
+        out: &mut Firing,
+    ) -> Result<(), TokenOverflow> {
+        if let Some(o) = self.net.overflow(&self.m, t) {
+            return Err(o);
+        }
         out.transition = Some(t);
         out.consumed.clear();
         out.produced.clear();
@@ -360,7 +370,7 @@ impl Engine {
                 }
             }
         }
-        self.tally.fire(&net, &mut self.m, t, now);
+        self.tally.fire(&net, &mut self.m, t, now)?;
         self.firings += 1;
         let mut next = 0;
         for &(p, w) in net.outputs(t) {
@@ -393,6 +403,7 @@ impl Engine {
         for &u in net.affected_by(t) {
             self.update(u);
         }
+        Ok(())
     }
 
     /// Transitions some agent chose that cannot fire now (for the "never enabled" error).

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use tokio::sync::broadcast;
 
 use super::StopReason;
-use super::action::Outcome;
+use super::action::{Outcome, OutputStream};
 use super::id::AgentId;
 use crate::net::{Marking, PlaceId, TransitionId};
 
@@ -71,6 +71,18 @@ pub enum EventKind {
         place: PlaceId,
         /// How it ended.
         outcome: Outcome,
+    },
+    /// A line an agent's action printed (a program's stdout or stderr, a worker's `output`
+    /// message), at most [`MAX_OUTPUT_LINE`](super::action::MAX_OUTPUT_LINE) bytes.
+    ActionOutput {
+        /// The agent.
+        agent: AgentId,
+        /// The action place.
+        place: PlaceId,
+        /// Where the line came from.
+        stream: OutputStream,
+        /// The line, without its newline.
+        line: String,
     },
     /// An agent ended (consumed by a join: the thesis's *Void*).
     AgentEnded {

@@ -1,14 +1,19 @@
 //! The journal: every event of a run as JSON Lines, after a header line with the net's
 //! identity and the seed (enough for a later `plan-runner replay`).
 //!
-//! The supervisor writes it itself, through a buffer, so the journal never lags and never
-//! misses an event; it is flushed when the run stops. [`read_journal`] reads one back into
-//! typed [`Event`]s and the marking after each firing (`plan-runner replay`, with or without
-//! the viewer).
+//! The supervisor hands every event, serialised, to a writer thread as it happens, so the
+//! journal never misses an event and never blocks the run on the disk. The writer thread
+//! holds at most [`FLUSH_EVENTS`] events or [`FLUSH_AFTER`] of them before it writes them to
+//! the file, and flushes (and syncs) when the run stops, whatever stopped it. After a
+//! `SIGKILL` the file holds every event up to the last write, with at most one line cut
+//! short at the end, which `replay` skips with a warning (see docs/reliability.md).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
@@ -86,15 +91,30 @@ pub struct JournalHeader<'a> {
     pub transitions: Vec<std::borrow::Cow<'a, str>>,
 }
 
-/// A JSON Lines writer for one run's events.
+/// Most events the writer holds before it writes them to the file.
+pub const FLUSH_EVENTS: usize = 100;
+
+/// Longest time an event waits in the writer before it is written to the file.
+pub const FLUSH_AFTER: Duration = Duration::from_millis(100);
+
+/// What the supervisor sends the writer thread.
+enum Msg {
+    /// One serialised line, newline included.
+    Line(Vec<u8>),
+}
+
+/// A JSON Lines writer for one run's events: a thread that writes through a buffer it
+/// flushes every [`FLUSH_EVENTS`] events or [`FLUSH_AFTER`], whichever comes first.
 #[derive(Debug)]
 pub(crate) struct Journal {
-    out: BufWriter<File>,
+    tx: Option<mpsc::Sender<Msg>>,
+    writer: Option<JoinHandle<Option<String>>>,
     failed: Option<String>,
 }
 
 impl Journal {
-    /// Creates the file and writes the header.
+    /// Creates the file, writes the header (on disk before the run starts) and starts the
+    /// writer thread.
     pub(crate) fn create(
         path: &Path,
         net: &Net,
@@ -120,32 +140,102 @@ impl Journal {
         };
         serde_json::to_writer(&mut out, &header)?;
         out.write_all(b"\n")?;
-        Ok(Journal { out, failed: None })
+        out.flush()?;
+        let (tx, rx) = mpsc::channel();
+        let writer = std::thread::Builder::new()
+            .name("gspn-journal".into())
+            .spawn(move || write_through(out, rx))?;
+        Ok(Journal {
+            tx: Some(tx),
+            writer: Some(writer),
+            failed: None,
+        })
     }
 
-    /// Appends one event (an I/O error is remembered and reported once, at the end).
+    /// Hands one event to the writer (an I/O error is reported once, at the end).
     pub(crate) fn write(&mut self, e: &Event) {
-        if self.failed.is_some() {
+        let Some(tx) = &self.tx else {
+            return;
+        };
+        let mut line = Vec::with_capacity(128);
+        if let Err(err) = serde_json::to_writer(&mut line, e) {
+            self.failed.get_or_insert(err.to_string());
             return;
         }
-        let r = serde_json::to_writer(&mut self.out, e)
-            .map_err(std::io::Error::from)
-            .and_then(|_| self.out.write_all(b"\n"));
-        if let Err(err) = r {
-            self.failed = Some(err.to_string());
+        line.push(b'\n');
+        if tx.send(Msg::Line(line)).is_err() {
+            // The writer ended early: it failed, and says why when joined.
+            self.tx = None;
         }
     }
 
-    /// Flushes the buffer to the file; the first error of the run, if any.
+    /// Writes out and syncs everything handed over so far and ends the writer; the first
+    /// error of the run, if any. Later events are dropped.
     pub(crate) fn flush(&mut self) -> Option<String> {
-        if let Err(e) = self
-            .out
-            .flush()
-            .and_then(|_| self.out.get_ref().sync_data())
-        {
-            self.failed.get_or_insert(e.to_string());
+        self.tx = None;
+        if let Some(w) = self.writer.take() {
+            let r = w
+                .join()
+                .unwrap_or_else(|_| Some("the journal writer panicked".into()));
+            if let Some(e) = r {
+                self.failed.get_or_insert(e);
+            }
         }
         self.failed.clone()
+    }
+}
+
+impl Drop for Journal {
+    /// A run dropped without stopping (its supervisor killed) still gets its events written.
+    fn drop(&mut self) {
+        self.flush();
+    }
+}
+
+/// The writer thread: lines in, written to the file at most [`FLUSH_EVENTS`] lines or
+/// [`FLUSH_AFTER`] after they arrived; a final flush and sync when the sender goes away.
+fn write_through(mut out: BufWriter<File>, rx: mpsc::Receiver<Msg>) -> Option<String> {
+    let mut failed: Option<String> = None;
+    let mut pending = 0usize;
+    let mut deadline: Option<Instant> = None;
+    let flush = |out: &mut BufWriter<File>, failed: &mut Option<String>| {
+        if let Err(e) = out.flush() {
+            failed.get_or_insert(e.to_string());
+        }
+    };
+    loop {
+        let msg = match deadline {
+            None => rx.recv().map_err(|_| mpsc::RecvTimeoutError::Disconnected),
+            Some(d) => rx.recv_timeout(d.saturating_duration_since(Instant::now())),
+        };
+        match msg {
+            Ok(Msg::Line(line)) => {
+                if failed.is_none()
+                    && let Err(e) = out.write_all(&line)
+                {
+                    failed = Some(e.to_string());
+                }
+                pending += 1;
+                deadline.get_or_insert_with(|| Instant::now() + FLUSH_AFTER);
+                if pending >= FLUSH_EVENTS {
+                    flush(&mut out, &mut failed);
+                    pending = 0;
+                    deadline = None;
+                }
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                flush(&mut out, &mut failed);
+                pending = 0;
+                deadline = None;
+            }
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                flush(&mut out, &mut failed);
+                if let Err(e) = out.get_ref().sync_data() {
+                    failed.get_or_insert(e.to_string());
+                }
+                return failed;
+            }
+        }
     }
 }
 
@@ -257,4 +347,23 @@ pub fn read_journal(text: &str, net: &Net) -> Result<Vec<Frame>, JournalError> {
         }
     }
     Ok(frames)
+}
+
+/// The journal of a killed run, read back: a last line cut short — no newline after it and
+/// not valid JSON, what a `SIGKILL` in the middle of a write leaves — is split off and
+/// reported as a [`JournalError::BadLine`] (a warning for `plan-runner replay`), so the rest
+/// reads with [`read_journal`]. Any other bad line is still an error there.
+pub fn split_torn(text: &str) -> (&str, Option<JournalError>) {
+    if !text.ends_with('\n')
+        && let Some(start) = text.rfind('\n').map(|i| i + 1)
+        && !text[start..].trim().is_empty()
+        && let Err(e) = serde_json::from_str::<serde_json::Value>(&text[start..])
+    {
+        let torn = JournalError::BadLine {
+            line: text.lines().count(),
+            reason: format!("cut short ({e})"),
+        };
+        return (&text[..start], Some(torn));
+    }
+    (text, None)
 }

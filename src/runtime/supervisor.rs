@@ -20,7 +20,7 @@ use rustc_hash::FxHashMap;
 use tokio::sync::{broadcast, mpsc, watch};
 
 use super::StopReason;
-use super::action::{ActionContext, ActionDone, CancelSource, CancelToken};
+use super::action::{ActionContext, ActionDone, CancelSource, CancelToken, OutputLine, OutputSink};
 use super::agent::{Agent, AgentMode, AgentState, Run, Update};
 use super::clock::Clock;
 use super::engine::{Engine, Firing, Ready};
@@ -78,7 +78,10 @@ pub struct Supervisor {
     snapshots: Snapshots,
     reports_tx: mpsc::UnboundedSender<ActionDone>,
     reports_rx: Option<mpsc::UnboundedReceiver<ActionDone>>,
+    output_tx: mpsc::UnboundedSender<OutputLine>,
+    output_rx: Option<mpsc::UnboundedReceiver<OutputLine>>,
     robots: Vec<Arc<str>>,
+    seed: u64,
 }
 
 impl std::fmt::Debug for Supervisor {
@@ -105,6 +108,8 @@ pub(crate) struct SupervisorArgs {
     pub(crate) agent_mode: AgentMode,
     /// Robots for the initial agents, in agent order (empty: none).
     pub(crate) robots: Vec<Arc<str>>,
+    /// The seed of the run (actions see it).
+    pub(crate) seed: u64,
 }
 
 impl Supervisor {
@@ -112,6 +117,7 @@ impl Supervisor {
     pub(crate) fn start(args: SupervisorArgs) -> ActorRef<Supervisor> {
         let (cancel, cancel_token) = CancelSource::new();
         let (reports_tx, reports_rx) = mpsc::unbounded_channel();
+        let (output_tx, output_rx) = mpsc::unbounded_channel();
         let sup = Supervisor {
             eng: args.eng,
             buf: Firing::default(),
@@ -135,7 +141,10 @@ impl Supervisor {
             snapshots: Snapshots::default(),
             reports_tx,
             reports_rx: Some(reports_rx),
+            output_tx,
+            output_rx: Some(output_rx),
             robots: args.robots,
+            seed: args.seed,
         };
         Supervisor::spawn_with_mailbox(sup, mailbox::unbounded())
     }
@@ -243,6 +252,9 @@ impl Supervisor {
             attempt,
             cancel: self.cancel_token.clone(),
             net: Arc::clone(&self.eng.net),
+            seed: self.seed,
+            time: self.now(),
+            output: OutputSink::new(self.output_tx.clone()),
         };
         match self.agent_actors.get(&id) {
             Some(agent) => {
@@ -270,9 +282,35 @@ impl Supervisor {
         }
     }
 
+    /// Records the output lines waiting in the channel (before the reports that follow them,
+    /// so a journal shows an action's output before its end).
+    fn drain_output(&mut self, rx: &mut mpsc::UnboundedReceiver<OutputLine>) {
+        while let Ok(o) = rx.try_recv() {
+            self.action_output(o);
+        }
+    }
+
+    fn action_output(&mut self, o: OutputLine) {
+        if self.observed() {
+            self.emit(EventKind::ActionOutput {
+                agent: o.agent,
+                place: o.place,
+                stream: o.stream,
+                line: o.line,
+            });
+        }
+    }
+
     fn fire_one(&mut self, t: TransitionId) {
         let mut buf = std::mem::take(&mut self.buf);
-        self.eng.fire(t, self.now(), &mut buf);
+        if let Err(o) = self.eng.fire(t, self.now(), &mut buf) {
+            self.buf = buf;
+            let msg = self.eng.net.describe_overflow(&o);
+            self.errors.push(msg.clone());
+            self.emit(EventKind::Error { message: msg });
+            self.begin_stop(StopReason::Failure);
+            return;
+        }
         self.progress
             .firings
             .store(self.eng.firings, Ordering::Relaxed);
@@ -569,28 +607,42 @@ impl Actor for Supervisor {
             if self.finished {
                 return Ok(None);
             }
-            let Some(mut rx) = self.reports_rx.take() else {
+            let (Some(mut rx), Some(mut out)) = (self.reports_rx.take(), self.output_rx.take())
+            else {
                 return Ok(mailbox_rx.recv().await);
             };
             let got = tokio::select! {
                 biased;
                 sig = mailbox_rx.recv() => {
                     self.reports_rx = Some(rx);
+                    self.output_rx = Some(out);
                     return Ok(sig);
+                }
+                Some(o) = out.recv() => {
+                    self.action_output(o);
+                    self.drain_output(&mut out);
+                    self.reports_rx = Some(rx);
+                    self.output_rx = Some(out);
+                    continue;
                 }
                 r = rx.recv() => r,
             };
             let mut settle = false;
             if let Some(first) = got {
+                self.drain_output(&mut out);
                 settle |= self.action_done(first);
                 for _ in 0..BATCH {
                     match rx.try_recv() {
-                        Ok(d) => settle |= self.action_done(d),
+                        Ok(d) => {
+                            self.drain_output(&mut out);
+                            settle |= self.action_done(d)
+                        }
                         Err(_) => break,
                     }
                 }
             }
             self.reports_rx = Some(rx);
+            self.output_rx = Some(out);
             if settle {
                 self.settle();
                 self.schedule();

@@ -257,6 +257,19 @@ fn describe(net: &Net, kind: &EventKind) -> String {
                 place(*p)
             )
         }
+        EventKind::ActionOutput {
+            agent,
+            place: p,
+            stream,
+            line,
+        } => match stream {
+            crate::runtime::OutputStream::Stdout => {
+                format!("agent {} in {}: {line}", agent.0, place(*p))
+            }
+            crate::runtime::OutputStream::Stderr => {
+                format!("agent {} in {} (stderr): {line}", agent.0, place(*p))
+            }
+        },
         EventKind::AgentEnded { agent } => format!("agent {} ended", agent.0),
         EventKind::Error { message } => format!("error: {message}"),
         EventKind::Stopped { reason } => format!("stopped: {reason}"),

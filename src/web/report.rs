@@ -20,6 +20,7 @@ pub(crate) fn analyse(net: &Net, max_states: usize, progress: &Progress) -> Valu
         max_states,
         progress: false,
         threads: 0,
+        ..Options::default()
     };
     let cancelled = || json!({ "error": "cancelled", "kind": "cancelled" });
     if !progress.enter(Phase::StateSpace) {
@@ -34,6 +35,8 @@ pub(crate) fn analyse(net: &Net, max_states: usize, progress: &Progress) -> Valu
                 AnalysisError::TimelessTrap { .. } => "timeless_trap",
                 AnalysisError::VanishingLoopTooLarge { .. } => "vanishing_loop_too_large",
                 AnalysisError::Cancelled { .. } => "cancelled",
+                AnalysisError::TooManyTokens { .. } => "too_many_tokens",
+                AnalysisError::TooMuchMemory { .. } => "too_much_memory",
             };
             let mut v = json!({ "error": e.to_string(), "kind": kind });
             if let AnalysisError::Unbounded { places } = &e {

@@ -154,7 +154,12 @@ impl Session {
             return Err(SessionError::NotFirable(name.to_string()));
         }
         let mut marking = self.sim.marking().clone();
-        self.net.fire(&mut marking, t);
+        self.net.fire(&mut marking, t).map_err(|o| {
+            SessionError::Sim(SimError::TokenOverflow {
+                time: self.time(),
+                message: self.net.describe_overflow(&o),
+            })
+        })?;
         self.manual += 1;
         self.firings += 1;
         self.segment_time = self.time();

@@ -13,7 +13,6 @@
 //! failure policy decides (retry, fire, stop).
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use tokio::sync::oneshot;
 
@@ -110,7 +109,7 @@ impl Action for SimAction {
                             return Outcome::Cancelled;
                         };
                         let sleep =
-                            tokio::time::sleep(Duration::from_secs_f64(secs * world.scale()));
+                            tokio::time::sleep(crate::limits::duration(secs * world.scale()));
                         tokio::select! {
                             _ = sleep => {}
                             _ = ctx.cancel.cancelled() => return Outcome::Cancelled,

@@ -202,7 +202,7 @@ impl World {
             robots,
             names,
             scale,
-            tick_len: Duration::from_secs_f64(dt * scale),
+            tick_len: crate::limits::duration(dt * scale),
             next_tick: Instant::now(),
             clock_start: Instant::now(),
             wall_start: std::time::Instant::now(),

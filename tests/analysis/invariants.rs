@@ -115,7 +115,9 @@ fn size_cap_reports_an_incomplete_answer() {
     let full = p_invariants(&net, DEFAULT_CAP);
     assert!(full.complete);
     assert_eq!(full.vectors.len(), 1);
-    assert!(full.vectors[0].iter().all(|&w| w == 1));
+    let entries = full.vectors[0].entries();
+    assert_eq!(entries.len(), net.place_count());
+    assert!(entries.iter().all(|&(_, w)| w == 1));
     let capped = p_invariants(&net, 0);
     assert!(!capped.complete && capped.vectors.is_empty());
 }

@@ -4,11 +4,16 @@
 mod support;
 
 mod ctmc;
+mod decision_model;
+mod decision_objectives;
 mod invariants;
 mod mcc_oracles;
+mod memory_is_bounded;
 mod properties;
 mod state_space;
 mod steady_state_from_columns;
 mod steady_state_random_nets;
+mod storm_cross_check;
+mod synthesised_policy;
 mod thesis_reference;
 mod vanishing_elimination;

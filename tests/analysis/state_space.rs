@@ -338,7 +338,7 @@ fn plain_bfs(net: &Net) -> (usize, usize) {
         for t in net.firable(&m) {
             arcs += 1;
             let mut next = m.clone();
-            net.fire(&mut next, t);
+            net.fire(&mut next, t).unwrap();
             if seen.insert(next.clone()) {
                 queue.push_back(next);
             }

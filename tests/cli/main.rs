@@ -4,8 +4,12 @@
 mod support;
 
 mod analyze;
+mod bad_limits;
 mod check;
+mod journal_survives_signals;
+mod program_actions;
 mod readme;
 mod run;
 mod run_on_robots;
 mod simulate;
+mod synthesize;

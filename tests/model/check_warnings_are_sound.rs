@@ -85,7 +85,7 @@ proptest! {
             }
             let t = enabled[pick.index(enabled.len())];
             prop_assert!(s.may_fire[t.index()], "`{}` fired but was reported dead", net.transition(t).name);
-            net.fire(&mut m, t);
+            net.fire(&mut m, t).unwrap();
             if m.iter().any(|&k| k > 1000) {
                 break;
             }

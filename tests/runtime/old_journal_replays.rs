@@ -56,7 +56,7 @@ fn a_journal_written_before_the_typed_reader_still_replays() {
             .transition_by_name(w[1].transition.as_deref().unwrap())
             .unwrap();
         let mut m = w[0].tokens.clone();
-        net.fire(&mut m, t);
+        net.fire(&mut m, t).unwrap();
         assert_eq!(m, w[1].tokens);
         assert!(w[1].time >= w[0].time);
     }

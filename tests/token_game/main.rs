@@ -5,4 +5,5 @@ mod support;
 
 mod firing;
 mod reference_nets;
+mod token_counts_never_wrap;
 mod token_game_runs;

@@ -264,7 +264,7 @@ async fn analysis_reports_properties_measures_and_dead_markings() {
         for name in d["path"].as_array().unwrap() {
             let t = net.transition_by_name(name.as_str().unwrap()).unwrap();
             assert!(net.firable(&m).contains(&t));
-            net.fire(&mut m, t);
+            net.fire(&mut m, t).unwrap();
         }
         assert_eq!(net.format_marking(&m), d["text"].as_str().unwrap());
         assert!(net.firable(&m).is_empty());

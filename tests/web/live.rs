@@ -112,7 +112,7 @@ async fn a_journal_plays_back_as_the_markings_of_the_run() {
             .transition_by_name(w[1].transition.as_deref().unwrap())
             .unwrap();
         let mut m = w[0].tokens.clone();
-        net.fire(&mut m, t);
+        net.fire(&mut m, t).unwrap();
         assert_eq!(m, w[1].tokens);
         assert!(w[1].time >= w[0].time);
     }

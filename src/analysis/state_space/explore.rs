@@ -12,7 +12,7 @@ use std::sync::mpsc;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::packing::{Layout, MarkingStore};
+use super::packing::{Deltas, Layout, MarkingStore};
 use super::table::MoveTable;
 use super::{AnalysisError, Monitor, Move};
 use crate::firing::{self, Rules};
@@ -51,8 +51,25 @@ struct Block {
     overflow: Option<(usize, usize, u32)>,
 }
 
+/// How much the search may hold.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Limits {
+    /// Most markings.
+    pub(crate) states: usize,
+    /// Most bytes, estimated ([`Search::bytes_per_marking`]).
+    pub(crate) memory: usize,
+}
+
 /// Computes the successors of the states whose packed words are `frontier`.
-fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: usize) -> Block {
+fn generate(
+    net: &Net,
+    rules: &Rules,
+    layout: &Layout,
+    deltas: &Deltas,
+    frontier: &[u64],
+    first: usize,
+    wait: bool,
+) -> Block {
     let w = layout.words();
     let n = frontier.len() / w;
     let mut b = Block {
@@ -66,11 +83,19 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
     let mut m = vec![0u32; net.place_count()];
     let mut key = vec![0u64; w];
     let mut fire: Vec<(TransitionId, f64)> = Vec::new();
-    let deltas = layout.transition_deltas(net);
     for i in 0..n {
         let base = &frontier[i * w..(i + 1) * w];
         layout.unpack(base, &mut m);
         let tangible = firing::moves(net, rules, &m, &mut fire);
+        if wait && !tangible {
+            // Negative: an exponential rate out of a vanishing marking (see `Search::insert`).
+            for &t in rules.exponentials() {
+                let r = net.exp_rate(&m, t);
+                if r > 0.0 {
+                    fire.push((t, -r));
+                }
+            }
+        }
         let (items_len, keys_len) = (b.items.len(), b.keys.len());
         for &(t, v) in &fire {
             for &(p, d) in net.delta(t) {
@@ -83,9 +108,10 @@ fn generate(net: &Net, rules: &Rules, layout: &Layout, frontier: &[u64], first: 
                     return b;
                 }
             }
-            let d = &deltas[t.index() * w..(t.index() + 1) * w];
-            for ((k, &x), &y) in key.iter_mut().zip(base).zip(d) {
-                *k = x.wrapping_add(y);
+            key.copy_from_slice(base);
+            for &(word, add) in deltas.of(t.index()) {
+                let k = &mut key[word as usize];
+                *k = k.wrapping_add(add);
             }
             b.items.push((t.0, v, MarkingStore::hash(&key)));
             b.keys.extend_from_slice(&key);
@@ -101,11 +127,39 @@ struct Search<'m> {
     raw: Raw,
     monitor: &'m Monitor,
     max_states: usize,
+    max_memory: usize,
     group: Vec<Move>,
     bar: Option<ProgressBar>,
 }
 
 impl Search<'_> {
+    /// Estimated bytes one more marking costs: its packed words (stored, and copied once
+    /// into the frontier), its index entry (with the table's spare room), its parent, its
+    /// flag and its group's span.
+    fn bytes_per_marking(&self) -> usize {
+        self.raw.store.layout.words() * 8 * 2 + 32 + 8 + 1 + 12
+    }
+
+    /// Refuses to grow past [`Limits::memory`]: the estimate is made before the store, the
+    /// index and the move table take their next allocation.
+    fn check_memory(&self) -> Result<(), AnalysisError> {
+        let per = self.bytes_per_marking();
+        let bytes = self
+            .raw
+            .store
+            .len()
+            .saturating_mul(per)
+            .saturating_add(self.raw.moves.total() * std::mem::size_of::<Move>());
+        if bytes > self.max_memory {
+            return Err(AnalysisError::TooMuchMemory {
+                limit_mib: self.max_memory >> 20,
+                markings: self.raw.store.len(),
+                bytes_per_marking: per,
+            });
+        }
+        Ok(())
+    }
+
     /// Inserts a block's targets; `Some(overflow)` when the block stopped early.
     fn insert(&mut self, b: &Block) -> Result<Option<(usize, usize, u32)>, AnalysisError> {
         let w = self.raw.store.layout.words();
@@ -124,9 +178,15 @@ impl Search<'_> {
                             limit: self.max_states,
                         });
                     }
+                    self.check_memory()?;
                     self.raw.parent.push((src, t));
                 }
-                let (rate, prob) = if tangible { (v, 1.0) } else { (0.0, v) };
+                let (rate, prob) = match (tangible, v < 0.0) {
+                    (true, _) => (v, 1.0),
+                    // An exponential transition enabled in a vanishing marking (WAIT).
+                    (false, true) => (-v, 0.0),
+                    (false, false) => (0.0, v),
+                };
                 self.group.push(Move {
                     transition: TransitionId(t),
                     rate,
@@ -152,13 +212,29 @@ impl Search<'_> {
 }
 
 /// Searches the whole reachability graph from the initial marking.
+#[cfg(test)]
 pub(crate) fn explore(
     net: &Net,
     layout: Layout,
-    max_states: usize,
+    limits: Limits,
     threads: usize,
     progress: bool,
     monitor: &Monitor,
+) -> Result<Raw, AnalysisError> {
+    explore_with(net, layout, limits, threads, progress, monitor, false)
+}
+
+/// As [`explore`]; with `wait`, a vanishing marking's group also holds its enabled
+/// exponential transitions (`rate > 0`, `prob == 0`) and their targets are searched too: the
+/// markings a WAIT choice reaches.
+pub(crate) fn explore_with(
+    net: &Net,
+    layout: Layout,
+    limits: Limits,
+    threads: usize,
+    progress: bool,
+    monitor: &Monitor,
+    wait: bool,
 ) -> Result<Raw, AnalysisError> {
     let rules = Rules::new(net);
     let mut store = MarkingStore::new(layout, net.place_count());
@@ -187,22 +263,33 @@ pub(crate) fn explore(
             parent: vec![(u32::MAX, u32::MAX)],
         },
         monitor,
-        max_states: max_states.max(1),
+        max_states: limits.states.max(1),
+        max_memory: limits.memory,
         group: Vec::new(),
         bar,
     };
+    s.check_memory()?;
     let mut cursor = 0;
     while cursor < s.raw.store.len() {
         let hi = s.raw.store.len();
         let w = s.raw.store.layout.words();
         let layout = s.raw.store.layout.clone();
+        let deltas = layout.transition_deltas(net);
         let frontier: Vec<u64> = (cursor..hi)
             .flat_map(|id| s.raw.store.packed(id).iter().copied())
             .collect();
         let overflow = if threads <= 1 || hi - cursor < PAR_MIN {
             let mut over = None;
             for (k, chunk) in frontier.chunks(BLOCK * w).enumerate() {
-                let b = generate(net, &rules, &layout, chunk, cursor + k * BLOCK);
+                let b = generate(
+                    net,
+                    &rules,
+                    &layout,
+                    &deltas,
+                    chunk,
+                    cursor + k * BLOCK,
+                    wait,
+                );
                 over = s.insert(&b)?;
                 if over.is_some() {
                     break;
@@ -210,14 +297,16 @@ pub(crate) fn explore(
             }
             over
         } else {
-            expand_parallel(net, &rules, &layout, &frontier, cursor, threads, &mut s)?
+            let ctx = (net, &rules, &layout, &deltas);
+            expand_parallel(ctx, &frontier, cursor, threads, &mut s, wait)?
         };
         match overflow {
             Some((state, p, value)) => {
                 if s.raw.store.layout.max_value(p) >= u32::MAX as u64 {
-                    // More than 2³² tokens: unbounded for every practical purpose.
-                    return Err(AnalysisError::Unbounded {
-                        places: vec![net.place(crate::net::PlaceId(p as u32)).name.clone()],
+                    // A count past the largest one a marking holds.
+                    return Err(AnalysisError::TooManyTokens {
+                        place: net.place(crate::net::PlaceId(p as u32)).name.clone(),
+                        tokens: u32::MAX as u64 + 1,
                     });
                 }
                 let wider = s.raw.store.layout.widened(p, value);
@@ -237,14 +326,14 @@ pub(crate) fn explore(
 
 /// Expands a large frontier: `threads - 1` workers compute blocks round-robin, the calling
 /// thread inserts them in order.
+#[allow(clippy::too_many_arguments)]
 fn expand_parallel(
-    net: &Net,
-    rules: &Rules,
-    layout: &Layout,
+    (net, rules, layout, deltas): (&Net, &Rules, &Layout, &Deltas),
     frontier: &[u64],
     first: usize,
     threads: usize,
     s: &mut Search<'_>,
+    wait: bool,
 ) -> Result<Option<(usize, usize, u32)>, AnalysisError> {
     let w = layout.words();
     let chunks: Vec<&[u64]> = frontier.chunks(BLOCK * w).collect();
@@ -257,7 +346,7 @@ fn expand_parallel(
             let chunks = &chunks;
             scope.spawn(move || {
                 for (j, chunk) in chunks.iter().enumerate().skip(k).step_by(workers) {
-                    let b = generate(net, rules, layout, chunk, first + j * BLOCK);
+                    let b = generate(net, rules, layout, deltas, chunk, first + j * BLOCK, wait);
                     let stop = b.overflow.is_some();
                     if tx.send(b).is_err() || stop {
                         return;
@@ -288,6 +377,11 @@ mod tests {
     use super::*;
     use crate::net::{NetBuilder, Servers};
 
+    const BIG: Limits = Limits {
+        states: 1 << 20,
+        memory: 1 << 30,
+    };
+
     /// Two independent two-place cycles with `n` tokens each: (n+1)² markings.
     fn cycles(n: u32) -> Net {
         let mut b = NetBuilder::new("cycles");
@@ -311,8 +405,8 @@ mod tests {
         let narrow = Layout::new(&[Some(60), Some(1), Some(60), Some(1)], &[60, 0, 60, 0]);
         for threads in [1, 2] {
             let m = Monitor::new();
-            let a = explore(&net, exact.clone(), 1 << 20, threads, false, &m).unwrap();
-            let b = explore(&net, narrow.clone(), 1 << 20, threads, false, &m).unwrap();
+            let a = explore(&net, exact.clone(), BIG, threads, false, &m).unwrap();
+            let b = explore(&net, narrow.clone(), BIG, threads, false, &m).unwrap();
             assert_eq!(a.store.len(), 61 * 61);
             assert_eq!(b.store.len(), a.store.len());
             assert_eq!(b.moves.total(), a.moves.total());
@@ -331,12 +425,12 @@ mod tests {
         let net = cycles(60);
         let exact = Layout::new(&[Some(60); 4], &[60, 0, 60, 0]);
         let m = Monitor::new();
-        explore(&net, exact.clone(), 1 << 20, 1, false, &m).unwrap();
+        explore(&net, exact.clone(), BIG, 1, false, &m).unwrap();
         assert_eq!(m.markings(), 61 * 61);
         let c = Monitor::new();
         c.cancel();
         // The first block (the initial marking) is expanded, then the flag is seen.
-        match explore(&net, exact, 1 << 20, 1, false, &c) {
+        match explore(&net, exact, BIG, 1, false, &c) {
             Err(AnalysisError::Cancelled { markings }) => assert_eq!(markings, 3),
             other => panic!("expected a cancel, got {:?}", other.map(|r| r.store.len())),
         }

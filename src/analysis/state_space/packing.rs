@@ -86,19 +86,28 @@ impl Layout {
         }
     }
 
-    /// Per transition, `words` numbers to add (wrapping) to a packed marking to fire it:
-    /// each place's delta shifted into its field. Correct whenever the result fits, since a
-    /// field that stays in range neither borrows from nor carries into its neighbours.
-    pub(crate) fn transition_deltas(&self, net: &Net) -> Vec<u64> {
-        let w = self.words;
-        let mut out = vec![0u64; net.transition_count() * w];
+    /// Per transition, the numbers to add (wrapping) to the words of a packed marking to
+    /// fire it: each place's delta shifted into its field. Correct whenever the result fits,
+    /// since a field that stays in range neither borrows from nor carries into its
+    /// neighbours. Sparse, so its size follows the arcs (a dense table of transitions ×
+    /// words grew with the square of a chain's length).
+    pub(crate) fn transition_deltas(&self, net: &Net) -> Deltas {
+        let mut start = Vec::with_capacity(net.transition_count() + 1);
+        let mut items: Vec<(u32, u64)> = Vec::new();
+        start.push(0);
         for t in net.transition_ids() {
+            let first = items.len();
             for &(p, d) in net.delta(t) {
-                let slot = &mut out[t.index() * w + self.word[p.index()] as usize];
-                *slot = slot.wrapping_add((d as u64).wrapping_shl(self.shift[p.index()] as u32));
+                let word = self.word[p.index()];
+                let add = (d as u64).wrapping_shl(self.shift[p.index()] as u32);
+                match items[first..].iter_mut().find(|(w, _)| *w == word) {
+                    Some((_, x)) => *x = x.wrapping_add(add),
+                    None => items.push((word, add)),
+                }
             }
+            start.push(items.len() as u32);
         }
-        out
+        Deltas { start, items }
     }
 
     /// Packs `m` into `out`; `Err(place)` when a count does not fit.
@@ -123,6 +132,22 @@ impl Layout {
             let mask = if b >= 64 { u64::MAX } else { (1u64 << b) - 1 };
             *o = ((words[self.word[p] as usize] >> self.shift[p]) & mask) as u32;
         }
+    }
+}
+
+/// What firing each transition adds to the words of a packed marking
+/// ([`Layout::transition_deltas`]).
+#[derive(Clone, Debug)]
+pub(crate) struct Deltas {
+    start: Vec<u32>,
+    items: Vec<(u32, u64)>,
+}
+
+impl Deltas {
+    /// `(word, number to add)` for transition `t`.
+    #[inline]
+    pub(crate) fn of(&self, t: usize) -> &[(u32, u64)] {
+        &self.items[self.start[t] as usize..self.start[t + 1] as usize]
     }
 }
 

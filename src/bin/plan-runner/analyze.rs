@@ -39,6 +39,9 @@ pub(crate) struct Args {
     /// Most reachable markings before giving up.
     #[arg(long, value_name = "N", default_value_t = 10_000_000)]
     max_states: usize,
+    /// Most memory the state space may take, in MiB (estimated before each allocation).
+    #[arg(long, value_name = "MIB", default_value_t = 4096)]
+    max_memory: usize,
     /// Probability of a marking predicate, e.g. `P1>0 && P3==0` (repeatable).
     #[arg(long = "prob", value_name = "EXPR")]
     prob: Vec<String>,
@@ -68,6 +71,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         max_states: args.max_states,
         progress: !args.json && std::io::stderr().is_terminal(),
         threads: 0,
+        max_memory: args.max_memory.saturating_mul(1 << 20),
     };
     let ss = match StateSpace::build(net, &opts) {
         Ok(ss) => ss,

@@ -107,7 +107,12 @@ pub(crate) async fn setup(
         tokio::select! {
             b = crate::ros2::connect(&plan, &args.ros2) => backends.push(b?),
             _ = interrupted => {
-                return Err(crate::common::Interrupted("while waiting for the robots").into());
+                return Err(crate::common::Interrupted {
+                    what: "waiting for the robots",
+                    signal: "SIGINT",
+                    code: 130,
+                }
+                .into());
             }
         }
     }

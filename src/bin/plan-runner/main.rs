@@ -1,6 +1,7 @@
 //! `plan-runner`: check, analyse, simulate, run and convert GSPN plans.
 //!
-//! Exit codes: 0 ok, 1 failure, 2 bad input, 130 interrupted.
+//! Exit codes: 0 ok, 1 failure, 2 bad input, 130 interrupted (SIGINT), 143 terminated
+//! (SIGTERM), 129 hung up (SIGHUP); the last three stop a run cleanly (see docs/reliability.md).
 
 mod analyze;
 mod backends;
@@ -15,6 +16,7 @@ mod run;
 #[cfg(feature = "web")]
 mod serve;
 mod simulate;
+mod synthesize;
 
 use std::process::ExitCode;
 
@@ -38,6 +40,8 @@ enum Command {
     Simulate(simulate::Args),
     /// Execute a plan (or a bare net) on agents.
     Run(run::Args),
+    /// The optimal policy of a net with rewards: decision model, objective, `[[policy]]` rules.
+    Synthesize(synthesize::Args),
     /// Convert a net between formats (chosen by the output's extension).
     Convert(convert::Args),
     /// Turn a thesis framework execution input (JSON) into a plan.toml next to its net.
@@ -62,6 +66,7 @@ fn main() -> ExitCode {
         Command::Analyze(a) => analyze::main(a),
         Command::Simulate(a) => simulate::main(a),
         Command::Run(a) => run::main(a),
+        Command::Synthesize(a) => synthesize::main(a),
         Command::Convert(a) => convert::main(a),
         Command::ImportThesis(a) => import_thesis::main(a),
         #[cfg(feature = "web")]
@@ -70,6 +75,10 @@ fn main() -> ExitCode {
         #[cfg(feature = "ros2")]
         Command::Robot(a) => ros2::robot(a),
     };
+    // No program an action started outlives plan-runner (a stop already ended them; this
+    // catches the ones a runtime dropped mid-run).
+    #[cfg(unix)]
+    gspn::actions::terminate_all();
     match result {
         Ok(code) => code,
         Err(e) => {

@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use gspn::plan::open;
-use gspn::runtime::journal::{Frame, read_journal};
+use gspn::runtime::journal::{Frame, read_journal, split_torn};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -41,8 +41,15 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         .net;
     let text = std::fs::read_to_string(&args.journal)
         .with_context(|| format!("cannot read {}", args.journal.display()))?;
-    let frames = read_journal(&text, &net)
+    let (text, torn) = split_torn(&text);
+    let frames = read_journal(text, &net)
         .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
+    if let Some(torn) = &torn {
+        eprintln!(
+            "warning: {}: {torn}: skipped (the run was killed while writing it)",
+            args.journal.display()
+        );
+    }
     match args.web {
         Some(addr) => viewer(addr, &args.journal, net, frames),
         None => {

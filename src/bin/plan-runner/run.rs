@@ -3,7 +3,8 @@
 //! Places whose action is not registered in this binary run net-timed (the CLI has no user
 //! code); a live one-line progress display on a terminal; a summary at the end (`--json`:
 //! `stopped, firings, time, agents_spawned, agents_ended, final_marking, mean_tokens,
-//! throughput, errors`). Ctrl-C stops the run cleanly (journal flushed) with exit code 130.
+//! throughput, errors`). Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the run cleanly (actions
+//! cancelled, a final `stopped` event, journal flushed) with exit code 130, 143 and 129.
 //!
 //! The backends (simulated robots for a plan with a `[map]`, ROS 2 for `ros2` places, the
 //! viewer with `--web`) come from `backends.rs`; each adds its section to the summary (the
@@ -16,10 +17,10 @@ use std::time::Duration;
 
 use anyhow::Context as _;
 use gspn::plan::open;
-use gspn::runtime::{Backends, RuntimeBuilder, Section, Summary};
+use gspn::runtime::{Backends, RuntimeBuilder, Section, StopReason, Summary};
 
 use crate::backends::{self, BackendArgs};
-use crate::common::{BadInput, NetArgs};
+use crate::common::{BadInput, Interrupted, NetArgs, StopSignals};
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
@@ -53,8 +54,17 @@ pub(crate) struct Args {
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let mut plan = open(&args.file, &args.net.read_options())?.into_plan();
     if let Some(x) = args.time_scale {
-        if !(x.is_finite() && x >= 0.0) {
-            return Err(BadInput(format!("--time-scale {x}: must be ≥ 0")).into());
+        if !(x.is_finite() && (0.0..=gspn::limits::MAX_SECONDS).contains(&x)) {
+            let shown = if x.abs() >= 1e15 {
+                format!("{x:e}")
+            } else {
+                x.to_string()
+            };
+            return Err(BadInput(format!(
+                "--time-scale {shown}: {}",
+                gspn::plan::resolve::TIME_SCALE_EXPECTED
+            ))
+            .into());
         }
         plan.time_scale = Some(x);
     }
@@ -72,9 +82,18 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     }
     backends::check(&plan, &args.backends)?;
     let rt = backends::tokio_runtime(&plan).context("starting tokio")?;
-    let (summary, sections) = rt.block_on(async {
-        let (run, mut backends) = backends::setup(plan, &args.backends).await?;
-        execute(run, &args, &mut backends).await
+    let (summary, sections, code) = rt.block_on(async {
+        // Registered before the backends start: a signal while ROS 2 waits for its robots
+        // ends the wait at once with the signal's exit code.
+        let mut signals = StopSignals::new()?;
+        let setup = backends::setup(plan, &args.backends);
+        let (run, mut backends) = tokio::select! {
+            r = setup => r?,
+            (signal, code) = signals.recv() => {
+                return Err(Interrupted { what: "waiting for the robots", signal, code }.into());
+            }
+        };
+        execute(run, &args, &mut backends, signals).await
     })?;
     if args.json {
         if sections.is_empty() {
@@ -94,15 +113,18 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             }
         }
     }
-    Ok(ExitCode::from(summary.exit_code()))
+    Ok(ExitCode::from(code))
 }
 
-/// Runs `run` with its backends: journal, progress, Ctrl-C, then every backend's section.
+/// Runs `run` with its backends: journal, progress, stop signals, then every backend's
+/// section. The exit code is the summary's, or 128 + the signal's number when SIGINT,
+/// SIGTERM or SIGHUP stopped the run.
 async fn execute(
     run: RuntimeBuilder,
     args: &Args,
     backends: &mut Backends,
-) -> anyhow::Result<(Summary, Vec<(&'static str, Section)>)> {
+    mut signals: StopSignals,
+) -> anyhow::Result<(Summary, Vec<(&'static str, Section)>, u8)> {
     let mut b = backends.attach(run)?;
     if let Some(j) = &args.journal {
         b = b.journal(j);
@@ -128,15 +150,13 @@ async fn execute(
     let wait = handle.wait();
     tokio::pin!(wait);
     let mut ticker = tokio::time::interval(Duration::from_millis(200));
-    let mut interrupted = false;
+    let mut interrupted: Option<u8> = None;
     let summary = loop {
         tokio::select! {
             s = &mut wait => break s,
-            r = tokio::signal::ctrl_c(), if !interrupted => {
-                if r.is_ok() {
-                    interrupted = true;
-                    handle.interrupt();
-                }
+            (_, code) = signals.recv(), if interrupted.is_none() => {
+                interrupted = Some(code);
+                handle.interrupt();
             }
             _ = ticker.tick() => {
                 if let Some(bar) = &bar {
@@ -155,7 +175,11 @@ async fn execute(
     eprintln!("seed {}", handle.seed());
     let sections = backends.finish(&summary).await;
     backends.stop();
-    Ok((summary, sections))
+    let code = match interrupted {
+        Some(code) if summary.stopped == StopReason::Interrupted => code,
+        _ => summary.exit_code(),
+    };
+    Ok((summary, sections, code))
 }
 
 fn print_summary(s: &Summary) -> anyhow::Result<()> {

@@ -168,7 +168,9 @@ impl Env<'_> {
                 what,
                 name: owner.to_string(),
                 value: shown(attr, v),
-                expected: if min == 0 {
+                expected: if v.fract() == 0.0 && v > u32::MAX as f64 {
+                    crate::net::TOO_MANY_TOKENS
+                } else if min == 0 {
                     "must be a whole number ≥ 0"
                 } else {
                     "must be a whole number ≥ 1"
@@ -305,7 +307,6 @@ pub(super) fn build(
         }
     }
     for (k, v) in &opts.params {
-        let given = format!("--param {k}={v}");
         let Some((t, slot)) = env.templates.get_mut(k.as_str()) else {
             return Err(LoadError::file(
                 path,
@@ -330,7 +331,14 @@ pub(super) fn build(
                 )
             })?;
         check_template_type(t, value).map_err(|reason| {
-            LoadError::file(path, LoadErrorKind::Invalid(format!("{given}: {reason}")))
+            LoadError::file(
+                path,
+                LoadErrorKind::BadParam {
+                    name: k.clone(),
+                    value: v.clone(),
+                    reason,
+                },
+            )
         })?;
         *slot = Some(value);
     }

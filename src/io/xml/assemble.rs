@@ -500,7 +500,9 @@ fn count(
                 what,
                 name: name.to_string(),
                 value: s.to_string(),
-                expected: if min == 0 {
+                expected: if n > u32::MAX as i64 {
+                    crate::net::TOO_MANY_TOKENS
+                } else if min == 0 {
                     "must be a whole number ≥ 0"
                 } else {
                     "must be a whole number ≥ 1"

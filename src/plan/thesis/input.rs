@@ -6,17 +6,22 @@ use std::path::Path;
 use super::json::{self, Field, JsonStr, JsonValue};
 use super::pylit::{self, Py, PyKind};
 use super::{ActionEntry, KeyItem, Named, PolicyEntry, ThesisInput};
-use crate::io::{LoadError, LoadErrorKind, Span};
+use crate::io::{LineIndex, LoadError, LoadErrorKind, Span};
 
 /// Reads one input file; positions are computed against `text`.
 pub(super) struct Reader<'a> {
     pub(super) path: &'a Path,
     pub(super) text: &'a str,
+    /// Line starts of `text`, found on the first position asked for.
+    pub(super) lines: std::cell::OnceCell<LineIndex>,
 }
 
 impl Reader<'_> {
     fn span(&self, offset: usize) -> Span {
-        Span::locate(self.text.as_bytes(), offset)
+        let bytes = self.text.as_bytes();
+        self.lines
+            .get_or_init(|| LineIndex::new(bytes))
+            .locate(bytes, offset)
     }
 
     fn err(&self, offset: usize, kind: LoadErrorKind) -> LoadError {

@@ -1,0 +1,280 @@
+//! Building a [`DecisionModel`] from the reachable markings.
+
+use super::absorb::{Target, absorb};
+use super::{Action, BuildOptions, Controls, DecisionError, DecisionModel, Kind};
+use crate::analysis::state_space::explore::Raw;
+use crate::analysis::state_space::{AnalysisError, Monitor, Move, Options, search};
+use crate::net::{Net, Timing};
+
+/// What a reachable marking becomes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Class {
+    Tangible,
+    Decision,
+    Race,
+    Eliminated,
+}
+
+/// Sums the entries of `v` with equal index (sorted by index).
+fn merge(v: &mut Vec<(u32, f64)>) {
+    v.sort_unstable_by_key(|&(i, _)| i);
+    let mut out: Vec<(u32, f64)> = Vec::with_capacity(v.len());
+    for &(i, x) in v.iter() {
+        match out.last_mut() {
+            Some(last) if last.0 == i => last.1 += x,
+            _ => out.push((i, x)),
+        }
+    }
+    *v = out;
+}
+
+/// The race of the uncontrolled immediate transitions enabled in vanishing marking `g`:
+/// probability ∝ weight (uniform when all weights are 0).
+fn race<'r>(net: &Net, raw: &'r Raw, ctrl: &[bool], g: usize) -> Vec<(&'r Move, f64)> {
+    let arcs: Vec<(&Move, f64)> = raw
+        .moves
+        .group(g)
+        .iter()
+        .filter(|m| m.rate == 0.0 && !ctrl[m.transition.index()])
+        .map(|m| match net.transition(m.transition).timing {
+            Timing::Immediate { weight, .. } => (m, weight),
+            Timing::Exponential { .. } => (m, 0.0),
+        })
+        .collect();
+    let sum: f64 = arcs.iter().map(|&(_, w)| w).sum();
+    let k = arcs.len() as f64;
+    arcs.into_iter()
+        .map(|(m, w)| (m, if sum > 0.0 { w / sum } else { 1.0 / k }))
+        .collect()
+}
+
+pub(super) fn build(
+    net: &Net,
+    controls: &Controls,
+    opts: &BuildOptions,
+    monitor: &Monitor,
+) -> Result<DecisionModel, DecisionError> {
+    let sopts = Options {
+        max_states: opts.max_states,
+        progress: opts.progress,
+        threads: opts.threads,
+        ..Options::default()
+    };
+    let raw = search(net, &sopts, monitor, controls.wait)?;
+    let ctrl = &controls.controllable;
+    let n = raw.store.len();
+    let mut class = vec![Class::Tangible; n];
+    let mut hybrid = vec![false; n];
+    for g in 0..n {
+        if raw.tangible[g] {
+            continue;
+        }
+        let group = raw.moves.group(g);
+        let uncontrolled = group
+            .iter()
+            .any(|m| m.rate == 0.0 && !ctrl[m.transition.index()]);
+        hybrid[g] = controls.wait && group.iter().any(|m| m.rate > 0.0);
+        class[g] = if !uncontrolled {
+            Class::Decision
+        } else if hybrid[g] || controls.keep_races {
+            Class::Race
+        } else {
+            Class::Eliminated
+        };
+    }
+    // Kept markings in search order, then the WAIT copies; eliminated markings apart.
+    let mut id = vec![u32::MAX; n];
+    let mut kept: Vec<u32> = Vec::new();
+    let mut elim: Vec<u32> = Vec::new();
+    for g in 0..n {
+        if class[g] == Class::Eliminated {
+            id[g] = elim.len() as u32;
+            elim.push(g as u32);
+        } else {
+            id[g] = kept.len() as u32;
+            kept.push(g as u32);
+        }
+    }
+    let mut copy_of: Vec<u32> = Vec::new();
+    let mut copy_id = vec![u32::MAX; n];
+    for &g in &kept {
+        if hybrid[g as usize] {
+            copy_id[g as usize] = (kept.len() + copy_of.len()) as u32;
+            copy_of.push(g);
+        }
+    }
+    let target = |to: u32| {
+        if class[to as usize] == Class::Eliminated {
+            Target::In(id[to as usize])
+        } else {
+            Target::Out(id[to as usize])
+        }
+    };
+    let absorbed = absorb(
+        elim.len(),
+        |v, out| {
+            for (m, p) in race(net, &raw, ctrl, elim[v as usize] as usize) {
+                out.push((target(m.to), p));
+            }
+        },
+        |v, out| {
+            for (m, p) in race(net, &raw, ctrl, elim[v as usize] as usize) {
+                out.push((m.transition.0, p));
+            }
+        },
+    )
+    .map_err(|v| {
+        let mut mk = vec![0u32; net.place_count()];
+        raw.store.get(elim[v as usize] as usize, &mut mk);
+        AnalysisError::TimelessTrap {
+            marking: net.format_marking(&mk),
+        }
+    })?;
+
+    let total = kept.len() + copy_of.len();
+    let mut b = Builder {
+        model: DecisionModel {
+            places: net.place_count(),
+            marking: Vec::with_capacity(total),
+            copy: Vec::with_capacity(total),
+            kind: Vec::with_capacity(total),
+            exit: Vec::with_capacity(total),
+            choice_start: vec![0],
+            action: Vec::new(),
+            branch_start: vec![0],
+            to: Vec::new(),
+            prob: Vec::new(),
+            count_start: vec![0],
+            count_t: Vec::new(),
+            count_x: Vec::new(),
+            initial: Vec::new(),
+            copies: copy_of.len(),
+            eliminated: elim.len(),
+            total_markings: n,
+            store: crate::analysis::state_space::packing::MarkingStore::new(
+                raw.store.layout.clone(),
+                net.place_count(),
+            ),
+        },
+        branches: Vec::new(),
+        counts: Vec::new(),
+    };
+    let add = |b: &mut Builder, to: u32, q: f64| match target(to) {
+        Target::Out(k) => b.branches.push((k, q)),
+        Target::In(w) => {
+            for &(k, x) in &absorbed.dist[w as usize] {
+                b.branches.push((k, q * x));
+            }
+            for &(t, x) in &absorbed.counts[w as usize] {
+                b.counts.push((t, q * x));
+            }
+        }
+    };
+    let delay = |b: &mut Builder, g: usize, s: u32| {
+        let moves: Vec<&Move> = raw.moves.group(g).iter().filter(|m| m.rate > 0.0).collect();
+        let exit: f64 = moves.iter().map(|m| m.rate).sum();
+        if moves.is_empty() {
+            b.branches.push((s, 1.0));
+            b.choice(Action::Delay);
+            return (Kind::Dead, 1.0);
+        }
+        for m in moves {
+            let q = m.rate / exit;
+            b.counts.push((m.transition.0, q));
+            add(b, m.to, q);
+        }
+        b.choice(Action::Delay);
+        (Kind::Markovian, exit)
+    };
+    for (s, &g) in kept.iter().enumerate() {
+        let g = g as usize;
+        let (kind, exit) = match class[g] {
+            Class::Tangible => delay(&mut b, g, s as u32),
+            Class::Decision => {
+                for m in raw.moves.group(g).iter().filter(|m| m.rate == 0.0) {
+                    b.counts.push((m.transition.0, 1.0));
+                    add(&mut b, m.to, 1.0);
+                    b.choice(Action::Fire(m.transition));
+                }
+                (Kind::Instant, 0.0)
+            }
+            Class::Race => {
+                for (m, p) in race(net, &raw, ctrl, g) {
+                    b.counts.push((m.transition.0, p));
+                    add(&mut b, m.to, p);
+                }
+                b.choice(Action::Race);
+                (Kind::Instant, 0.0)
+            }
+            Class::Eliminated => unreachable!("eliminated markings are not kept"),
+        };
+        if hybrid[g] {
+            b.branches.push((copy_id[g], 1.0));
+            b.choice(Action::Wait);
+        }
+        b.state(g as u32, false, kind, exit);
+    }
+    for (j, &g) in copy_of.iter().enumerate() {
+        let s = (kept.len() + j) as u32;
+        let (kind, exit) = delay(&mut b, g as usize, s);
+        b.state(g, true, kind, exit);
+    }
+    let mut model = b.model;
+    model.initial = match target(0) {
+        Target::Out(k) => vec![(k, 1.0)],
+        Target::In(w) => absorbed.dist[w as usize].clone(),
+    };
+    // Keep the markings of kept states only, in the order of their first use.
+    let Raw { store, .. } = raw;
+    let words: Vec<u32> = (0..n as u32)
+        .filter(|&g| class[g as usize] != Class::Eliminated)
+        .collect();
+    let mut new_store = model.store;
+    for (k, &g) in words.iter().enumerate() {
+        new_store.insert(store.packed(g as usize));
+        debug_assert_eq!(k + 1, new_store.len());
+    }
+    new_store.drop_index();
+    model.store = new_store;
+    model.marking = model.marking.iter().map(|&g| id[g as usize]).collect();
+    Ok(model)
+}
+
+/// Accumulates choices and states in compressed rows.
+struct Builder {
+    model: DecisionModel,
+    branches: Vec<(u32, f64)>,
+    counts: Vec<(u32, f64)>,
+}
+
+impl Builder {
+    /// Closes a choice with the branches and counts gathered since the last one.
+    fn choice(&mut self, action: Action) {
+        merge(&mut self.branches);
+        merge(&mut self.counts);
+        let m = &mut self.model;
+        m.action.push(action);
+        for &(k, p) in &self.branches {
+            m.to.push(k);
+            m.prob.push(p);
+        }
+        m.branch_start.push(m.to.len() as u32);
+        for &(t, x) in &self.counts {
+            m.count_t.push(t);
+            m.count_x.push(x);
+        }
+        m.count_start.push(m.count_t.len() as u32);
+        self.branches.clear();
+        self.counts.clear();
+    }
+
+    /// Closes a state with the choices added since the last one.
+    fn state(&mut self, marking: u32, copy: bool, kind: Kind, exit: f64) {
+        let m = &mut self.model;
+        m.marking.push(marking);
+        m.copy.push(copy);
+        m.kind.push(kind);
+        m.exit.push(exit);
+        m.choice_start.push(m.action.len() as u32);
+    }
+}

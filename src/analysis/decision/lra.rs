@@ -1,0 +1,419 @@
+//! Long-run average reward: maximal end components (MECs), the optimal average of each, then
+//! the best MEC to reach.
+//!
+//! Inside a MEC every state can reach every other, so one value `g` holds for all of them.
+//! It is found by value iteration on the MEC uniformised with `Λ` slightly above its largest
+//! exit rate (a self-loop in every Markovian state: aperiodic): a step of the iteration is
+//! `1/Λ` of time, instant states are resolved inside the step, and for any `v` the increments
+//! bound the optimum, `min(Tv − v)·Λ ≤ g ≤ max(Tv − v)·Λ` (the MEC is communicating). The
+//! iteration stops once the bounds are within the precision. Then every state chooses
+//! between staying in its MEC (value `g`) and leaving it, solved by optimistic value
+//! iteration with a stop option per MEC state; a MEC whose best is to leave steers each of
+//! its states to the leaving state (an attractor), so the policy never cycles inside.
+
+use super::solve::{Equations, Method, Solution, SolveOptions};
+use super::{DecisionError, DecisionModel, Kind, Rewards};
+use crate::analysis::scc::tarjan;
+
+/// The maximal end components: per state its MEC (`u32::MAX` outside any), per choice
+/// whether it stays inside its state's MEC.
+pub(super) struct Mecs {
+    pub(super) of: Vec<u32>,
+    pub(super) count: usize,
+    pub(super) inside: Vec<bool>,
+}
+
+pub(super) fn mecs(model: &DecisionModel) -> Mecs {
+    let n = model.state_count();
+    let mut alive = vec![true; model.choice_count()];
+    let mut live = vec![true; n];
+    loop {
+        let sccs = tarjan(n, |s, out| {
+            if !live[s as usize] {
+                return;
+            }
+            for c in model.choices(s as usize) {
+                if alive[c] {
+                    out.extend(
+                        model
+                            .branches(c)
+                            .map(|(t, _)| t)
+                            .filter(|&t| live[t as usize]),
+                    );
+                }
+            }
+        });
+        let comp = &sccs.component;
+        let mut changed = false;
+        for s in 0..n {
+            if !live[s] {
+                continue;
+            }
+            let mut any = false;
+            for c in model.choices(s) {
+                if !alive[c] {
+                    continue;
+                }
+                if model
+                    .branches(c)
+                    .any(|(t, _)| !live[t as usize] || comp[t as usize] != comp[s])
+                {
+                    alive[c] = false;
+                    changed = true;
+                } else {
+                    any = true;
+                }
+            }
+            if !any {
+                live[s] = false;
+                changed = true;
+            }
+        }
+        if !changed {
+            let mut ids = vec![u32::MAX; sccs.count];
+            let mut of = vec![u32::MAX; n];
+            let mut count = 0;
+            for s in 0..n {
+                if live[s] {
+                    let k = &mut ids[comp[s] as usize];
+                    if *k == u32::MAX {
+                        *k = count;
+                        count += 1;
+                    }
+                    of[s] = *k;
+                }
+            }
+            return Mecs {
+                of,
+                count: count as usize,
+                inside: alive,
+            };
+        }
+    }
+}
+
+/// The optimal average of one MEC: bounds, iterations, and per state the best inside choice.
+struct MecValue {
+    lower: f64,
+    upper: f64,
+    iterations: usize,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn mec_value(
+    model: &DecisionModel,
+    rewards: &Rewards,
+    mecs: &Mecs,
+    states: &[u32],
+    max: bool,
+    opts: &SolveOptions,
+    policy: &mut [u32],
+    iterations_so_far: usize,
+) -> Result<MecValue, DecisionError> {
+    let markov: Vec<u32> = states
+        .iter()
+        .copied()
+        .filter(|&s| model.kind(s as usize) != Kind::Instant)
+        .collect();
+    let instant: Vec<u32> = states
+        .iter()
+        .copied()
+        .filter(|&s| model.kind(s as usize) == Kind::Instant)
+        .collect();
+    if markov.is_empty() {
+        // Only instant states: time never passes here (a Zeno end component).
+        let s = states[0] as usize;
+        return Err(DecisionError::TimelessPolicy {
+            marking: format!("{:?}", model.marking(s)),
+        });
+    }
+    let lambda = markov
+        .iter()
+        .map(|&s| model.exit_rate(s as usize))
+        .fold(0.0, f64::max)
+        * 1.05;
+    // Instant states sinks first (their inside choices only).
+    let mut local = vec![u32::MAX; model.state_count()];
+    for (i, &s) in instant.iter().enumerate() {
+        local[s as usize] = i as u32;
+    }
+    let sccs = tarjan(instant.len(), |v, out| {
+        for c in model.choices(instant[v as usize] as usize) {
+            if mecs.inside[c] {
+                out.extend(
+                    model
+                        .branches(c)
+                        .map(|(t, _)| local[t as usize])
+                        .filter(|&l| l != u32::MAX),
+                );
+            }
+        }
+    });
+    let order = sccs.members();
+    let better = |a: f64, b: f64| if max { a > b } else { a < b };
+    let mut x = vec![0.0f64; model.state_count()];
+    let mut next = vec![0.0f64; markov.len()];
+    let eps = opts.precision;
+    let mut iterations = 0;
+    loop {
+        if opts.cancelled() {
+            return Err(DecisionError::Cancelled {
+                iterations: iterations_so_far + iterations,
+            });
+        }
+        if iterations >= opts.max_iterations {
+            return Err(DecisionError::NoConvergence {
+                iterations: iterations_so_far + iterations,
+                lower: f64::NAN,
+                upper: f64::NAN,
+            });
+        }
+        iterations += 1;
+        // Instant states from the current Markovian values.
+        let tiny = 1e-15
+            * (1.0
+                + markov
+                    .iter()
+                    .fold(0.0f64, |m, &s| m.max(x[s as usize].abs())));
+        for comp in &order {
+            let rounds = if comp.len() == 1 { 1 } else { 10_000 };
+            for _ in 0..rounds {
+                let mut change = 0.0f64;
+                for &v in comp {
+                    let s = instant[v as usize] as usize;
+                    let mut best: Option<f64> = None;
+                    for c in model.choices(s) {
+                        if !mecs.inside[c] {
+                            continue;
+                        }
+                        let val = rewards.impulse[c]
+                            + model
+                                .branches(c)
+                                .map(|(t, p)| p * x[t as usize])
+                                .sum::<f64>();
+                        if best.is_none_or(|b| better(val, b)) {
+                            best = Some(val);
+                            policy[s] = c as u32;
+                        }
+                    }
+                    let val = best.unwrap_or(0.0);
+                    change = change.max((val - x[s]).abs());
+                    x[s] = val;
+                }
+                if change <= tiny {
+                    break;
+                }
+            }
+        }
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for (i, &s) in markov.iter().enumerate() {
+            let s = s as usize;
+            let c = model.choices(s).start;
+            policy[s] = c as u32;
+            let (e, rate) = if model.kind(s) == Kind::Dead {
+                (0.0, 0.0)
+            } else {
+                (model.exit_rate(s), rewards.rate[s])
+            };
+            let sum: f64 = model.branches(c).map(|(t, p)| p * x[t as usize]).sum();
+            let v =
+                rate / lambda + e / lambda * (rewards.impulse[c] + sum) + (1.0 - e / lambda) * x[s];
+            let d = v - x[s];
+            lo = lo.min(d);
+            hi = hi.max(d);
+            next[i] = v;
+        }
+        let (glo, ghi) = (lo * lambda, hi * lambda);
+        let reference = next[0];
+        for (i, &s) in markov.iter().enumerate() {
+            x[s as usize] = next[i] - reference;
+        }
+        if ghi - glo <= eps * glo.abs().max(ghi.abs()) || ghi - glo <= 1e-300 {
+            return Ok(MecValue {
+                lower: glo,
+                upper: ghi,
+                iterations,
+            });
+        }
+    }
+}
+
+/// Solves the long-run average reward, maximal or minimal.
+pub(super) fn solve(
+    model: &DecisionModel,
+    rewards: &Rewards,
+    max: bool,
+    opts: &SolveOptions,
+) -> Result<Solution, DecisionError> {
+    let n = model.state_count();
+    let mecs = mecs(model);
+    let mut members: Vec<Vec<u32>> = vec![Vec::new(); mecs.count];
+    for s in 0..n {
+        if mecs.of[s] != u32::MAX {
+            members[mecs.of[s] as usize].push(s as u32);
+        }
+    }
+    let mut policy = vec![u32::MAX; n];
+    let mut iterations = 0;
+    let mut g: Vec<(f64, f64)> = Vec::with_capacity(mecs.count);
+    for states in &members {
+        let v = mec_value(
+            model,
+            rewards,
+            &mecs,
+            states,
+            max,
+            opts,
+            &mut policy,
+            iterations,
+        )?;
+        iterations += v.iterations;
+        g.push((v.lower, v.upper));
+    }
+    // Reaching the best MEC, as a maximisation with non-negative stop values: for max,
+    // y = g − gmin; for min, y = gmax − g.
+    let gmin = g.iter().map(|v| v.0).fold(f64::INFINITY, f64::min);
+    let gmax = g.iter().map(|v| v.1).fold(f64::NEG_INFINITY, f64::max);
+    let shift = |v: f64| if max { v - gmin } else { gmax - v };
+    let unshift = |y: f64| if max { y + gmin } else { gmax - y };
+    let zero = vec![0.0; model.choice_count()];
+    let stop_of = |pick: fn(&(f64, f64)) -> f64, max_side: bool| {
+        let mut eq = Equations::new(model, true);
+        for s in 0..n {
+            if mecs.of[s] != u32::MAX {
+                let v = g[mecs.of[s] as usize];
+                // For min the lower y comes from the upper g and vice versa.
+                let gv = if max_side {
+                    pick(&v)
+                } else {
+                    pick(&(v.1, v.0))
+                };
+                eq.stop[s] = Some(shift(gv));
+            }
+        }
+        eq
+    };
+    let eq_lo = stop_of(|v| v.0, max);
+    let eq_hi = stop_of(|v| v.1, max);
+    let single = mecs.count == 1 && mecs.of.iter().all(|&m| m == 0);
+    let (sol_lo, sol_hi) = if single {
+        (None, None)
+    } else {
+        let a = eq_lo.solve(model, &zero, opts, false)?;
+        let b = eq_hi.solve(model, &zero, opts, false)?;
+        iterations += a.iterations + b.iterations;
+        (Some(a), Some(b))
+    };
+    let (values, lower, upper) = match (&sol_lo, &sol_hi) {
+        (Some(a), Some(b)) => {
+            let values: Vec<f64> = (0..n)
+                .map(|s| (unshift(a.values[s]) + unshift(b.values[s])) / 2.0)
+                .collect();
+            // y-lower of the lower run and y-upper of the upper run bound the value.
+            let (y_lo, y_hi) = (a.lower, b.upper);
+            let (l, u) = if max {
+                (unshift(y_lo), unshift(y_hi))
+            } else {
+                (unshift(y_hi), unshift(y_lo))
+            };
+            (values, l, u)
+        }
+        _ => {
+            let (l, u) = g[0];
+            (vec![(l + u) / 2.0; n], l, u)
+        }
+    };
+    // The policy: inside a MEC whose best is to stay, its own choices; elsewhere the best
+    // exit, steered to by an attractor inside the MEC.
+    if let Some(a) = &sol_lo {
+        let y = &a.values;
+        let mut leave_best: Vec<Option<(f64, u32)>> = vec![None; mecs.count];
+        for (s, slot) in policy.iter_mut().enumerate() {
+            let m = mecs.of[s];
+            if m == u32::MAX {
+                let c = eq_lo.update(model, &zero, y, s).1;
+                *slot = if c == u32::MAX {
+                    model.choices(s).start as u32
+                } else {
+                    c
+                };
+                continue;
+            }
+            for c in model.choices(s) {
+                if mecs.inside[c] {
+                    continue;
+                }
+                let val: f64 = model.branches(c).map(|(t, p)| p * y[t as usize]).sum();
+                let stop = eq_lo.stop[s].unwrap_or(0.0);
+                if val > stop + 1e-12 * stop.abs().max(1.0)
+                    && leave_best[m as usize].is_none_or(|(b, _)| val > b)
+                {
+                    leave_best[m as usize] = Some((val, c as u32));
+                }
+            }
+        }
+        for (m, best) in leave_best.iter().enumerate() {
+            let Some((_, c)) = *best else { continue };
+            attract(model, &mecs, &members[m], c as usize, &mut policy);
+        }
+    }
+    for (s, slot) in policy.iter_mut().enumerate() {
+        if *slot == u32::MAX {
+            *slot = model.choices(s).start as u32;
+        }
+    }
+    let value = match (&sol_lo, &sol_hi) {
+        (Some(_), Some(_)) => {
+            let v: f64 = model
+                .initial()
+                .iter()
+                .map(|&(s, p)| p * values[s as usize])
+                .sum();
+            v.clamp(lower, upper)
+        }
+        _ => (lower + upper) / 2.0,
+    };
+    Ok(Solution {
+        value,
+        lower,
+        upper,
+        values,
+        policy,
+        iterations,
+        method: Method::RelativeValueIteration,
+    })
+}
+
+/// Steers every state of a MEC to the state owning `exit` (a choice leaving the MEC): a
+/// backward search over the inside choices, each state taking a choice that reaches states
+/// already steered.
+fn attract(model: &DecisionModel, mecs: &Mecs, states: &[u32], exit: usize, policy: &mut [u32]) {
+    let owner = states
+        .iter()
+        .copied()
+        .find(|&s| model.choices(s as usize).contains(&exit))
+        .expect("the exit belongs to a state of the MEC") as usize;
+    let mut done = vec![false; model.state_count()];
+    done[owner] = true;
+    policy[owner] = exit as u32;
+    loop {
+        let mut changed = false;
+        for &s in states {
+            let s = s as usize;
+            if done[s] {
+                continue;
+            }
+            for c in model.choices(s) {
+                if mecs.inside[c] && model.branches(c).any(|(t, _)| done[t as usize]) {
+                    policy[s] = c as u32;
+                    done[s] = true;
+                    changed = true;
+                    break;
+                }
+            }
+        }
+        if !changed {
+            return;
+        }
+    }
+}

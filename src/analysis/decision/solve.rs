@@ -1,0 +1,471 @@
+//! Solving an [`Objective`]: value iteration with sound bounds.
+//!
+//! Reachability, accumulated reward and the two discounted objectives are Bellman equations
+//! `x(s) = opt_c [r_c + f_c·Σ p·x(s') + w_c·x(s)]` over every state (instant states take no
+//! time: `f_c = 1` except under the per-step discount). They are solved by *optimistic value
+//! iteration* (Hartmanns & Kaminski, CAV 2020): Gauss–Seidel sweeps from 0 give a lower bound
+//! (the value is the least fixed point); a guessed upper bound `U` is accepted only once one
+//! Bellman step does not raise it anywhere (`T(U) ≤ U`, so `U` is above the least fixed
+//! point). Discounted objectives are contractions, so `T(L) ≥ L` is checked for the lower
+//! bound too. The result is an interval `[lower, upper]` at the initial distribution, of
+//! relative width at most [`SolveOptions::precision`].
+//!
+//! The long-run average reward is solved in [`lra`](super::lra): maximal end components, the
+//! value of each, then the best one to reach.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use super::lra;
+use super::{DecisionError, DecisionModel, Kind, Objective, Rewards};
+
+/// Relative slack of the bound checks: floating-point sums of probabilities are off by a
+/// few ulps.
+const ROUNDING: f64 = 16.0 * f64::EPSILON;
+
+/// How to solve.
+#[derive(Clone, Debug)]
+pub struct SolveOptions {
+    /// Relative width of the result interval (default 1e-9).
+    pub precision: f64,
+    /// Most sweeps before giving up with [`DecisionError::NoConvergence`].
+    pub max_iterations: usize,
+    /// Set from another thread to stop ([`DecisionError::Cancelled`]).
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+impl Default for SolveOptions {
+    fn default() -> Self {
+        SolveOptions {
+            precision: 1e-9,
+            max_iterations: 1_000_000,
+            cancel: None,
+        }
+    }
+}
+
+impl SolveOptions {
+    pub(super) fn cancelled(&self) -> bool {
+        self.cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+}
+
+/// Which algorithm produced a [`Solution`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Optimistic value iteration: a lower bound by Gauss–Seidel sweeps, an upper bound
+    /// verified by one Bellman step.
+    OptimisticValueIteration,
+    /// Long-run average: value iteration on the uniformised end components with the
+    /// span bounds `min(Tv − v) ≤ g ≤ max(Tv − v)`, then optimistic value iteration to reach
+    /// the best component.
+    RelativeValueIteration,
+}
+
+/// An optimal value with its bound, and a policy that attains it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solution {
+    /// The value at the initial distribution (middle of the interval).
+    pub value: f64,
+    /// Lower end of the interval that holds the exact optimum.
+    pub lower: f64,
+    /// Upper end.
+    pub upper: f64,
+    /// Per state: the value (middle of its interval; `inf` where infinite).
+    pub values: Vec<f64>,
+    /// Per state: the chosen choice (a global choice id of that state).
+    pub policy: Vec<u32>,
+    /// Sweeps done.
+    pub iterations: usize,
+    /// The algorithm.
+    pub method: Method,
+}
+
+/// Solves `objective` on `model` with `rewards`.
+pub fn solve(
+    model: &DecisionModel,
+    rewards: &Rewards,
+    objective: &Objective,
+    opts: &SolveOptions,
+) -> Result<Solution, DecisionError> {
+    let max = objective.maximises();
+    match objective {
+        Objective::Lra { .. } => lra::solve(model, rewards, max, opts),
+        Objective::Reach { goal, .. } => {
+            let eq = Equations::new(model, max);
+            let eq = Equations {
+                fixed: goal
+                    .iter()
+                    .map(|&g| if g { Some(1.0) } else { None })
+                    .collect(),
+                ..eq
+            };
+            eq.solve(model, &vec![0.0; model.choice_count()], opts, false)
+        }
+        Objective::Total { goal, .. } => {
+            if rewards
+                .rate
+                .iter()
+                .chain(&rewards.impulse)
+                .any(|&r| r < 0.0)
+            {
+                return Err(DecisionError::Unsupported(
+                    "accumulated rewards must be ≥ 0".into(),
+                ));
+            }
+            let mut eq = Equations::new(model, max);
+            let infinite = if max {
+                min_below_one(model, goal)
+            } else {
+                not_max_one(model, goal)
+            };
+            for s in 0..model.state_count() {
+                eq.fixed[s] = if goal[s] {
+                    Some(0.0)
+                } else if infinite[s] {
+                    Some(f64::INFINITY)
+                } else {
+                    None
+                };
+            }
+            let r = sojourn_rewards(model, rewards, |_| 1.0);
+            eq.solve(model, &r, opts, false)
+        }
+        Objective::Discounted { rate, .. } => {
+            if !(*rate > 0.0 && rate.is_finite()) {
+                return Err(DecisionError::Unsupported(format!(
+                    "the discount rate must be > 0, not {rate}"
+                )));
+            }
+            let mut eq = Equations::new(model, max);
+            let mut r = vec![0.0; model.choice_count()];
+            for s in 0..model.state_count() {
+                let e = model.exit_rate(s);
+                for c in model.choices(s) {
+                    if model.kind(s) == Kind::Instant {
+                        r[c] = rewards.impulse[c];
+                    } else {
+                        eq.scale[c] = e / (e + rate);
+                        r[c] = (rewards.rate[s] + e * rewards.impulse[c]) / (e + rate);
+                    }
+                }
+            }
+            eq.solve(model, &r, opts, true)
+        }
+        Objective::DiscountedPerStep { gamma, .. } => {
+            if !(*gamma > 0.0 && *gamma < 1.0) {
+                return Err(DecisionError::Unsupported(format!(
+                    "the per-step discount must be in (0, 1), not {gamma}"
+                )));
+            }
+            let eta = model.eta();
+            let mut eq = Equations::new(model, max);
+            let mut r = vec![0.0; model.choice_count()];
+            for s in 0..model.state_count() {
+                let e = model.exit_rate(s);
+                match model.kind(s) {
+                    Kind::Dead => eq.fixed[s] = Some(0.0),
+                    Kind::Instant => {
+                        for c in model.choices(s) {
+                            eq.scale[c] = *gamma;
+                            r[c] = rewards.impulse[c];
+                        }
+                    }
+                    Kind::Markovian => {
+                        for c in model.choices(s) {
+                            eq.scale[c] = gamma * e / eta;
+                            eq.stay[c] = gamma * (1.0 - e / eta);
+                            r[c] = (rewards.rate[s] + e * rewards.impulse[c]) / eta;
+                        }
+                    }
+                }
+            }
+            eq.solve(model, &r, opts, true)
+        }
+    }
+}
+
+/// Per choice: the reward of one step — the rate earned over the expected sojourn
+/// `1/exit` (times `factor(s)`) plus the impulse.
+pub(super) fn sojourn_rewards(
+    model: &DecisionModel,
+    rewards: &Rewards,
+    factor: impl Fn(usize) -> f64,
+) -> Vec<f64> {
+    let mut r = rewards.impulse.clone();
+    for s in 0..model.state_count() {
+        if model.kind(s) == Kind::Markovian {
+            for c in model.choices(s) {
+                r[c] += factor(s) * rewards.rate[s] / model.exit_rate(s);
+            }
+        }
+    }
+    r
+}
+
+/// States where some policy misses the goal with positive probability (`Pmin < 1`): those
+/// that can reach, avoiding the goal, a state where some policy avoids it for ever.
+fn min_below_one(model: &DecisionModel, goal: &[bool]) -> Vec<bool> {
+    let n = model.state_count();
+    // Prob0E: the greatest set of non-goal states where some choice stays inside.
+    let mut avoid: Vec<bool> = goal.iter().map(|&g| !g).collect();
+    loop {
+        let mut changed = false;
+        for s in 0..n {
+            if avoid[s]
+                && !model
+                    .choices(s)
+                    .any(|c| model.branches(c).all(|(t, _)| avoid[t as usize]))
+            {
+                avoid[s] = false;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    backward_closure(model, avoid, goal)
+}
+
+/// States from which no policy reaches the goal with probability 1 (`Pmax < 1`).
+fn not_max_one(model: &DecisionModel, goal: &[bool]) -> Vec<bool> {
+    let n = model.state_count();
+    let mut u = vec![true; n];
+    loop {
+        let mut r: Vec<bool> = goal.to_vec();
+        loop {
+            let mut changed = false;
+            for s in 0..n {
+                if !r[s]
+                    && u[s]
+                    && model.choices(s).any(|c| {
+                        model.branches(c).all(|(t, _)| u[t as usize])
+                            && model.branches(c).any(|(t, _)| r[t as usize])
+                    })
+                {
+                    r[s] = true;
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        if r == u {
+            return u.iter().map(|&x| !x).collect();
+        }
+        u = r;
+    }
+}
+
+/// `set` plus every non-goal state with a choice that can reach it.
+fn backward_closure(model: &DecisionModel, mut set: Vec<bool>, goal: &[bool]) -> Vec<bool> {
+    let n = model.state_count();
+    loop {
+        let mut changed = false;
+        for s in (0..n).rev() {
+            if !set[s]
+                && !goal[s]
+                && model
+                    .choices(s)
+                    .any(|c| model.branches(c).any(|(t, _)| set[t as usize]))
+            {
+                set[s] = true;
+                changed = true;
+            }
+        }
+        if !changed {
+            return set;
+        }
+    }
+}
+
+/// Bellman equations over the model's choices.
+pub(super) struct Equations {
+    pub(super) max: bool,
+    /// Per state: a value fixed in advance (goal, infinite, dead).
+    pub(super) fixed: Vec<Option<f64>>,
+    /// Per state: an extra option "stop here and get this" (end components in LRA).
+    pub(super) stop: Vec<Option<f64>>,
+    /// Per choice: factor on `Σ p·x(s')`.
+    pub(super) scale: Vec<f64>,
+    /// Per choice: weight on the state's own value (uniformisation self-loop).
+    pub(super) stay: Vec<f64>,
+}
+
+impl Equations {
+    pub(super) fn new(model: &DecisionModel, max: bool) -> Equations {
+        Equations {
+            max,
+            fixed: vec![None; model.state_count()],
+            stop: vec![None; model.state_count()],
+            scale: vec![1.0; model.choice_count()],
+            stay: vec![0.0; model.choice_count()],
+        }
+    }
+
+    fn better(&self, a: f64, b: f64) -> bool {
+        if self.max { a > b } else { a < b }
+    }
+
+    /// One Bellman update of state `s` from `x`: (value, best choice; `u32::MAX` when the
+    /// stop option is best).
+    #[inline]
+    pub(super) fn update(
+        &self,
+        model: &DecisionModel,
+        r: &[f64],
+        x: &[f64],
+        s: usize,
+    ) -> (f64, u32) {
+        let mut best = self.stop[s];
+        let mut arg = u32::MAX;
+        for c in model.choices(s) {
+            let mut sum = 0.0;
+            for (t, p) in model.branches(c) {
+                sum += p * x[t as usize];
+            }
+            let v = r[c] + self.scale[c] * sum + self.stay[c] * x[s];
+            if v.is_nan() {
+                continue;
+            }
+            if best.is_none_or(|b| self.better(v, b)) {
+                best = Some(v);
+                arg = c as u32;
+            }
+        }
+        (best.unwrap_or(0.0), arg)
+    }
+
+    /// Optimistic value iteration; `contraction` also verifies the lower bound.
+    pub(super) fn solve(
+        &self,
+        model: &DecisionModel,
+        r: &[f64],
+        opts: &SolveOptions,
+        contraction: bool,
+    ) -> Result<Solution, DecisionError> {
+        let n = model.state_count();
+        let fixed_or = |s: usize, v: f64| self.fixed[s].unwrap_or(v);
+        let mut lo: Vec<f64> = (0..n).map(|s| fixed_or(s, 0.0)).collect();
+        let mut policy = vec![u32::MAX; n];
+        let eps = opts.precision;
+        let mut threshold = eps;
+        let mut iterations = 0;
+        loop {
+            // Gauss–Seidel sweeps until the relative change is below the threshold.
+            loop {
+                if opts.cancelled() {
+                    return Err(DecisionError::Cancelled { iterations });
+                }
+                if iterations >= opts.max_iterations {
+                    let v = initial_value(model, &lo);
+                    return Err(DecisionError::NoConvergence {
+                        iterations,
+                        lower: v,
+                        upper: f64::INFINITY,
+                    });
+                }
+                iterations += 1;
+                let mut delta = 0.0f64;
+                for s in (0..n).rev() {
+                    if self.fixed[s].is_some() {
+                        continue;
+                    }
+                    let (v, c) = self.update(model, r, &lo, s);
+                    let d = (v - lo[s]).abs() / v.abs().max(1e-300);
+                    if d > delta && (v - lo[s]).abs() > 1e-300 {
+                        delta = d;
+                    }
+                    lo[s] = v;
+                    policy[s] = c;
+                }
+                if delta <= threshold {
+                    break;
+                }
+            }
+            // Guess bounds around the iterate and check them with one Bellman step.
+            let scale = lo
+                .iter()
+                .filter(|v| v.is_finite())
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            let width = |v: f64| (eps * v.abs() / 4.0).max(eps * scale * 1e-3);
+            let up: Vec<f64> = (0..n)
+                .map(|s| self.fixed[s].unwrap_or(lo[s] + width(lo[s])))
+                .collect();
+            let down: Vec<f64> = (0..n)
+                .map(|s| self.fixed[s].unwrap_or(lo[s] - width(lo[s])))
+                .collect();
+            let mut ok = true;
+            let mut up2 = up.clone();
+            let mut down2 = down.clone();
+            for s in 0..n {
+                if self.fixed[s].is_some() {
+                    continue;
+                }
+                let (v, _) = self.update(model, r, &up, s);
+                // Probabilities that sum to 1 give sums off by a few ulps: tolerate those.
+                if v > up[s] + ROUNDING * up[s].abs() {
+                    ok = false;
+                    break;
+                }
+                up2[s] = v;
+                if contraction {
+                    let (w, _) = self.update(model, r, &down, s);
+                    if w < down[s] - ROUNDING * down[s].abs() {
+                        ok = false;
+                        break;
+                    }
+                    down2[s] = w;
+                }
+            }
+            iterations += 1;
+            if ok {
+                let lower_vec = if contraction { down2 } else { lo.clone() };
+                let lower = initial_value(model, &lower_vec);
+                let upper = initial_value(model, &up2);
+                let values = (0..n)
+                    .map(|s| (lower_vec[s] + up2[s]) / 2.0)
+                    .map(|v| if v.is_nan() { f64::INFINITY } else { v })
+                    .collect();
+                for (s, slot) in policy.iter_mut().enumerate() {
+                    if *slot == u32::MAX {
+                        *slot = self.update(model, r, &lo, s).1;
+                        if *slot == u32::MAX {
+                            *slot = model.choices(s).start as u32;
+                        }
+                    }
+                }
+                return Ok(Solution {
+                    value: (lower + upper) / 2.0,
+                    lower,
+                    upper,
+                    values,
+                    policy,
+                    iterations,
+                    method: Method::OptimisticValueIteration,
+                });
+            }
+            threshold /= 10.0;
+            if threshold < 1e-300 {
+                return Err(DecisionError::NoConvergence {
+                    iterations,
+                    lower: initial_value(model, &lo),
+                    upper: f64::INFINITY,
+                });
+            }
+        }
+    }
+}
+
+/// `Σ p·x(s)` over the initial distribution.
+pub(super) fn initial_value(model: &DecisionModel, x: &[f64]) -> f64 {
+    model
+        .initial()
+        .iter()
+        .map(|&(s, p)| p * x[s as usize])
+        .sum()
+}

@@ -1,0 +1,718 @@
+//! `plan-runner synthesize FILE --objective OBJ [--goal EXPR] [--discount RATE] [--gamma G]
+//! [--rewards FILE] [--wait true|false] [--precision P] [--max-states N] [--out FILE]
+//! [--compact] [--json] [--export-drn FILE] [--sweep robots=A..B]`: the optimal policy of a
+//! GSPN with rewards (see docs/synthesis.md).
+
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::Context;
+use gspn::analysis::decision::{
+    Action, BuildOptions, Controls, DecisionModel, Objective, PlaceMode, RewardSpec, Rewards,
+    Solution, SolveOptions, compress, solve,
+};
+use gspn::io::drn;
+use gspn::net::Net;
+use gspn::net::predicate::Predicate;
+use gspn::policy::{Pattern, Rule};
+use serde_json::json;
+
+use crate::common::{BadInput, NetArgs, load_net};
+
+/// Arguments of `synthesize`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct Args {
+    /// A plan (.toml: its `[rewards.NAME]`, `controllable` and `wait` apply) or a net
+    /// (.xml, .pnml, .PNPRO; rewards from --rewards).
+    file: PathBuf,
+    /// The plan's reward structure to use (default: its only one).
+    #[arg(long, value_name = "NAME")]
+    reward: Option<String>,
+    /// lra-max, lra-min, reach-max, reach-min, total-max, total-min, time-max, time-min,
+    /// discounted-max, discounted-min (with --discount RATE), discounted-per-step-max,
+    /// discounted-per-step-min (with --gamma G).
+    #[arg(long, default_value = "lra-max")]
+    objective: String,
+    /// The goal of reach-, total- and time- objectives, a marking predicate (`P_done == 3`).
+    #[arg(long, value_name = "EXPR")]
+    goal: Option<String>,
+    /// Discount rate per unit of time of the discounted objectives.
+    #[arg(long, value_name = "RATE")]
+    discount: Option<f64>,
+    /// γ of the per-step discounted objectives (the GSPNR toolbox's).
+    #[arg(long, value_name = "G")]
+    gamma: Option<f64>,
+    /// Rewards, controllable transitions and WAIT, in the GSPNR fixtures' format
+    /// (`[places]` rates while marked, `[transitions]` impulses, `controllable = [...]`,
+    /// `wait = true|false`).
+    #[arg(long, value_name = "FILE")]
+    rewards: Option<PathBuf>,
+    /// Offer WAIT in hybrid markings (overrides the rewards file).
+    #[arg(long, value_name = "BOOL")]
+    wait: Option<bool>,
+    /// Relative width of the value's interval.
+    #[arg(long, default_value_t = 1e-9)]
+    precision: f64,
+    /// Most reachable markings before giving up.
+    #[arg(long, value_name = "N", default_value_t = 10_000_000)]
+    max_states: usize,
+    /// Write the policy as `[[policy]]` rules of a plan that `run` executes.
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// Write the compressed rules (a decision tree over token counts) instead of one rule
+    /// per marking.
+    #[arg(long)]
+    compact: bool,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Write the model in Storm's DRN format.
+    #[arg(long, value_name = "FILE")]
+    export_drn: Option<PathBuf>,
+    /// Solve for each robot count: `robots=1..10` scales the initial tokens.
+    #[arg(long, value_name = "robots=A..B")]
+    sweep: Option<String>,
+    #[command(flatten)]
+    net: NetArgs,
+}
+
+/// What to optimise, parsed from the command line.
+#[derive(Clone, Debug)]
+enum Goal {
+    Lra,
+    Reach(Predicate),
+    Total(Predicate),
+    Time(Predicate),
+    Discounted(f64),
+    PerStep(f64),
+}
+
+fn parse_objective(args: &Args, net: &Net) -> anyhow::Result<(Goal, bool)> {
+    let o = args.objective.replace('_', "-");
+    let (kind, max) = match o.rsplit_once('-') {
+        Some((k, "max")) => (k.to_string(), true),
+        Some((k, "min")) => (k.to_string(), false),
+        _ => {
+            return Err(BadInput(format!(
+                "--objective `{}`: expected NAME-max or NAME-min (lra, reach, total, time, discounted, discounted-per-step)",
+                args.objective
+            ))
+            .into());
+        }
+    };
+    let goal = || -> anyhow::Result<Predicate> {
+        let text = args.goal.as_deref().ok_or_else(|| {
+            BadInput(format!(
+                "--objective {o} needs --goal EXPR (e.g. 'P_done == 3')"
+            ))
+        })?;
+        Ok(Predicate::parse(net, text).map_err(|e| BadInput(format!("--goal `{text}`: {e}")))?)
+    };
+    let g = match kind.as_str() {
+        "lra" => Goal::Lra,
+        "reach" => Goal::Reach(goal()?),
+        "total" => Goal::Total(goal()?),
+        "time" => Goal::Time(goal()?),
+        "discounted" => {
+            let r = args
+                .discount
+                .ok_or_else(|| BadInput("--objective discounted-… needs --discount RATE".into()))?;
+            if !(r > 0.0 && r.is_finite()) {
+                return Err(BadInput(format!("--discount {r}: must be a rate > 0")).into());
+            }
+            Goal::Discounted(r)
+        }
+        "discounted-per-step" => {
+            let g = args.gamma.ok_or_else(|| {
+                BadInput("--objective discounted-per-step-… needs --gamma G".into())
+            })?;
+            if !(g > 0.0 && g < 1.0) {
+                return Err(BadInput(format!("--gamma {g}: must be in (0, 1)")).into());
+            }
+            Goal::PerStep(g)
+        }
+        other => {
+            return Err(BadInput(format!(
+                "--objective `{}`: unknown objective `{other}` (lra, reach, total, time, discounted, discounted-per-step)",
+                args.objective
+            ))
+            .into());
+        }
+    };
+    Ok((g, max))
+}
+
+/// Rewards, controllable transitions and WAIT from a GSPNR-style rewards file.
+fn read_rewards(path: &Path, net: &Net) -> anyhow::Result<(RewardSpec, Option<Controls>)> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let table: toml::Table = text
+        .parse()
+        .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+    let bad = |msg: String| BadInput(format!("{}: {msg}", path.display()));
+    let mut spec = RewardSpec {
+        name: "reward".into(),
+        ..RewardSpec::default()
+    };
+    let number = |v: &toml::Value| v.as_float().or(v.as_integer().map(|i| i as f64));
+    if let Some(places) = table.get("places").and_then(|v| v.as_table()) {
+        for (name, v) in places {
+            let p = net
+                .place_by_name(name)
+                .ok_or_else(|| bad(format!("[places]: unknown place `{name}`")))?;
+            let r = number(v).ok_or_else(|| bad(format!("[places] `{name}`: not a number")))?;
+            spec.places.push((p, r, PlaceMode::Marked));
+        }
+    }
+    if let Some(ts) = table.get("transitions").and_then(|v| v.as_table()) {
+        for (name, v) in ts {
+            let t = net
+                .transition_by_name(name)
+                .ok_or_else(|| bad(format!("[transitions]: unknown transition `{name}`")))?;
+            let r =
+                number(v).ok_or_else(|| bad(format!("[transitions] `{name}`: not a number")))?;
+            spec.transitions.push((t, r));
+        }
+    }
+    let mut controls = None;
+    if let Some(list) = table.get("controllable").and_then(|v| v.as_array()) {
+        let mut ids = Vec::new();
+        for v in list {
+            let name = v
+                .as_str()
+                .ok_or_else(|| bad("controllable: expected transition names".into()))?;
+            let t = net
+                .transition_by_name(name)
+                .ok_or_else(|| bad(format!("controllable: unknown transition `{name}`")))?;
+            if !net.transition(t).is_immediate() {
+                return Err(bad(format!(
+                    "controllable: `{name}` is exponential; only immediate transitions are decisions"
+                ))
+                .into());
+            }
+            ids.push(t);
+        }
+        controls = Some(Controls::of(net, &ids));
+    }
+    if let Some(w) = table.get("wait").and_then(|v| v.as_bool()) {
+        let c = controls.get_or_insert_with(|| Controls::zero_weight(net));
+        c.wait = w;
+    }
+    Ok((spec, controls))
+}
+
+/// One solved model with its timings.
+struct Solved {
+    model: DecisionModel,
+    rewards: Rewards,
+    solution: Solution,
+    build_s: f64,
+    solve_s: f64,
+}
+
+fn synthesize(
+    net: &Net,
+    controls: &Controls,
+    spec: &RewardSpec,
+    goal: &Goal,
+    max: bool,
+    args: &Args,
+    progress: bool,
+) -> anyhow::Result<Solved> {
+    let t0 = Instant::now();
+    let model = DecisionModel::build(
+        net,
+        controls,
+        &BuildOptions {
+            max_states: args.max_states,
+            progress,
+            threads: 0,
+        },
+    )
+    .with_context(|| format!("{}", args.file.display()))?;
+    let build_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let flags = |p: &Predicate| model.states_where(|m| p.eval(m));
+    let (rewards, objective) = match goal {
+        Goal::Lra => (model.rewards(spec), Objective::Lra { max }),
+        Goal::Reach(p) => (
+            model.rewards(spec),
+            Objective::Reach {
+                max,
+                goal: flags(p),
+            },
+        ),
+        Goal::Total(p) => (
+            model.rewards(spec),
+            Objective::Total {
+                max,
+                goal: flags(p),
+            },
+        ),
+        Goal::Time(p) => (
+            model.time_rewards(),
+            Objective::Total {
+                max,
+                goal: flags(p),
+            },
+        ),
+        Goal::Discounted(rate) => (
+            model.rewards(spec),
+            Objective::Discounted { max, rate: *rate },
+        ),
+        Goal::PerStep(gamma) => (
+            model.rewards(spec),
+            Objective::DiscountedPerStep { max, gamma: *gamma },
+        ),
+    };
+    let solution = solve(
+        &model,
+        &rewards,
+        &objective,
+        &SolveOptions {
+            precision: args.precision,
+            ..SolveOptions::default()
+        },
+    )
+    .context("solving")?;
+    let solve_s = t1.elapsed().as_secs_f64();
+    Ok(Solved {
+        model,
+        rewards,
+        solution,
+        build_s,
+        solve_s,
+    })
+}
+
+/// The policy table: each decision marking and the transition the solution fires there.
+fn table(s: &Solved) -> (Vec<(Vec<u32>, gspn::net::TransitionId)>, usize) {
+    let mut out = Vec::new();
+    let mut waits = 0;
+    for st in 0..s.model.state_count() {
+        if s.model.choices(st).len() < 2 {
+            continue;
+        }
+        match s.model.action(s.solution.policy[st] as usize) {
+            Action::Fire(t) => out.push((s.model.marking(st), t)),
+            Action::Wait => waits += 1,
+            Action::Race | Action::Delay => {}
+        }
+    }
+    (out, waits)
+}
+
+/// FNV-1a of the net as GreatSPN PNPRO text: the same net gives the same hash.
+fn net_hash(net: &Net) -> String {
+    let text = gspn::io::pnpro::write(net);
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+fn toml_key(name: &str) -> String {
+    if !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        name.to_string()
+    } else {
+        format!("{name:?}")
+    }
+}
+
+/// The rules as `[[policy]]` tables.
+fn rules_toml(net: &Net, rules: &[Rule]) -> String {
+    let mut out = String::new();
+    for r in rules {
+        let (pairs, partial): (Vec<(usize, u32)>, bool) = match &r.pattern {
+            Pattern::Exact(m) => (
+                m.iter()
+                    .enumerate()
+                    .filter(|&(_, &k)| k > 0)
+                    .map(|(i, &k)| (i, k))
+                    .collect(),
+                false,
+            ),
+            Pattern::Partial(v) => (v.iter().map(|&(p, k)| (p.index(), k)).collect(), true),
+        };
+        out.push_str("\n[[policy]]\n");
+        let marking: Vec<String> = pairs
+            .iter()
+            .map(|&(i, k)| format!("{} = {k}", toml_key(&net.places()[i].name)))
+            .collect();
+        let _ = writeln!(out, "marking = {{ {} }}", marking.join(", "));
+        if partial {
+            out.push_str("partial = true\n");
+        }
+        let choose: Vec<String> = r
+            .choose
+            .iter()
+            .map(|&(t, p)| format!("{} = {p:?}", toml_key(&net.transition(t).name)))
+            .collect();
+        let _ = writeln!(out, "choose = {{ {} }}", choose.join(", "));
+    }
+    out
+}
+
+fn relative_to(target: &Path, dir: &Path) -> PathBuf {
+    let target = std::fs::canonicalize(target).unwrap_or_else(|_| target.to_path_buf());
+    let dir = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+    let t: Vec<_> = target.components().collect();
+    let d: Vec<_> = dir.components().collect();
+    let common = t.iter().zip(&d).take_while(|(a, b)| a == b).count();
+    let mut out = PathBuf::new();
+    for _ in common..d.len() {
+        out.push("..");
+    }
+    for c in &t[common..] {
+        out.push(c);
+    }
+    out
+}
+
+/// Without the robot world (feature `sim`) there is no robot scaling.
+#[cfg(not(feature = "sim"))]
+fn scaled(_: &Net, _: usize) -> anyhow::Result<Net> {
+    Err(
+        BadInput("--sweep scales robots like `run --robots`: build with feature `sim`".into())
+            .into(),
+    )
+}
+
+/// The plan's text with its `net` path made relative to `dir` (where the output goes).
+fn rebase_plan(plan: &Path, text: &str, dir: &Path) -> anyhow::Result<String> {
+    let file = gspn::plan::PlanFile::parse(plan, text)?;
+    let net_path = file.net_path(plan);
+    let span = file.net.span();
+    let rel = relative_to(&net_path, dir);
+    let mut out = String::with_capacity(text.len() + 64);
+    out.push_str(&text[..span.start]);
+    out.push_str(&format!("{:?}", rel.to_string_lossy()));
+    out.push_str(&text[span.end..]);
+    if !out.ends_with('\n') {
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+/// Parses `robots=A..B`.
+fn parse_sweep(s: &str) -> anyhow::Result<std::ops::RangeInclusive<usize>> {
+    let bad = || {
+        BadInput(format!(
+            "--sweep `{s}`: expected robots=A..B, e.g. robots=1..10"
+        ))
+    };
+    let range = s.strip_prefix("robots=").ok_or_else(bad)?;
+    let (a, b) = range.split_once("..").ok_or_else(bad)?;
+    let a: usize = a.trim().parse().map_err(|_| bad())?;
+    let b: usize = b
+        .trim_start_matches('=')
+        .trim()
+        .parse()
+        .map_err(|_| bad())?;
+    if a == 0 || b < a {
+        return Err(bad().into());
+    }
+    Ok(a..=b)
+}
+
+/// The net with its initial tokens scaled to `n` robots: every marked place's share, largest
+/// remainder first (as `run --robots` scales a plan's robot places).
+#[cfg(feature = "sim")]
+fn scaled(net: &Net, n: usize) -> anyhow::Result<Net> {
+    let robot: Vec<bool> = net.places().iter().map(|p| p.initial > 0).collect();
+    let m = gspn::world::fleet::scaled_marking(net, &robot, n);
+    net.with_initial_marking(&m)
+        .map_err(|e| anyhow::anyhow!("scaling the initial marking: {e}"))
+}
+
+/// What the input gave: the net, the rewards and controls, and a plan's path and text.
+struct Input {
+    net: Net,
+    spec: RewardSpec,
+    controls: Controls,
+    plan: Option<String>,
+}
+
+fn read_input(args: &Args) -> anyhow::Result<Input> {
+    let is_plan = args
+        .file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if !is_plan {
+        if args.reward.is_some() {
+            return Err(BadInput(
+                "--reward NAME picks a plan's [rewards.NAME]; give a plan".into(),
+            )
+            .into());
+        }
+        let net = load_net(&args.file, &args.net)?.net;
+        let (spec, file_controls) = match &args.rewards {
+            Some(p) => read_rewards(p, &net)?,
+            None => (RewardSpec::default(), None),
+        };
+        let controls = file_controls.unwrap_or_else(|| Controls::zero_weight(&net));
+        return Ok(Input {
+            net,
+            spec,
+            controls,
+            plan: None,
+        });
+    }
+    if args.rewards.is_some() {
+        return Err(BadInput(
+            "--rewards is for a bare net; a plan has its own [rewards.NAME]".into(),
+        )
+        .into());
+    }
+    let plan = gspn::plan::read_plan(&args.file, &args.net.read_options())?;
+    let spec = match &args.reward {
+        Some(name) => plan
+            .rewards
+            .iter()
+            .find(|r| &r.name == name)
+            .cloned()
+            .ok_or_else(|| {
+                let names: Vec<&str> = plan.rewards.iter().map(|r| r.name.as_str()).collect();
+                BadInput(format!(
+                    "--reward {name}: the plan has no [rewards.{name}] (it has: {})",
+                    if names.is_empty() {
+                        "none".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                ))
+            })?,
+        None => match plan.rewards.len() {
+            0 => RewardSpec::default(),
+            1 => plan.rewards[0].clone(),
+            _ => {
+                let names: Vec<&str> = plan.rewards.iter().map(|r| r.name.as_str()).collect();
+                return Err(BadInput(format!(
+                    "the plan has several reward structures ({}): pick one with --reward NAME",
+                    names.join(", ")
+                ))
+                .into());
+            }
+        },
+    };
+    if !plan.policy.is_empty() {
+        return Err(BadInput(format!(
+            "{}: the plan already has [[policy]] rules; synthesize from a plan without them",
+            args.file.display()
+        ))
+        .into());
+    }
+    let text = std::fs::read_to_string(&args.file)
+        .with_context(|| format!("reading {}", args.file.display()))?;
+    Ok(Input {
+        net: plan.net,
+        spec,
+        controls: plan.controls,
+        plan: Some(text),
+    })
+}
+
+pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    let input = read_input(&args)?;
+    let net = &input.net;
+    let (goal, max) = parse_objective(&args, net)?;
+    let spec = input.spec.clone();
+    let mut controls = input.controls.clone();
+    if let Some(w) = args.wait {
+        controls.wait = w;
+    }
+    if matches!(goal, Goal::PerStep(_)) {
+        // The toolbox counts every vanishing step, races included.
+        controls.keep_races = true;
+    }
+    let progress = !args.json && std::io::stderr().is_terminal();
+    if let Some(sweep) = &args.sweep {
+        return run_sweep(
+            &args,
+            net,
+            &controls,
+            &spec,
+            &goal,
+            max,
+            parse_sweep(sweep)?,
+        );
+    }
+    let s = synthesize(net, &controls, &spec, &goal, max, &args, progress)?;
+    if let Some(path) = &args.export_drn {
+        let text = drn::to_string(net, &s.model, &[(spec.name.as_str(), &s.rewards)], &[]);
+        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    let (table, waits) = table(&s);
+    let exact: Vec<Rule> = table
+        .iter()
+        .map(|(m, t)| Rule {
+            pattern: Pattern::Exact(m.clone()),
+            choose: vec![(*t, 1.0)],
+        })
+        .collect();
+    let compressed = compress(&table);
+    let sol = &s.solution;
+    if let Some(out) = &args.out {
+        let dir = out
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        let mut text = String::new();
+        let _ = writeln!(text, "# policy synthesised by plan-runner synthesize");
+        let _ = writeln!(text, "# net: {} (hash {})", net.name(), net_hash(net));
+        let _ = writeln!(
+            text,
+            "# objective: {}, optimal value {} in [{}, {}] ({:?})",
+            args.objective, sol.value, sol.lower, sol.upper, sol.method
+        );
+        let _ = writeln!(
+            text,
+            "# {} decision markings; {} exact rules, {} compressed rules{}",
+            table.len() + waits,
+            exact.len(),
+            compressed.len(),
+            if args.compact { " (written here)" } else { "" }
+        );
+        if waits > 0 {
+            let _ = writeln!(
+                text,
+                "# {waits} markings choose WAIT: no rule (run fires an immediate transition at once)"
+            );
+        }
+        match &input.plan {
+            None => {
+                let net_rel = relative_to(&args.file, dir);
+                let _ = writeln!(text, "net = {:?}", net_rel.to_string_lossy());
+            }
+            Some(plan_text) => text.push_str(&rebase_plan(&args.file, plan_text, dir)?),
+        }
+        text.push_str(&rules_toml(
+            net,
+            if args.compact { &compressed } else { &exact },
+        ));
+        std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+    }
+    if args.json {
+        let rules: Vec<serde_json::Value> = table
+            .iter()
+            .map(|(m, t)| {
+                let marking: serde_json::Map<String, serde_json::Value> = m
+                    .iter()
+                    .enumerate()
+                    .filter(|&(_, &k)| k > 0)
+                    .map(|(i, &k)| (net.places()[i].name.clone(), json!(k)))
+                    .collect();
+                json!({ "marking": marking, "choose": net.transition(*t).name })
+            })
+            .collect();
+        let v = json!({
+            "objective": args.objective,
+            "value": finite(sol.value),
+            "lower": finite(sol.lower),
+            "upper": finite(sol.upper),
+            "method": format!("{:?}", sol.method),
+            "iterations": sol.iterations,
+            "states": s.model.state_count(),
+            "choices": s.model.choice_count(),
+            "markings": s.model.marking_count(),
+            "wait_copies": s.model.wait_copies(),
+            "eliminated": s.model.eliminated_count(),
+            "toolbox_states": s.model.toolbox_state_count(),
+            "build_s": s.build_s,
+            "solve_s": s.solve_s,
+            "rules": rules,
+            "compressed_rules": compressed.len(),
+            "net_hash": net_hash(net),
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!(
+            "{} states ({} markings, {} WAIT copies, {} eliminated), {} choices",
+            s.model.state_count(),
+            s.model.marking_count(),
+            s.model.wait_copies(),
+            s.model.eliminated_count(),
+            s.model.choice_count()
+        );
+        println!(
+            "{}: {} in [{}, {}] ({:?}, {} iterations)",
+            args.objective, sol.value, sol.lower, sol.upper, sol.method, sol.iterations
+        );
+        println!(
+            "policy: {} decision markings, {} exact rules, {} compressed rules",
+            table.len() + waits,
+            exact.len(),
+            compressed.len()
+        );
+        println!("build {:.3} s, solve {:.3} s", s.build_s, s.solve_s);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn finite(v: f64) -> serde_json::Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        json!(format!("{v}"))
+    }
+}
+
+fn run_sweep(
+    args: &Args,
+    net: &Net,
+    controls: &Controls,
+    spec: &RewardSpec,
+    goal: &Goal,
+    max: bool,
+    range: std::ops::RangeInclusive<usize>,
+) -> anyhow::Result<ExitCode> {
+    let mut rows = Vec::new();
+    if !args.json {
+        println!(
+            "{:>6} {:>10} {:>10} {:>10} {:>10} {:>14}",
+            "robots", "states", "choices", "build_s", "solve_s", "value"
+        );
+    }
+    for n in range {
+        let t0 = Instant::now();
+        let net_n = scaled(net, n)?;
+        let s = synthesize(&net_n, controls, spec, goal, max, args, false)?;
+        let total = t0.elapsed().as_secs_f64();
+        if args.json {
+            rows.push(json!({
+                "robots": n,
+                "states": s.model.state_count(),
+                "choices": s.model.choice_count(),
+                "toolbox_states": s.model.toolbox_state_count(),
+                "build_s": s.build_s,
+                "solve_s": s.solve_s,
+                "total_s": total,
+                "value": finite(s.solution.value),
+                "lower": finite(s.solution.lower),
+                "upper": finite(s.solution.upper),
+            }));
+        } else {
+            println!(
+                "{n:>6} {:>10} {:>10} {:>10.4} {:>10.4} {:>14.9}",
+                s.model.state_count(),
+                s.model.choice_count(),
+                s.build_s,
+                s.solve_s,
+                s.solution.value
+            );
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,128 @@
+//! Built-in actions, in every backend, with or without a `[map]`:
+//!
+//! - `wait`: the net decides at once — the race of the place's exponential outputs at the
+//!   net's rates (the runtime's one sampler), or the immediate choice;
+//! - `wait S`: S model seconds, then the net decides;
+//! - `log MSG`: records MSG as the agent's output, then the net decides;
+//! - `fire T` / `fire T after S`: fires T (an output of the place), after S model seconds.
+//!
+//! A backend with its own meaning for a name (the robot world's `wait` moves no robot but
+//! holds one) registers it first; these fill in what is left.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use super::action::{Action, ActionContext, ActionFuture, Outcome, OutputStream};
+use crate::net::{Net, PlaceId, TransitionId};
+
+/// A built-in action; see the [module docs](self).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Builtin {
+    /// `wait [S]`.
+    Wait(Option<f64>),
+    /// `log MSG`.
+    Log(Arc<str>),
+    /// `fire T [after S]`.
+    Fire {
+        /// The transition.
+        transition: TransitionId,
+        /// Model seconds to wait first.
+        after: Option<f64>,
+    },
+}
+
+/// The words that start a built-in action.
+pub const BUILTIN_WORDS: [&str; 3] = ["wait", "log", "fire"];
+
+impl Builtin {
+    /// The built-in that `text` names for `place`: `None` when `text` does not start with a
+    /// built-in word, `Some(Err(why))` when it does but is malformed (a bad number, a
+    /// transition that is not an output of the place).
+    pub fn parse(text: &str, net: &Net, place: PlaceId) -> Option<Result<Builtin, String>> {
+        let text = text.trim();
+        let (word, rest) = text.split_once(char::is_whitespace).unwrap_or((text, ""));
+        let rest = rest.trim();
+        let seconds = |s: &str| -> Result<f64, String> {
+            match s.parse::<f64>() {
+                Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+                _ => Err(format!(
+                    "`{text}`: `{s}` is not a number of seconds (finite, ≥ 0)"
+                )),
+            }
+        };
+        Some(match word {
+            "wait" if rest.is_empty() => Ok(Builtin::Wait(None)),
+            "wait" => seconds(rest).map(|s| Builtin::Wait(Some(s))),
+            "log" => Ok(Builtin::Log(Arc::from(rest))),
+            "fire" => {
+                let mut parts = rest.split_whitespace();
+                let name = parts.next().unwrap_or("");
+                let after = match (parts.next(), parts.next(), parts.next()) {
+                    (None, _, _) => Ok(None),
+                    (Some("after"), Some(s), None) => seconds(s).map(Some),
+                    _ => Err(format!("`{text}`: expected `fire T` or `fire T after S`")),
+                };
+                after.and_then(|after| {
+                    let outputs: Vec<TransitionId> = net
+                        .transition_ids()
+                        .filter(|&t| net.inputs(t).iter().any(|&(p, _)| p == place))
+                        .collect();
+                    match net.transition_by_name(name) {
+                        Some(t) if outputs.contains(&t) => Ok(Builtin::Fire {
+                            transition: t,
+                            after,
+                        }),
+                        _ => Err(format!(
+                            "`{text}`: `{name}` is not an output transition of `{}` (outputs: {})",
+                            net.place(place).name,
+                            outputs
+                                .iter()
+                                .map(|&t| net.transition(t).name.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        )),
+                    }
+                })
+            }
+            _ => return None,
+        })
+    }
+
+    /// The action, with `scale` tokio seconds per model second.
+    pub(crate) fn action(self, scale: f64) -> BuiltinAction {
+        BuiltinAction {
+            builtin: self,
+            scale,
+        }
+    }
+}
+
+/// A [`Builtin`] ready to run.
+#[derive(Debug)]
+pub(crate) struct BuiltinAction {
+    builtin: Builtin,
+    scale: f64,
+}
+
+impl Action for BuiltinAction {
+    fn run(&self, ctx: ActionContext) -> ActionFuture {
+        let (delay, outcome) = match &self.builtin {
+            Builtin::Wait(s) => (*s, Outcome::Decide),
+            Builtin::Log(msg) => {
+                ctx.output_line(OutputStream::Stdout, msg.to_string());
+                (None, Outcome::Decide)
+            }
+            Builtin::Fire { transition, after } => (*after, Outcome::Fire(*transition)),
+        };
+        let Some(s) = delay.filter(|&s| s > 0.0) else {
+            return Box::pin(std::future::ready(outcome));
+        };
+        let d = Duration::from_secs_f64(s * self.scale);
+        Box::pin(async move {
+            tokio::select! {
+                () = tokio::time::sleep(d) => outcome,
+                () = ctx.cancel.cancelled() => Outcome::Cancelled,
+            }
+        })
+    }
+}

@@ -1,0 +1,206 @@
+//! A synthesised policy, written as `[[policy]]` rules, is worth what the solver said: its
+//! exact evaluation (the CTMC it induces) equals the optimum to 1e-9; its compressed rules
+//! choose like the exact table in every reachable decision marking; and a long seeded token
+//! game under it earns the optimal long-run reward rate (within its 95% interval).
+
+use gspn::analysis::decision::{
+    Action, Controls, DecisionModel, Kind, Objective, PlaceMode, RewardSpec, SolveOptions,
+    compress, evaluate_lra, solve,
+};
+use gspn::net::{Net, TransitionId};
+use gspn::policy::{Pattern, Policy, Rule};
+use gspn::sim::Simulator;
+
+use super::decision_model::gspnr;
+
+/// Home cleaning with `name`'s robots: 1 per unit of time per room being mopped, 0.5 per room
+/// being vacuumed, 2 per mopping of L2 finished.
+fn home(name: &str) -> (Net, Controls, RewardSpec) {
+    let (net, mut controls, _) = gspnr(name);
+    controls.wait = false;
+    let mut spec = RewardSpec {
+        name: "cleaning".into(),
+        ..RewardSpec::default()
+    };
+    for l in ["L1", "L2", "L3"] {
+        let mop = net.place_by_name(&format!("Mopping_{l}")).unwrap();
+        let vac = net.place_by_name(&format!("Vacuuming_{l}")).unwrap();
+        spec.places.push((mop, 1.0, PlaceMode::Marked));
+        spec.places.push((vac, 0.5, PlaceMode::Marked));
+    }
+    let fin = net.transition_by_name("FinishedMop_L2").unwrap();
+    spec.transitions.push((fin, 2.0));
+    (net, controls, spec)
+}
+
+/// The exact table of a solution: (decision marking, transition fired).
+fn table(model: &DecisionModel, policy: &[u32]) -> Vec<(Vec<u32>, TransitionId)> {
+    (0..model.state_count())
+        .filter(|&s| model.kind(s) == Kind::Instant && model.choices(s).len() > 1)
+        .filter_map(|s| match model.action(policy[s] as usize) {
+            Action::Fire(t) => Some((model.marking(s), t)),
+            _ => None,
+        })
+        .collect()
+}
+
+fn exact_rules(table: &[(Vec<u32>, TransitionId)]) -> Vec<Rule> {
+    table
+        .iter()
+        .map(|(m, t)| Rule {
+            pattern: Pattern::Exact(m.clone()),
+            choose: vec![(*t, 1.0)],
+        })
+        .collect()
+}
+
+/// The policy's choice in model state `s`, through the policy lookup `run` uses.
+fn lookup(model: &DecisionModel, net: &Net, policy: &Policy, s: usize) -> Vec<(usize, f64)> {
+    let m = model.marking(s);
+    let firable = net.firable(&m);
+    let d = policy
+        .distribution(net, &m, &firable)
+        .expect("a rule for every decision marking");
+    d.iter()
+        .map(|&(t, p)| {
+            let c = model
+                .choices(s)
+                .find(|&c| model.action(c) == Action::Fire(t))
+                .expect("the chosen transition is a choice");
+            (c, p)
+        })
+        .collect()
+}
+
+#[test]
+fn the_written_policy_is_worth_the_optimum_exactly() {
+    let (net, controls, spec) = home("home_n03");
+    let model = DecisionModel::build(&net, &controls, &Default::default()).unwrap();
+    let rewards = model.rewards(&spec);
+    let sol = solve(
+        &model,
+        &rewards,
+        &Objective::Lra { max: true },
+        &SolveOptions::default(),
+    )
+    .unwrap();
+    assert!(sol.upper - sol.lower <= 1e-9 * sol.value.abs());
+    let table = table(&model, &sol.policy);
+    assert!(!table.is_empty());
+    let policy = Policy::new(&net, exact_rules(&table)).unwrap();
+    let v = evaluate_lra(&model, &rewards, |s| lookup(&model, &net, &policy, s)).unwrap();
+    assert!(
+        (v.lra - sol.value).abs() <= 1e-9 * sol.value.abs(),
+        "policy {} vs optimum {} [{}, {}]",
+        v.lra,
+        sol.value,
+        sol.lower,
+        sol.upper
+    );
+    // A worse policy (always the first choice) is worth less: the test can tell them apart.
+    let first = evaluate_lra(&model, &rewards, |s| vec![(model.choices(s).start, 1.0)]).unwrap();
+    assert!(
+        first.lra < sol.lower - 1e-3,
+        "{} vs {}",
+        first.lra,
+        sol.lower
+    );
+}
+
+#[test]
+fn compressed_rules_choose_like_the_exact_table_everywhere() {
+    for name in ["home_n03", "home_n05"] {
+        let (net, controls, spec) = home(name);
+        let model = DecisionModel::build(&net, &controls, &Default::default()).unwrap();
+        let rewards = model.rewards(&spec);
+        let sol = solve(
+            &model,
+            &rewards,
+            &Objective::Lra { max: true },
+            &SolveOptions::default(),
+        )
+        .unwrap();
+        let table = table(&model, &sol.policy);
+        let rules = compress(&table);
+        assert!(
+            rules.len() < table.len(),
+            "{name}: {} rules for {} markings",
+            rules.len(),
+            table.len()
+        );
+        let policy = Policy::new(&net, rules).unwrap();
+        for (m, t) in &table {
+            let d = policy.distribution(&net, m, &net.firable(m)).unwrap();
+            assert_eq!(d, vec![(*t, 1.0)], "{name}: {m:?}");
+        }
+    }
+}
+
+#[test]
+fn a_long_token_game_under_the_policy_earns_the_optimal_rate() {
+    let (net, controls, spec) = home("home_n02");
+    let model = DecisionModel::build(&net, &controls, &Default::default()).unwrap();
+    let rewards = model.rewards(&spec);
+    let sol = solve(
+        &model,
+        &rewards,
+        &Objective::Lra { max: true },
+        &SolveOptions::default(),
+    )
+    .unwrap();
+    let policy = Policy::new(&net, exact_rules(&table(&model, &sol.policy))).unwrap();
+    // Batch means: 40 batches of 500 time units, each the reward earned per unit of time.
+    let (batches, len) = (40usize, 500.0);
+    let mut earned = vec![0.0f64; batches];
+    let mut sim = Simulator::new(net.clone(), 2024).with_policy(policy.clone());
+    let rate = |m: &[u32]| -> f64 {
+        spec.places
+            .iter()
+            .map(|&(p, r, _)| if m[p.index()] > 0 { r } else { 0.0 })
+            .sum()
+    };
+    let impulse = |t: TransitionId| -> f64 {
+        spec.transitions
+            .iter()
+            .filter(|&&(u, _)| u == t)
+            .map(|&(_, r)| r)
+            .sum()
+    };
+    let end = batches as f64 * len;
+    loop {
+        // The rate of the marking held until the next firing, spread over the batches.
+        let held = if sim.is_vanishing() {
+            0.0
+        } else {
+            rate(sim.marking().as_slice())
+        };
+        let mut from = sim.time();
+        let step = sim.step_until(end).unwrap();
+        let to = sim.time();
+        while from < to {
+            let b = ((from / len) as usize).min(batches - 1);
+            let stop = to.min((b + 1) as f64 * len);
+            let stop = if b == batches - 1 { to } else { stop };
+            earned[b] += held * (stop - from);
+            from = stop;
+        }
+        match step {
+            Some(s) => earned[((s.time / len) as usize).min(batches - 1)] += impulse(s.transition),
+            None => break,
+        }
+    }
+    let xs: Vec<f64> = earned.iter().map(|e| e / len).collect();
+    let measured = xs.iter().sum::<f64>() / batches as f64;
+    let var = xs.iter().map(|x| (x - measured).powi(2)).sum::<f64>() / (batches - 1) as f64;
+    // Student t, 39 degrees of freedom, 97.5%.
+    let half = 2.0227 * (var / batches as f64).sqrt();
+    assert!(
+        half < 0.05 * sol.value,
+        "interval too wide to tell: ± {half}"
+    );
+    assert!(
+        (measured - sol.value).abs() <= half,
+        "measured {measured} (± {half}) vs optimum {}",
+        sol.value
+    );
+}

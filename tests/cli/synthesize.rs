@@ -1,0 +1,171 @@
+//! `plan-runner synthesize`: the optimal policy of a plan or a net with rewards, as JSON and
+//! as `[[policy]]` rules that load back; the robot sweep; the DRN export; bad input refused
+//! with exit code 2 and the line and column of a plan key.
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+use crate::support::fixture;
+
+fn synthesize(args: &[&str]) -> (i32, String, String) {
+    let out = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .arg("synthesize")
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).to_string(),
+        String::from_utf8_lossy(&out.stderr).to_string(),
+    )
+}
+
+fn home_plan() -> String {
+    format!(
+        "{}/plans/home-cleaning/plan.toml",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+#[test]
+fn the_home_plan_gives_an_optimal_policy_that_loads_back_as_a_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("policy.toml");
+    let (code, stdout, err) = synthesize(&[
+        &home_plan(),
+        "--objective",
+        "lra-max",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    let (v, lo, hi) = (
+        j["value"].as_f64().unwrap(),
+        j["lower"].as_f64().unwrap(),
+        j["upper"].as_f64().unwrap(),
+    );
+    assert!(lo <= v && v <= hi && hi - lo <= 1e-9 * v, "{j}");
+    // 3 robots without WAIT: the toolbox's count for N = 3.
+    assert_eq!(j["toolbox_states"], 389);
+    let rules = j["rules"].as_array().unwrap();
+    assert!(!rules.is_empty());
+    assert!(j["compressed_rules"].as_u64().unwrap() < rules.len() as u64);
+    // The written file is a plan with one exact rule per decision marking, and it loads.
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        text.contains("# objective: lra-max, optimal value"),
+        "{text}"
+    );
+    assert_eq!(text.matches("[[policy]]").count(), rules.len());
+    let plan = gspn::plan::read_plan(&out, &Default::default()).unwrap();
+    assert_eq!(plan.policy.rules().len(), rules.len());
+}
+
+#[test]
+fn compact_rules_are_fewer_and_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("compact.toml");
+    let (code, _, err) = synthesize(&[&home_plan(), "--compact", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let plan = gspn::plan::read_plan(&out, &Default::default()).unwrap();
+    assert!(!plan.policy.rules().is_empty());
+    assert!(
+        plan.policy.rules().len() < 150,
+        "{}",
+        plan.policy.rules().len()
+    );
+}
+
+#[test]
+fn a_sweep_prints_one_row_per_robot_count() {
+    let net = fixture("gspnr/home_n01/net.PNPRO");
+    let rewards = fixture("gspnr/home_n01/rewards.toml");
+    let (code, stdout, err) = synthesize(&[
+        net.to_str().unwrap(),
+        "--rewards",
+        rewards.to_str().unwrap(),
+        "--sweep",
+        "robots=1..4",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let rows: Vec<Value> = serde_json::from_str(&stdout).unwrap();
+    let states: Vec<u64> = rows.iter().map(|r| r["states"].as_u64().unwrap()).collect();
+    assert_eq!(states, vec![13, 86, 389, 1385]);
+}
+
+#[test]
+fn drn_export_names_the_model_type_and_every_state() {
+    let dir = tempfile::tempdir().unwrap();
+    let drn = dir.path().join("m.drn");
+    let net = fixture("gspnr/tiny_cycle/net.PNPRO");
+    let rewards = fixture("gspnr/tiny_cycle/rewards.toml");
+    let (code, stdout, err) = synthesize(&[
+        net.to_str().unwrap(),
+        "--rewards",
+        rewards.to_str().unwrap(),
+        "--export-drn",
+        drn.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    assert!((j["value"].as_f64().unwrap() - 6.0).abs() < 1e-9, "{j}");
+    let text = std::fs::read_to_string(&drn).unwrap();
+    assert!(text.contains("@type: Markov Automaton"));
+    assert_eq!(text.matches("\nstate ").count(), 3);
+}
+
+#[test]
+fn bad_input_is_refused_with_exit_code_2() {
+    let net = fixture("gspnr/tiny_cycle/net.PNPRO");
+    let (code, _, err) = synthesize(&[net.to_str().unwrap(), "--objective", "fastest-max"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("unknown objective `fastest`"), "{err}");
+    let (code, _, err) = synthesize(&[net.to_str().unwrap(), "--objective", "reach-max"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--goal"), "{err}");
+    let (code, _, err) = synthesize(&[
+        net.to_str().unwrap(),
+        "--objective",
+        "reach-max",
+        "--goal",
+        "p9 > 0",
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("p9"), "{err}");
+}
+
+#[test]
+fn a_plan_naming_an_unknown_place_in_rewards_is_refused_at_its_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let net = fixture("gspnr/tiny_cycle/net.PNPRO");
+    let plan = dir.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "net = {:?}\n\n[rewards.r]\nmarked = {{ p3 = 1.0, p7 = 2.0 }}\n",
+            net.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let (code, _, err) = synthesize(&[plan.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains(":4:22"), "{err}");
+    assert!(err.contains("p7"), "{err}");
+    std::fs::write(
+        &plan,
+        format!(
+            "net = {:?}\ncontrollable = [\"t1\", \"t2\"]\n",
+            net.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let (code, _, err) = synthesize(&[plan.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains(":2:23"), "{err}");
+    assert!(err.contains("exponential"), "{err}");
+}
