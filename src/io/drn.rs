@@ -77,7 +77,9 @@ pub fn to_string(
     }
     let list = |values: &mut dyn Iterator<Item = f64>| -> String {
         values
-            .map(|v| format!("{v}"))
+            // `+ 0.0` turns a negative zero (a rate times 0) into 0: Storm reads either, but
+            // "-0" in a reward column reads as a bug.
+            .map(|v| format!("{}", v + 0.0))
             .collect::<Vec<_>>()
             .join(", ")
     };
