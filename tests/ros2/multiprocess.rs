@@ -230,8 +230,8 @@ fn write_work_move_plan(dir: &std::path::Path) -> std::path::PathBuf {
     for (name, from, to, rate) in [
         ("done", work, mv, 1.0),
         ("arrive", mv, work, 1.0),
-        ("fail_w", work, broken, 1e-12),
-        ("fail_m", mv, broken, 1e-12),
+        ("fail_w", work, broken, 1e-6),
+        ("fail_m", mv, broken, 1e-6),
     ] {
         let t = b.exponential(name, rate, Servers::Infinite);
         b.input(from, t, 1);
