@@ -22,6 +22,12 @@ use serde_json::json;
 
 use crate::common::{BadInput, NetArgs, load_net};
 
+mod policy_file;
+mod sweep;
+
+use policy_file::{rebase_plan, relative_to, rules_toml};
+use sweep::{finite, parse_sweep, run_sweep};
+
 /// Arguments of `synthesize`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct Args {
@@ -305,135 +311,6 @@ fn table(s: &Solved) -> (Vec<(Vec<u32>, gspn::net::TransitionId)>, usize) {
     (out, waits)
 }
 
-/// FNV-1a of the net as GreatSPN PNPRO text: the same net gives the same hash.
-fn net_hash(net: &Net) -> String {
-    let text = gspn::io::pnpro::write(net);
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in text.bytes() {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    format!("{h:016x}")
-}
-
-fn toml_key(name: &str) -> String {
-    if !name.is_empty()
-        && name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
-    {
-        name.to_string()
-    } else {
-        format!("{name:?}")
-    }
-}
-
-/// The rules as `[[policy]]` tables.
-fn rules_toml(net: &Net, rules: &[Rule]) -> String {
-    let mut out = String::new();
-    for r in rules {
-        let (pairs, partial): (Vec<(usize, u32)>, bool) = match &r.pattern {
-            Pattern::Exact(m) => (
-                m.iter()
-                    .enumerate()
-                    .filter(|&(_, &k)| k > 0)
-                    .map(|(i, &k)| (i, k))
-                    .collect(),
-                false,
-            ),
-            Pattern::Partial(v) => (v.iter().map(|&(p, k)| (p.index(), k)).collect(), true),
-        };
-        out.push_str("\n[[policy]]\n");
-        let marking: Vec<String> = pairs
-            .iter()
-            .map(|&(i, k)| format!("{} = {k}", toml_key(&net.places()[i].name)))
-            .collect();
-        let _ = writeln!(out, "marking = {{ {} }}", marking.join(", "));
-        if partial {
-            out.push_str("partial = true\n");
-        }
-        let choose: Vec<String> = r
-            .choose
-            .iter()
-            .map(|&(t, p)| format!("{} = {p:?}", toml_key(&net.transition(t).name)))
-            .collect();
-        let _ = writeln!(out, "choose = {{ {} }}", choose.join(", "));
-    }
-    out
-}
-
-fn relative_to(target: &Path, dir: &Path) -> PathBuf {
-    let target = std::fs::canonicalize(target).unwrap_or_else(|_| target.to_path_buf());
-    let dir = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
-    let t: Vec<_> = target.components().collect();
-    let d: Vec<_> = dir.components().collect();
-    let common = t.iter().zip(&d).take_while(|(a, b)| a == b).count();
-    let mut out = PathBuf::new();
-    for _ in common..d.len() {
-        out.push("..");
-    }
-    for c in &t[common..] {
-        out.push(c);
-    }
-    out
-}
-
-/// Without the robot world (feature `sim`) there is no robot scaling.
-#[cfg(not(feature = "sim"))]
-fn scaled(_: &Net, _: usize) -> anyhow::Result<Net> {
-    Err(
-        BadInput("--sweep scales robots like `run --robots`: build with feature `sim`".into())
-            .into(),
-    )
-}
-
-/// The plan's text with its `net` path made relative to `dir` (where the output goes).
-fn rebase_plan(plan: &Path, text: &str, dir: &Path) -> anyhow::Result<String> {
-    let file = gspn::plan::PlanFile::parse(plan, text)?;
-    let net_path = file.net_path(plan);
-    let span = file.net.span();
-    let rel = relative_to(&net_path, dir);
-    let mut out = String::with_capacity(text.len() + 64);
-    out.push_str(&text[..span.start]);
-    out.push_str(&format!("{:?}", rel.to_string_lossy()));
-    out.push_str(&text[span.end..]);
-    if !out.ends_with('\n') {
-        out.push('\n');
-    }
-    Ok(out)
-}
-
-/// Parses `robots=A..B`.
-fn parse_sweep(s: &str) -> anyhow::Result<std::ops::RangeInclusive<usize>> {
-    let bad = || {
-        BadInput(format!(
-            "--sweep `{s}`: expected robots=A..B, e.g. robots=1..10"
-        ))
-    };
-    let range = s.strip_prefix("robots=").ok_or_else(bad)?;
-    let (a, b) = range.split_once("..").ok_or_else(bad)?;
-    let a: usize = a.trim().parse().map_err(|_| bad())?;
-    let b: usize = b
-        .trim_start_matches('=')
-        .trim()
-        .parse()
-        .map_err(|_| bad())?;
-    if a == 0 || b < a {
-        return Err(bad().into());
-    }
-    Ok(a..=b)
-}
-
-/// The net with its initial tokens scaled to `n` robots: every marked place's share, largest
-/// remainder first (as `run --robots` scales a plan's robot places).
-#[cfg(feature = "sim")]
-fn scaled(net: &Net, n: usize) -> anyhow::Result<Net> {
-    let robot: Vec<bool> = net.places().iter().map(|p| p.initial > 0).collect();
-    let m = gspn::world::fleet::scaled_marking(net, &robot, n);
-    net.with_initial_marking(&m)
-        .map_err(|e| anyhow::anyhow!("scaling the initial marking: {e}"))
-}
-
 /// What the input gave: the net, the rewards and controls, and a plan's path and text.
 struct Input {
     net: Net,
@@ -568,7 +445,12 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             .unwrap_or(Path::new("."));
         let mut text = String::new();
         let _ = writeln!(text, "# policy synthesised by plan-runner synthesize");
-        let _ = writeln!(text, "# net: {} (hash {})", net.name(), net_hash(net));
+        let _ = writeln!(
+            text,
+            "# net: {} (hash {})",
+            net.name(),
+            gspn::runtime::journal::net_hash(net)
+        );
         let _ = writeln!(
             text,
             "# objective: {}, optimal value {} in [{}, {}] ({:?})",
@@ -631,7 +513,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             "solve_s": s.solve_s,
             "rules": rules,
             "compressed_rules": compressed.len(),
-            "net_hash": net_hash(net),
+            "net_hash": gspn::runtime::journal::net_hash(net),
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
@@ -654,65 +536,6 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             compressed.len()
         );
         println!("build {:.3} s, solve {:.3} s", s.build_s, s.solve_s);
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-fn finite(v: f64) -> serde_json::Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        json!(format!("{v}"))
-    }
-}
-
-fn run_sweep(
-    args: &Args,
-    net: &Net,
-    controls: &Controls,
-    spec: &RewardSpec,
-    goal: &Goal,
-    max: bool,
-    range: std::ops::RangeInclusive<usize>,
-) -> anyhow::Result<ExitCode> {
-    let mut rows = Vec::new();
-    if !args.json {
-        println!(
-            "{:>6} {:>10} {:>10} {:>10} {:>10} {:>14}",
-            "robots", "states", "choices", "build_s", "solve_s", "value"
-        );
-    }
-    for n in range {
-        let t0 = Instant::now();
-        let net_n = scaled(net, n)?;
-        let s = synthesize(&net_n, controls, spec, goal, max, args, false)?;
-        let total = t0.elapsed().as_secs_f64();
-        if args.json {
-            rows.push(json!({
-                "robots": n,
-                "states": s.model.state_count(),
-                "choices": s.model.choice_count(),
-                "toolbox_states": s.model.toolbox_state_count(),
-                "build_s": s.build_s,
-                "solve_s": s.solve_s,
-                "total_s": total,
-                "value": finite(s.solution.value),
-                "lower": finite(s.solution.lower),
-                "upper": finite(s.solution.upper),
-            }));
-        } else {
-            println!(
-                "{n:>6} {:>10} {:>10} {:>10.4} {:>10.4} {:>14.9}",
-                s.model.state_count(),
-                s.model.choice_count(),
-                s.build_s,
-                s.solve_s,
-                s.solution.value
-            );
-        }
-    }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&rows)?);
     }
     Ok(ExitCode::SUCCESS)
 }
