@@ -5,6 +5,19 @@ use gspn::net::{Net, NetBuilder, Servers};
 
 #[cfg(feature = "web")]
 pub mod browser;
+
+/// Serves `state` (the viewer) on an ephemeral loopback port: its address and the server task.
+#[cfg(feature = "web")]
+pub async fn start_server(
+    state: gspn::web::WebState,
+) -> (std::net::SocketAddr, tokio::task::JoinHandle<()>) {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let task = tokio::spawn(async move {
+        let _ = gspn::web::serve(listener, state).await;
+    });
+    (addr, task)
+}
 pub mod fixtures;
 /// A fixture file under the fixture root (see [`fixtures::root`]); one lookup for every
 /// behaviour test.

@@ -26,7 +26,7 @@ use gspn::io::{ReadOptions, read_net};
 use gspn::net::{Net, Servers};
 use gspn::runtime::Runtime;
 use gspn::sim::Simulator;
-use gspn::web::{CONTENT_SECURITY_POLICY, LiveRun, WebState, serve};
+use gspn::web::{CONTENT_SECURITY_POLICY, LiveRun, WebState};
 use serde_json::{Value, json};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
@@ -47,14 +47,7 @@ fn screenshot_path(name: &str) -> PathBuf {
         .join(name)
 }
 
-async fn start_server(state: WebState) -> (SocketAddr, tokio::task::JoinHandle<()>) {
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let task = tokio::spawn(async move {
-        let _ = serve(listener, state).await;
-    });
-    (addr, task)
-}
+use crate::support::start_server;
 
 /// `GET path` over plain TCP: the head and the body.
 async fn http_get_raw(addr: SocketAddr, path: &str) -> (String, String) {

@@ -43,9 +43,7 @@ async fn a_late_joiner_gets_the_net_then_the_final_state_of_the_run() {
     let summary = handle.wait().await;
     assert_eq!(summary.firings, 30);
 
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let server = tokio::spawn(serve(listener, WebState::for_live(live)));
+    let (addr, server) = common::start_server(WebState::for_live(live)).await;
 
     assert_eq!(http_get(addr, "/api/mode").await["live"], true);
     // The fold may still be draining the bus: poll until it has seen the end.
@@ -159,9 +157,7 @@ async fn a_world_feed_is_served_and_sent_in_the_state_frames() {
     let live = LiveRun::start(handle.clone(), events).with_world(rx);
     handle.wait().await;
 
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let server = tokio::spawn(serve(listener, WebState::for_live(live)));
+    let (addr, server) = common::start_server(WebState::for_live(live)).await;
     assert_eq!(http_get(addr, "/api/live/world").await, world(0.5));
     assert_eq!(http_get(addr, "/api/live/state").await["world"], world(0.5));
 
@@ -211,9 +207,7 @@ async fn a_run_without_a_world_feed_has_no_world() {
     let handle = Arc::new(handle);
     let live = LiveRun::start(handle.clone(), events);
     handle.wait().await;
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let server = tokio::spawn(serve(listener, WebState::for_live(live)));
+    let (addr, server) = common::start_server(WebState::for_live(live)).await;
     let mut stream = tokio::net::TcpStream::connect(addr).await.unwrap();
     let req = format!("GET /api/live/world HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n");
     stream.write_all(req.as_bytes()).await.unwrap();

@@ -79,9 +79,7 @@ async fn a_cross_origin_form_post_cannot_stop_a_live_run() {
     let events = handle.events();
     let handle = Arc::new(handle);
     let live = LiveRun::start(handle.clone(), events);
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let server = tokio::spawn(serve(listener, WebState::for_live(live)));
+    let (addr, server) = common::start_server(WebState::for_live(live)).await;
 
     // What the attacking page's `<form method=post action=http://127.0.0.1:PORT/...>` sends.
     let evil = ("Origin", "http://evil.example");
@@ -230,9 +228,7 @@ async fn the_live_websocket_refuses_a_foreign_origin() {
     let handle = Arc::new(handle);
     let live = LiveRun::start(handle.clone(), events);
     handle.wait().await;
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let server = tokio::spawn(serve(listener, WebState::for_live(live)));
+    let (addr, server) = common::start_server(WebState::for_live(live)).await;
 
     let url = format!("ws://{addr}/api/live/ws");
     let with_origin = |origin: &str| {
