@@ -248,7 +248,7 @@ impl Supervisor {
             marking: self.snapshots.get(self.eng.firings(), self.eng.marking()),
             attempt,
             cancel: self.cancel_token.clone(),
-            net: Arc::clone(&self.eng.net()),
+            net: Arc::clone(self.eng.net()),
             seed: self.seed,
             time: self.now(),
             output: OutputSink::new(self.output_tx.clone()),
