@@ -445,10 +445,10 @@ fn layers(n: usize, dag: &[(usize, usize)]) -> Vec<usize> {
         }
     }
     for &v in order.iter().rev() {
-        if indeg[v] == 0 {
-            if let Some(l) = succ[v].iter().map(|&w| layer[w]).min() {
-                layer[v] = l - 1;
-            }
+        if indeg[v] == 0
+            && let Some(l) = succ[v].iter().map(|&w| layer[w]).min()
+        {
+            layer[v] = l - 1;
         }
     }
     layer
