@@ -12,7 +12,7 @@ use super::file::{PlaceFile, PlanFile, RuleFile, locate};
 use super::rewards::{resolve_controls, resolve_rewards};
 use super::ros2::resolve_ros2;
 use crate::io::{LoadError, LoadErrorKind};
-use crate::net::predicate::Predicate;
+use crate::net::predicate::{Predicate, PredicateErrorKind};
 use crate::net::{Net, PlaceId, Timing, TransitionId};
 use crate::policy::{Pattern, Policy, PolicyError, Rule};
 use crate::runtime::{FailurePolicy, Role, StopConditions};
@@ -101,8 +101,8 @@ impl PlanFile {
                         .char_indices()
                         .nth(e.column.saturating_sub(1))
                         .map_or(w.get_ref().len(), |(i, _)| i);
-                    let kind = match e.name {
-                        Some(n) if e.message.contains("does not exist") => unknown("place", &n),
+                    let kind = match (e.kind, e.name) {
+                        (PredicateErrorKind::UnknownPlace, Some(n)) => unknown("place", &n),
                         _ => LoadErrorKind::Invalid(format!("stop.when: {}", e.message)),
                     };
                     at(start + byte..start + byte, kind)

@@ -117,31 +117,19 @@ impl Map {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::map::{Location, QueueSpec, RobotSpec};
+    use crate::world::map::Location;
 
     fn map() -> Map {
+        let at = |n: &str| Location {
+            name: n.to_string(),
+            x: 0.0,
+            y: 0.0,
+            queue_dir: [0.0, -1.0],
+            places: vec![],
+        };
         Map {
-            locations: ["A", "B"]
-                .iter()
-                .map(|n| Location {
-                    name: n.to_string(),
-                    x: 0.0,
-                    y: 0.0,
-                    queue_dir: [0.0, -1.0],
-                    places: vec![],
-                })
-                .collect(),
             edges: vec![(0, 1)],
-            patrol: vec![],
-            walls: vec![],
-            obstacles: vec![],
-            robot: RobotSpec::default(),
-            queue: QueueSpec {
-                lanes: 1,
-                spacing: 0.5,
-            },
-            step_hz: 20.0,
-            stuck_after: 30.0,
+            ..Map::bare(vec![at("A"), at("B")])
         }
     }
 
