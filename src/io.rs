@@ -12,7 +12,7 @@ pub mod pipe;
 pub mod pnml;
 pub mod pnpro;
 pub mod prism;
-mod xml;
+pub(crate) mod xml;
 
 pub use xml::MAX_XML_DEPTH;
 
