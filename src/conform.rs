@@ -105,15 +105,7 @@ impl Trace {
         }
         let initial = steps
             .first()
-            .and_then(|s| {
-                let mut m: Vec<i64> = s.marking.iter().map(|&k| k as i64).collect();
-                for &(p, d) in net.delta(s.transition) {
-                    m[p.index()] -= d;
-                }
-                m.iter()
-                    .map(|&k| u32::try_from(k).ok())
-                    .collect::<Option<Vec<u32>>>()
-            })
+            .and_then(|s| marking_before(net, s.transition, &s.marking))
             .unwrap_or_else(|| net.initial_marking().as_slice().to_vec());
         Trace {
             initial,
@@ -164,6 +156,15 @@ impl Trace {
             None => (self.initial.clone(), 0.0),
         }
     }
+}
+
+/// The marking before `t` fired into `after` (`None` when a count would be negative).
+pub fn marking_before(net: &Net, t: TransitionId, after: &[u32]) -> Option<Vec<u32>> {
+    let mut m: Vec<i64> = after.iter().map(|&k| k as i64).collect();
+    for &(p, d) in net.delta(t) {
+        m[p.index()] -= d;
+    }
+    m.iter().map(|&k| u32::try_from(k).ok()).collect()
 }
 
 /// Thresholds of the comparison.
@@ -253,7 +254,7 @@ pub fn observe(
     trace: &Trace,
     opts: &Options,
 ) -> Result<Observations, ConformError> {
-    if !(trace.end > 0.0) {
+    if trace.end.is_nan() || trace.end <= 0.0 {
         return Err(ConformError::Empty(trace.end));
     }
     let (np, nt) = (net.place_count(), net.transition_count());
@@ -786,7 +787,7 @@ pub fn fit(net: &Net, obs: &Observations, opts: &Options) -> (Net, Vec<Fitted>) 
         let (Some(x), Timing::Exponential { rate, servers }) = (x, timings[i]) else {
             continue;
         };
-        let kept = x.firings < opts.min_firings || !(x.exposure > 0.0);
+        let kept = x.firings < opts.min_firings || x.exposure.is_nan() || x.exposure <= 0.0;
         let new = if kept {
             rate
         } else {

@@ -53,11 +53,6 @@ fn false_alarms(net: &Net, runs: u64, until: f64) -> (usize, usize, usize, usize
     let (reports, covered) = reports(net, net, runs, until);
     let tested: usize = reports.iter().map(|r| r.tested().count()).sum();
     let diverging: usize = reports.iter().map(|r| r.diverging().count()).sum();
-    for r in &reports {
-        for row in r.diverging() {
-            eprintln!("{} {:?} {} p={:?}", r.net, row.kind, row.item, row.p_value);
-        }
-    }
     let hits = covered.iter().filter(|c| **c).count();
     eprintln!(
         "{}: {diverging}/{tested} rows diverge; rate intervals cover the truth {hits}/{}",
@@ -133,4 +128,51 @@ fn a_run_of_another_net_diverges_on_the_changed_rate() {
     assert_eq!(row(RowKind::Rate, "T1").verdict, Verdict::Consistent);
     assert_eq!(row(RowKind::Shape, "T3").verdict, Verdict::Consistent);
     assert_eq!(row(RowKind::Throughput, "T1").verdict, Verdict::Diverges);
+}
+
+#[test]
+fn transient_from_a_trace_point_matches_monte_carlo_from_that_marking() {
+    use gspn::analysis::measures::Solver;
+    use gspn::analysis::state_space::{Options as SpaceOptions, StateSpace};
+    use gspn::sim::{Simulator, t_quantile_975};
+    let net = cyc3(Servers::Single);
+    let arc = Arc::new(net.clone());
+    let trace = Trace::simulate(&arc, None, 7, 0, 50.0).unwrap();
+    let seq = trace.steps[40].seq;
+    let (m, time) = trace.at(Some(seq));
+    assert_eq!(
+        (m.clone(), time),
+        (trace.steps[40].marking.clone(), trace.steps[40].time)
+    );
+    let from = net.with_initial_marking(&m).unwrap();
+    let ss = StateSpace::build(&from, &SpaceOptions::default()).unwrap();
+    let solver = Solver::new(&from, &ss);
+    let at = 0.75;
+    let exact = solver
+        .measures(&solver.transient(&[at], 1e-12)[0])
+        .mean_tokens;
+    // Monte-Carlo: the marking at `at` from the same point, 4000 runs.
+    let runs = 4000;
+    let mut sum = [0.0; 3];
+    let mut sq = [0.0; 3];
+    for i in 0..runs {
+        let mut sim =
+            Simulator::from_marking(Arc::clone(&arc), m.clone().into(), 11).with_stream(i);
+        sim.run_until(at).unwrap();
+        for (p, &k) in sim.marking().iter().enumerate() {
+            sum[p] += k as f64;
+            sq[p] += (k as f64).powi(2);
+        }
+    }
+    let n = runs as f64;
+    for p in 0..3 {
+        let mean = sum[p] / n;
+        let sd = ((sq[p] - n * mean * mean) / (n - 1.0)).sqrt();
+        let half = t_quantile_975(runs - 1) * sd / n.sqrt();
+        assert!(
+            (exact[p] - mean).abs() <= half,
+            "place {p}: transient {} vs Monte-Carlo {mean} ± {half}",
+            exact[p]
+        );
+    }
 }

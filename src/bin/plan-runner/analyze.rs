@@ -57,12 +57,7 @@ pub(crate) struct Args {
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let mut loaded = load_net(&args.file, &args.net)?;
     if let Some(spec) = &args.from {
-        let (net, time) = crate::conform::start_from(spec, &loaded.net)?;
-        eprintln!(
-            "starting from {spec}: time {time}, {}",
-            net.format_marking(net.initial_marking().as_slice())
-        );
-        loaded.net = net;
+        loaded.net = crate::conform::start_from(spec, &loaded.net)?;
     }
     let net = &loaded.net;
     if let Some(t) = args

@@ -5,15 +5,16 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::Context as _;
 use gspn::conform::{
-    Fitted, Options, Predictions, Report, Trace, Verdict, compare, fit, observe, steady_predictions,
+    Fitted, Options, Predictions, Report, Trace, Verdict, compare, fit, marking_before, observe,
+    steady_predictions,
 };
 use gspn::io::{Format, write_net};
 use gspn::net::Net;
 use gspn::plan::open;
 use gspn::policy::Policy;
-use gspn::runtime::journal::{read_events, split_torn};
+use gspn::runtime::journal::{JournalError, read_events, split_torn};
+use gspn::runtime::{Event, EventKind};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -66,11 +67,16 @@ pub(crate) fn model(
 /// A journal of a run of `net`, read into a trace (a last line cut short by a kill is
 /// skipped with a warning, as `replay` does).
 pub(crate) fn journal_trace(path: &Path, net: &Net) -> anyhow::Result<Trace> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| BadInput(format!("cannot read {}: {e}", path.display())))?;
     let (text, torn) = split_torn(&text);
-    let events =
-        read_events(text, net).map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+    let events = match read_events(text, net) {
+        Err(JournalError::OtherNet { .. }) if let Some(scaled) = scaled_net(text, net) => {
+            read_events(text, &scaled)
+        }
+        r => r,
+    }
+    .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
     if let Some(torn) = &torn {
         eprintln!(
             "warning: {}: {torn}: skipped (the run was killed while writing it)",
@@ -78,6 +84,29 @@ pub(crate) fn journal_trace(path: &Path, net: &Net) -> anyhow::Result<Trace> {
         );
     }
     Ok(Trace::from_events(net, &events))
+}
+
+/// `net` with the initial marking a run started from when it was not the net's (a plan run
+/// with `--robots N` scales it, and the journal's hash is of the scaled net): the marking
+/// before the journal's first firing.
+fn scaled_net(text: &str, net: &Net) -> Option<Net> {
+    let (t, marking) = text.lines().skip(1).find_map(|l| {
+        let e: Event = serde_json::from_str(l).ok()?;
+        match e.kind {
+            EventKind::Fired {
+                transition,
+                marking,
+                ..
+            } if transition.index() < net.transition_count()
+                && marking.len() == net.place_count() =>
+            {
+                Some((transition, marking))
+            }
+            _ => None,
+        }
+    })?;
+    net.with_initial_marking(&marking_before(net, t, &marking)?)
+        .ok()
 }
 
 /// The output format of `--fit`, by extension.
@@ -234,9 +263,9 @@ fn print_fitted(out: &Path, params: &[Fitted]) {
 }
 
 /// `--from JOURNAL[:SEQ]` of `simulate` and `analyze`: `net` started from the marking after
-/// the last firing with sequence number ≤ SEQ (the end of the run without one), and the
-/// model time of that point.
-pub(crate) fn start_from(spec: &str, net: &Net) -> anyhow::Result<(Net, f64)> {
+/// the last firing with sequence number ≤ SEQ (the end of the run without one); the point
+/// (its model time and marking) is reported on stderr.
+pub(crate) fn start_from(spec: &str, net: &Net) -> anyhow::Result<Net> {
     let (path, seq) = match spec.rsplit_once(':') {
         Some((p, s)) if !p.is_empty() && !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()) => {
             let seq = s
@@ -251,5 +280,9 @@ pub(crate) fn start_from(spec: &str, net: &Net) -> anyhow::Result<(Net, f64)> {
     let started = net
         .with_initial_marking(&marking)
         .map_err(|e| BadInput(format!("--from {spec}: {e}")))?;
-    Ok((started, time))
+    eprintln!(
+        "starting from {spec}: time {time}, {}",
+        started.format_marking(&marking)
+    );
+    Ok(started)
 }

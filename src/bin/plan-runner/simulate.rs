@@ -83,12 +83,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     }
     let mut input = load(&args)?;
     if let Some(spec) = &args.from {
-        let (net, time) = crate::conform::start_from(spec, &input.net)?;
-        eprintln!(
-            "starting from {spec}: time {time}, {}",
-            net.format_marking(net.initial_marking().as_slice())
-        );
-        input.net = net;
+        input.net = crate::conform::start_from(spec, &input.net)?;
     }
     let seed = args.seed.or(input.seed).unwrap_or(0);
     let horizon = match (args.until, args.steps) {
