@@ -382,6 +382,7 @@ pub(super) fn build(
         place_ids.insert(name, id);
     }
     let mut trans_ids = FxHashMap::default();
+    let mut transition_at = Vec::new();
     for r in of(Kind::Transition) {
         let name = name_of(&env, r, "transition")?;
         if let Some(g) = r.get("guard").filter(|g| g.value.trim() != "True") {
@@ -411,6 +412,7 @@ pub(super) fn build(
             position,
         });
         trans_ids.insert(name, id);
+        transition_at.push(r.at);
     }
     for r in of(Kind::Arc) {
         let get = |key: &str| {
@@ -501,6 +503,7 @@ pub(super) fn build(
         net,
         format: Format::Pnpro,
         warnings,
+        transition_at: Span::locate_all(text.as_bytes(), transition_at),
     })
 }
 
