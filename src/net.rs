@@ -81,6 +81,8 @@ pub struct Net {
     /// Per transition: the transitions whose enabling its firing can change (itself included
     /// when it changes one of its own places).
     affects: Vec<Vec<TransitionId>>,
+    /// Per place: the transitions with an input arc from it, in net order.
+    consumers: Vec<Vec<TransitionId>>,
     /// Per place: capacities, dense, `u32::MAX` when unbounded.
     capacity: Vec<u32>,
     has_capacity: bool,
@@ -179,6 +181,12 @@ impl Net {
     #[inline]
     pub fn delta(&self, t: TransitionId) -> &[(PlaceId, i64)] {
         &self.delta[t.index()]
+    }
+
+    /// The output transitions of place `p` (those with an input arc from it), in net order.
+    #[inline]
+    pub fn consumers(&self, p: PlaceId) -> &[TransitionId] {
+        &self.consumers[p.index()]
     }
 
     /// Transitions whose enabling can change when `t` fires.

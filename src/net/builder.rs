@@ -371,6 +371,12 @@ impl NetBuilder {
             a.dedup();
             affects.push(a);
         }
+        let mut consumers: Vec<Vec<TransitionId>> = vec![Vec::new(); np];
+        for (t, inputs) in pre.iter().enumerate() {
+            for &(p, _) in inputs {
+                consumers[p.index()].push(TransitionId(t as u32));
+            }
+        }
         let has_immediate = transitions.iter().any(Transition::is_immediate);
         Ok(Net {
             name,
@@ -382,6 +388,7 @@ impl NetBuilder {
             inhib,
             delta,
             affects,
+            consumers,
             capacity,
             has_capacity,
             has_immediate,

@@ -54,8 +54,7 @@ impl PlanFile {
                 .place_by_name(name.get_ref())
                 .ok_or_else(|| at(name.span(), unknown("place", name.get_ref())))?;
             roles[p.index()] = Some(resolve_role(&net, p, role, &at)?);
-            if matches!(roles[p.index()], Some(Role::Action { .. }))
-                && net_outputs(&net, p).is_empty()
+            if matches!(roles[p.index()], Some(Role::Action { .. })) && net.consumers(p).is_empty()
             {
                 warnings.push(format!(
                     "place `{}` has an action but no output transition: its agents end Inactive",
@@ -222,12 +221,6 @@ fn show(v: f64) -> String {
     } else {
         v.to_string()
     }
-}
-
-fn net_outputs(net: &Net, p: PlaceId) -> Vec<TransitionId> {
-    net.transition_ids()
-        .filter(|&t| net.inputs(t).iter().any(|&(q, _)| q == p))
-        .collect()
 }
 
 fn resolve_role(
