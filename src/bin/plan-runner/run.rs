@@ -16,7 +16,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use gspn::plan::open;
+
 use gspn::runtime::{Backends, RuntimeBuilder, Section, StopReason, Summary};
 
 use crate::backends::{self, BackendArgs};
@@ -52,7 +52,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let mut plan = open(&args.file, &args.net.read_options())?.into_plan();
+    let mut plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && (0.0..=gspn::limits::MAX_SECONDS).contains(&x)) {
             let shown = if x.abs() >= 1e15 {
