@@ -13,3 +13,4 @@ mod run;
 mod run_on_robots;
 mod simulate;
 mod synthesize;
+mod thesis_standalone;
