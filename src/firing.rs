@@ -346,7 +346,6 @@ impl Firable {
     /// applies, else ∝ weight, else uniformly. One uniform draw.
     pub(crate) fn choose_immediate(
         &mut self,
-        net: &Net,
         m: &[u32],
         policy: Option<&Policy>,
         rng: &mut Rng,
@@ -366,7 +365,7 @@ impl Firable {
                     .copied()
                     .filter(|t| self.imm_on[t.index()]),
             );
-            if policy.distribution_into(net, m, &self.candidates, &mut self.dist)
+            if policy.distribution_into(m, &self.candidates, &mut self.dist)
                 && let Some(t) = sample::pick_weighted_with(u, &self.dist)
             {
                 return t;

@@ -332,6 +332,11 @@ pub struct Loaded {
     pub format: Format,
     /// Things the reader accepted but the user should know (ignored elements, defaults used).
     pub warnings: Vec<String>,
+    /// Where each transition is defined in the file, by [`TransitionId`] index: a check made
+    /// after reading (a rate too slow for real time) can still name the line and column.
+    ///
+    /// [`TransitionId`]: crate::net::TransitionId
+    pub transition_at: Vec<Span>,
 }
 
 /// Reads the net in `path`, choosing the reader from the extension and, for XML, the content

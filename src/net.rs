@@ -448,26 +448,28 @@ impl Net {
     }
 }
 
+/// The three-place cycle of the fixtures (`greatspn/cyc3`), for unit tests.
+#[cfg(test)]
+pub(crate) fn cyc3(servers: Servers) -> Net {
+    let mut b = NetBuilder::new("cyc3");
+    let p1 = b.place("P1", 2);
+    let p2 = b.place("P2", 0);
+    let p3 = b.place("P3", 0);
+    let t1 = b.exponential("T1", 1.0, servers);
+    let t2 = b.immediate("t2", 1.0, 1);
+    let t3 = b.exponential("T3", 2.0, servers);
+    b.input(p1, t1, 1);
+    b.output(t1, p2, 1);
+    b.input(p2, t2, 1);
+    b.output(t2, p3, 1);
+    b.input(p3, t3, 1);
+    b.output(t3, p1, 1);
+    b.build().unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn cyc3(servers: Servers) -> Net {
-        let mut b = NetBuilder::new("cyc3");
-        let p1 = b.place("P1", 2);
-        let p2 = b.place("P2", 0);
-        let p3 = b.place("P3", 0);
-        let t1 = b.exponential("T1", 1.0, servers);
-        let t2 = b.immediate("t2", 1.0, 1);
-        let t3 = b.exponential("T3", 2.0, servers);
-        b.input(p1, t1, 1);
-        b.output(t1, p2, 1);
-        b.input(p2, t2, 1);
-        b.output(t2, p3, 1);
-        b.input(p3, t3, 1);
-        b.output(t3, p1, 1);
-        b.build().unwrap()
-    }
 
     #[test]
     fn exponential_rate_follows_server_semantics() {

@@ -103,6 +103,8 @@ pub struct Plan {
     /// Where each place's `action` is written in the plan file, indexed by
     /// [`PlaceId::index`] (for [`Plan::check_actions`]).
     pub action_spans: Vec<Option<Span>>,
+    /// Where each transition is defined in the net file ([`Loaded::transition_at`]).
+    pub transition_at: Vec<Span>,
 }
 
 impl Plan {
@@ -130,7 +132,23 @@ impl Plan {
             controls,
             programs: Vec::new(),
             action_spans: vec![None; n],
+            transition_at: loaded.transition_at,
         }
+    }
+
+    /// Refuses a time scale under which some exponential transition would wait longer than
+    /// 10 years of real time on average, pointing at the transition in the net file: for a
+    /// time scale given on the command line (`what`, e.g. `--time-scale 1`), which the plan
+    /// reader did not see. Plans check their own `time_scale` when they are read.
+    pub fn check_time_scale(&self, what: &str, scale: f64) -> Result<(), LoadError> {
+        let Some((t, rate)) = crate::limits::too_slow_for_real_time(&self.net, scale) else {
+            return Ok(());
+        };
+        let kind = LoadErrorKind::Invalid(resolve::real_time_wait(what, &self.net, t, rate, scale));
+        Err(match self.transition_at.get(t.index()) {
+            Some(&span) => LoadError::at(&self.net_path, span, kind),
+            None => LoadError::file(&self.net_path, kind),
+        })
     }
 
     /// The role of place `p`.
@@ -229,6 +247,7 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
     })?;
     let mut plan = file.resolve(path, &text, loaded.net)?;
     plan.net_path = net_path;
+    plan.transition_at = loaded.transition_at;
     plan.page = page;
     let mut warnings = loaded.warnings;
     warnings.append(&mut plan.warnings);

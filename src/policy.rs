@@ -31,10 +31,10 @@
 //!     pattern: Pattern::Partial(vec![(p, 1)]),
 //!     choose: vec![(a, 0.25), (c, 0.75)],
 //! }]).unwrap();
-//! let d = policy.distribution(&net, &[1], &[a, c]).unwrap();
+//! let d = policy.distribution(&[1], &[a, c]).unwrap();
 //! assert_eq!(d, vec![(a, 0.25), (c, 0.75)]);
 //! // Only `a` can fire: the rule is renormalised over it.
-//! assert_eq!(policy.distribution(&net, &[1], &[a]).unwrap(), vec![(a, 1.0)]);
+//! assert_eq!(policy.distribution(&[1], &[a]).unwrap(), vec![(a, 1.0)]);
 //! ```
 
 use rustc_hash::FxHashMap;
@@ -297,25 +297,21 @@ impl Policy {
     /// (use the net's weights). Transitions with probability 0 are left out.
     pub fn distribution(
         &self,
-        net: &Net,
         m: &[u32],
         firable: &[TransitionId],
     ) -> Option<Vec<(TransitionId, f64)>> {
         let mut out = Vec::new();
-        self.distribution_into(net, m, firable, &mut out)
-            .then_some(out)
+        self.distribution_into(m, firable, &mut out).then_some(out)
     }
 
     /// Like [`Policy::distribution`], writing into `out` (cleared first) so a hot loop can
     /// reuse one buffer; returns false when no rule applies (and leaves `out` empty).
     pub fn distribution_into(
         &self,
-        net: &Net,
         m: &[u32],
         firable: &[TransitionId],
         out: &mut Vec<(TransitionId, f64)>,
     ) -> bool {
-        let _ = net;
         out.clear();
         let Some((_, rule)) = self.rule_for(m, firable) else {
             return false;
@@ -346,7 +342,7 @@ impl Policy {
         m: &[u32],
         firable: &[TransitionId],
     ) -> Vec<(TransitionId, f64)> {
-        if let Some(d) = self.distribution(net, m, firable) {
+        if let Some(d) = self.distribution(m, firable) {
             return d;
         }
         let weight = |t: TransitionId| match net.transition(t).timing {
@@ -425,30 +421,28 @@ mod tests {
         Pattern::Partial(vec![(PlaceId(p), k)])
     }
 
+    fn rule(pattern: Pattern, choose: Vec<(TransitionId, f64)>) -> Rule {
+        Rule { pattern, choose }
+    }
+
     #[test]
     fn exact_rule_wins_over_an_earlier_partial_one() {
         let (net, [a, b, c, _]) = net();
         let policy = Policy::new(
             &net,
             vec![
-                Rule {
-                    pattern: partial(0, 1),
-                    choose: vec![(a, 1.0)],
-                },
-                Rule {
-                    pattern: Pattern::Exact(vec![1, 0]),
-                    choose: vec![(b, 0.4), (c, 0.6)],
-                },
+                rule(partial(0, 1), vec![(a, 1.0)]),
+                rule(Pattern::Exact(vec![1, 0]), vec![(b, 0.4), (c, 0.6)]),
             ],
         )
         .unwrap();
-        let d = policy.distribution(&net, &[1, 0], &[a, b, c]).unwrap();
+        let d = policy.distribution(&[1, 0], &[a, b, c]).unwrap();
         assert_eq!(d, vec![(b, 0.4), (c, 0.6)]);
         // Another marking: only the partial rule matches.
-        let d = policy.distribution(&net, &[1, 5], &[a, b, c]).unwrap();
+        let d = policy.distribution(&[1, 5], &[a, b, c]).unwrap();
         assert_eq!(d, vec![(a, 1.0)]);
         // No rule for p = 2.
-        assert_eq!(policy.distribution(&net, &[2, 0], &[a, b, c]), None);
+        assert_eq!(policy.distribution(&[2, 0], &[a, b, c]), None);
     }
 
     #[test]
@@ -462,7 +456,7 @@ mod tests {
             }],
         )
         .unwrap();
-        let d = policy.distribution(&net, &[1, 0], &[b, c]).unwrap();
+        let d = policy.distribution(&[1, 0], &[b, c]).unwrap();
         assert_eq!(d.len(), 2);
         assert!((d[0].1 - 0.375).abs() < 1e-12 && d[0].0 == b);
         assert!((d[1].1 - 0.625).abs() < 1e-12 && d[1].0 == c);
@@ -474,26 +468,20 @@ mod tests {
         let policy = Policy::new(
             &net,
             vec![
-                Rule {
-                    pattern: partial(0, 1),
-                    choose: vec![(a, 1.0), (b, 0.0)],
-                },
-                Rule {
-                    pattern: partial(1, 0),
-                    choose: vec![(c, 1.0)],
-                },
+                rule(partial(0, 1), vec![(a, 1.0), (b, 0.0)]),
+                rule(partial(1, 0), vec![(c, 1.0)]),
             ],
         )
         .unwrap();
         // First rule matches but gives b zero mass and a is not firable: the second applies.
         assert_eq!(
-            policy.distribution(&net, &[1, 0], &[b, c]).unwrap(),
+            policy.distribution(&[1, 0], &[b, c]).unwrap(),
             vec![(c, 1.0)]
         );
         // Nothing applies at all: the net's weights.
-        assert_eq!(policy.distribution(&net, &[1, 3], &[b]), None);
+        assert_eq!(policy.distribution(&[1, 3], &[b]), None);
         let mut buf = vec![(a, 9.0)];
-        assert!(!policy.distribution_into(&net, &[1, 3], &[b], &mut buf));
+        assert!(!policy.distribution_into(&[1, 3], &[b], &mut buf));
         assert!(buf.is_empty());
     }
 
@@ -503,14 +491,8 @@ mod tests {
         let policy = Policy::new(
             &net,
             vec![
-                Rule {
-                    pattern: partial(1, 0),
-                    choose: vec![(b, 1.0)],
-                },
-                Rule {
-                    pattern: partial(0, 1),
-                    choose: vec![(a, 1.0)],
-                },
+                rule(partial(1, 0), vec![(b, 1.0)]),
+                rule(partial(0, 1), vec![(a, 1.0)]),
             ],
         )
         .unwrap();
@@ -521,7 +503,6 @@ mod tests {
     #[test]
     fn bad_rules_are_refused() {
         let (net, [a, b, _, e]) = net();
-        let rule = |pattern, choose| Rule { pattern, choose };
         let err = |rules| Policy::new(&net, rules).unwrap_err();
         assert_eq!(
             err(vec![rule(partial(0, 1), vec![(e, 1.0)])]),
@@ -569,7 +550,7 @@ mod tests {
 
     #[test]
     fn empty_policy_defers_to_weights() {
-        let (net, [a, ..]) = net();
-        assert_eq!(Policy::empty().distribution(&net, &[1, 0], &[a]), None);
+        let (_, [a, ..]) = net();
+        assert_eq!(Policy::empty().distribution(&[1, 0], &[a]), None);
     }
 }

@@ -278,12 +278,9 @@ impl Simulator {
                     last: self.last_name(),
                 });
             }
-            let t = self.firable.choose_immediate(
-                &self.net,
-                &self.marking,
-                self.policy.as_deref(),
-                &mut self.rng,
-            );
+            let t =
+                self.firable
+                    .choose_immediate(&self.marking, self.policy.as_deref(), &mut self.rng);
             self.instant += 1;
             self.fire(t)?;
             return Ok(Some(Step {

@@ -57,26 +57,25 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Loaded, Loa
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(LoadError::file(path, LoadErrorKind::Empty));
     }
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        LoadError::at(
-            path,
-            Span::locate(bytes, e.valid_up_to()),
-            LoadErrorKind::Xml(format!("the file is not valid UTF-8: {e}")),
-        )
-    })?;
+    let text = utf8(path, bytes)?;
     let scanned = scan::scan(path, text, opts)?;
     build::build(path, text, &scanned, opts)
 }
 
-/// The names of the `<gspn>` pages of a project, in file order.
-pub fn pages(path: &Path, bytes: &[u8]) -> Result<Vec<String>, LoadError> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
+/// `bytes` as text, or the position of the first byte that is not UTF-8.
+fn utf8<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str, LoadError> {
+    std::str::from_utf8(bytes).map_err(|e| {
         LoadError::at(
             path,
             Span::locate(bytes, e.valid_up_to()),
             LoadErrorKind::Xml(format!("the file is not valid UTF-8: {e}")),
         )
-    })?;
+    })
+}
+
+/// The names of the `<gspn>` pages of a project, in file order.
+pub fn pages(path: &Path, bytes: &[u8]) -> Result<Vec<String>, LoadError> {
+    let text = utf8(path, bytes)?;
     Ok(scan::scan(path, text, &ReadOptions::default())?.pages)
 }
 

@@ -215,10 +215,21 @@ impl fmt::Display for Predicate {
 pub struct PredicateError {
     /// Column of the offending token, from 1, counted in characters.
     pub column: usize,
-    /// The offending name (an unknown place), when there is one.
+    /// The offending name (an unknown place, a malformed word), when there is one.
     pub name: Option<String>,
+    /// What kind of mistake.
+    pub kind: PredicateErrorKind,
     /// What was wrong.
     pub message: String,
+}
+
+/// The kinds of [`PredicateError`], for callers that report them in their own words.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PredicateErrorKind {
+    /// A name that is no place of the net ([`PredicateError::name`] holds it).
+    UnknownPlace,
+    /// Anything else: a bad token, a missing operand, nesting too deep.
+    Syntax,
 }
 
 impl PredicateError {
@@ -226,6 +237,7 @@ impl PredicateError {
         PredicateError {
             column,
             name: None,
+            kind: PredicateErrorKind::Syntax,
             message,
         }
     }

@@ -13,7 +13,7 @@ use super::programs::{ActionFile, Programs};
 use super::rewards::{resolve_controls, resolve_rewards};
 use super::ros2::resolve_ros2;
 use crate::io::{LoadError, LoadErrorKind};
-use crate::net::predicate::Predicate;
+use crate::net::predicate::{Predicate, PredicateErrorKind};
 use crate::net::{Net, PlaceId, Timing, TransitionId};
 use crate::policy::{Pattern, Policy, PolicyError, Rule};
 use crate::runtime::{FailurePolicy, Role, StopConditions};
@@ -35,25 +35,15 @@ impl PlanFile {
                 ));
             }
             // In real time a rate is a wait on the clock: refuse one that would never end.
-            if v > 0.0
-                && let Some((t, rate)) = net.transitions().iter().find_map(|t| match t.timing {
-                    crate::net::Timing::Exponential { rate, .. }
-                        if v / rate > crate::limits::MAX_SECONDS =>
-                    {
-                        Some((t, rate))
-                    }
-                    _ => None,
-                })
-            {
+            if let Some((t, rate)) = crate::limits::too_slow_for_real_time(&net, v) {
                 return Err(at(
                     ts.span(),
-                    LoadErrorKind::Invalid(format!(
-                        "time_scale = {}: transition `{}` (rate {}) would wait {:.1e} s of real time on average, more than the maximum {} s (10 years)",
-                        show(v),
-                        t.name,
-                        show(rate),
-                        v / rate,
-                        crate::limits::MAX_SECONDS
+                    LoadErrorKind::Invalid(real_time_wait(
+                        &format!("time_scale = {}", show(v)),
+                        &net,
+                        t,
+                        rate,
+                        v,
                     )),
                 ));
             }
@@ -114,8 +104,8 @@ impl PlanFile {
                         .char_indices()
                         .nth(e.column.saturating_sub(1))
                         .map_or(w.get_ref().len(), |(i, _)| i);
-                    let kind = match e.name {
-                        Some(n) if e.message.contains("does not exist") => unknown("place", &n),
+                    let kind = match (e.kind, e.name) {
+                        (PredicateErrorKind::UnknownPlace, Some(n)) => unknown("place", &n),
                         _ => LoadErrorKind::Invalid(format!("stop.when: {}", e.message)),
                     };
                     at(start + byte..start + byte, kind)
@@ -207,6 +197,7 @@ impl PlanFile {
             controls,
             programs: programs.list,
             action_spans,
+            transition_at: Vec::new(),
         })
     }
 }
@@ -498,3 +489,21 @@ fn policy_error_span(e: &PolicyError, rule: &RuleFile) -> Option<Range<usize>> {
 
 #[cfg(test)]
 mod tests;
+
+/// The message for a transition too slow for real time ([`crate::limits::too_slow_for_real_time`]):
+/// `what` names the time scale's source (`time_scale = 1`, `--time-scale 1`).
+pub(crate) fn real_time_wait(
+    what: &str,
+    net: &Net,
+    t: TransitionId,
+    rate: f64,
+    scale: f64,
+) -> String {
+    format!(
+        "{what}: transition `{}` (rate {}) would wait {:.1e} s of real time on average, more than the maximum {} s (10 years)",
+        net.transition(t).name,
+        show(rate),
+        scale / rate,
+        crate::limits::MAX_SECONDS
+    )
+}

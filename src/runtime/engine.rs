@@ -71,32 +71,84 @@ pub(crate) struct Firing {
 
 #[derive(Debug)]
 pub(crate) struct Engine {
-    pub(crate) net: Arc<Net>,
-    pub(crate) m: Marking,
+    net: Arc<Net>,
+    m: Marking,
     policy: Policy,
     rng: Rng,
     /// Per place: index into `aps` when it is an action place.
-    pub(crate) action_of: Vec<Option<u32>>,
-    pub(crate) aps: Vec<ActionPlace>,
-    pub(crate) agents: FxHashMap<AgentId, AgentRec>,
+    action_of: Vec<Option<u32>>,
+    aps: Vec<ActionPlace>,
+    agents: FxHashMap<AgentId, AgentRec>,
     next_agent: u64,
-    pub(crate) next_ticket: u64,
+    next_ticket: u64,
     /// Exponential transitions some agent returned `Fire` for, in arrival order.
     pending: Vec<TransitionId>,
     in_pending: Vec<bool>,
     /// What may fire: the net's rules filtered by what the agents are ready for.
     firable: Firable,
     /// Agents with a running action.
-    pub(crate) running: usize,
-    pub(crate) firings: u64,
+    running: usize,
+    firings: u64,
     tally: Tally,
-    pub(crate) agents_spawned: u64,
-    pub(crate) agents_ended: u64,
+    agents_spawned: u64,
+    agents_ended: u64,
     /// Some agent is bound to a robot (firings then report the robots they moved).
     has_robots: bool,
 }
 
 impl Engine {
+    /// The net being executed.
+    pub(crate) fn net(&self) -> &Arc<Net> {
+        &self.net
+    }
+
+    /// The current marking.
+    pub(crate) fn marking(&self) -> &Marking {
+        &self.m
+    }
+
+    /// Firings so far.
+    pub(crate) fn firings(&self) -> u64 {
+        self.firings
+    }
+
+    /// Agents whose action is running.
+    pub(crate) fn running(&self) -> usize {
+        self.running
+    }
+
+    /// Agents created and ended so far.
+    pub(crate) fn agent_counts(&self) -> (u64, u64) {
+        (self.agents_spawned, self.agents_ended)
+    }
+
+    /// The live agents.
+    pub(crate) fn agents(&self) -> impl Iterator<Item = (&AgentId, &AgentRec)> {
+        self.agents.iter()
+    }
+
+    /// A live agent's record.
+    pub(crate) fn agent(&self, id: AgentId) -> Option<&AgentRec> {
+        self.agents.get(&id)
+    }
+
+    /// Sets a live agent's state; its place, or `None` for an agent that has ended.
+    pub(crate) fn set_state(&mut self, id: AgentId, state: AgentState) -> Option<PlaceId> {
+        let rec = self.agents.get_mut(&id)?;
+        rec.state = state;
+        Some(rec.place)
+    }
+
+    /// The index of action place `p` among the action places (`None` for other places).
+    pub(crate) fn action_index(&self, p: PlaceId) -> Option<usize> {
+        self.action_of[p.index()].map(|a| a as usize)
+    }
+
+    /// Whether `t` consumes the agents of action place `p`.
+    pub(crate) fn consumes(&self, p: PlaceId, t: TransitionId) -> bool {
+        self.action_of[p.index()].is_some_and(|a| self.aps[a as usize].consumers.contains(&t))
+    }
+
     pub(crate) fn new(
         net: Arc<Net>,
         action_places: &[PlaceId],
@@ -277,12 +329,10 @@ impl Engine {
     /// one in arrival order.
     pub(crate) fn next_ready(&mut self) -> Option<TransitionId> {
         if self.firable.is_vanishing() {
-            return Some(self.firable.choose_immediate(
-                &self.net,
-                &self.m,
-                Some(&self.policy),
-                &mut self.rng,
-            ));
+            return Some(
+                self.firable
+                    .choose_immediate(&self.m, Some(&self.policy), &mut self.rng),
+            );
         }
         let mut i = 0;
         while i < self.pending.len() {

@@ -82,18 +82,19 @@ pub struct Summary {
 
 impl Summary {
     pub(crate) fn new(eng: &Engine, stopped: StopReason, now: f64, errors: Vec<String>) -> Self {
-        let net = &eng.net;
+        let net = eng.net();
+        let (agents_spawned, agents_ended) = eng.agent_counts();
         let stats = eng.statistics(now);
         Summary {
             stopped,
-            firings: eng.firings,
+            firings: eng.firings(),
             time: now,
-            agents_spawned: eng.agents_spawned,
-            agents_ended: eng.agents_ended,
+            agents_spawned,
+            agents_ended,
             final_marking: net
                 .places()
                 .iter()
-                .zip(eng.m.iter())
+                .zip(eng.marking().iter())
                 .map(|(p, &k)| (p.name.clone(), k))
                 .collect(),
             mean_tokens: net
@@ -109,7 +110,7 @@ impl Summary {
                 .map(|(t, x)| (t.name.clone(), x))
                 .collect(),
             errors,
-            marking: eng.m.clone(),
+            marking: eng.marking().clone(),
         }
     }
 

@@ -88,8 +88,8 @@ pub struct Supervisor {
 impl std::fmt::Debug for Supervisor {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Supervisor")
-            .field("net", &self.eng.net.name())
-            .field("firings", &self.eng.firings)
+            .field("net", &self.eng.net().name())
+            .field("firings", &self.eng.firings())
             .field("now", &self.clock.now())
             .finish()
     }
@@ -167,16 +167,12 @@ impl Supervisor {
     }
 
     fn ap(&self, p: PlaceId) -> usize {
-        self.eng.action_of[p.index()].expect("an action place") as usize
+        self.eng.action_index(p).expect("an action place")
     }
 
     fn set_state(&mut self, id: AgentId, state: AgentState) {
-        let place = match self.eng.agents.get_mut(&id) {
-            Some(rec) => {
-                rec.state = state;
-                rec.place
-            }
-            None => return,
+        let Some(place) = self.eng.set_state(id, state) else {
+            return;
         };
         // An agent actor sets Occupied and Done itself (it runs the action).
         if !matches!(state, AgentState::Occupied | AgentState::Done)
@@ -235,7 +231,7 @@ impl Supervisor {
     /// Starts (or restarts) the action of an agent in its place; Inactive when the place has
     /// no output transition.
     fn start_action(&mut self, id: AgentId, attempt: u32) {
-        let Some(place) = self.eng.agents.get(&id).map(|r| r.place) else {
+        let Some(place) = self.eng.agent(id).map(|r| r.place) else {
             return;
         };
         if !self.eng.has_outputs(place) {
@@ -244,15 +240,15 @@ impl Supervisor {
         }
         let a = self.ap(place);
         let ticket = self.eng.start(id, attempt);
-        let robot = self.eng.agents.get(&id).and_then(|r| r.robot.clone());
+        let robot = self.eng.agent(id).and_then(|r| r.robot.clone());
         let ctx = ActionContext {
             agent: id,
             robot: robot.or_else(|| self.setups[a].robot.clone()),
             place,
-            marking: self.snapshots.get(self.eng.firings, &self.eng.m),
+            marking: self.snapshots.get(self.eng.firings(), self.eng.marking()),
             attempt,
             cancel: self.cancel_token.clone(),
-            net: Arc::clone(&self.eng.net),
+            net: Arc::clone(self.eng.net()),
             seed: self.seed,
             time: self.now(),
             output: OutputSink::new(self.output_tx.clone()),
@@ -306,7 +302,7 @@ impl Supervisor {
         let mut buf = std::mem::take(&mut self.buf);
         if let Err(o) = self.eng.fire(t, self.now(), &mut buf) {
             self.buf = buf;
-            let msg = self.eng.net.describe_overflow(&o);
+            let msg = self.eng.net().describe_overflow(&o);
             self.errors.push(msg.clone());
             self.emit(EventKind::Error { message: msg });
             self.begin_stop(StopReason::Failure);
@@ -314,7 +310,7 @@ impl Supervisor {
         }
         self.progress
             .firings
-            .store(self.eng.firings, Ordering::Relaxed);
+            .store(self.eng.firings(), Ordering::Relaxed);
         self.progress
             .time
             .store(self.now().to_bits(), Ordering::Relaxed);
@@ -324,12 +320,12 @@ impl Supervisor {
                 transition: t,
                 consumed: buf.consumed.clone(),
                 produced: buf.produced.clone(),
-                marking: self.eng.m.clone(),
+                marking: self.eng.marking().clone(),
                 robots: buf.robots.clone(),
             });
         }
         for &id in &buf.spawned {
-            let place = self.eng.agents[&id].place;
+            let place = self.eng.agent(id).expect("a live agent").place;
             self.spawn_agent_actor(id, place);
             if observed {
                 self.emit(EventKind::AgentSpawned {
@@ -352,11 +348,11 @@ impl Supervisor {
         }
         self.buf = buf;
         if let Some(max) = self.stop.max_firings
-            && self.eng.firings >= max
+            && self.eng.firings() >= max
         {
             self.begin_stop(StopReason::MaxFirings);
         } else if let Some(p) = &self.stop.when
-            && p.eval(&self.eng.m)
+            && p.eval(self.eng.marking())
         {
             self.begin_stop(StopReason::Condition);
         }
@@ -385,13 +381,13 @@ impl Supervisor {
         if self.stopping.is_some() {
             return;
         }
-        if self.clock.is_virtual() && self.eng.running == 0 {
+        if self.clock.is_virtual() && self.eng.running() == 0 {
             self.clock.cancel();
             self.kick();
             return;
         }
         let total = self.eng.race_total();
-        if total <= 0.0 && self.eng.running == 0 {
+        if total <= 0.0 && self.eng.running() == 0 {
             self.dead();
             return;
         }
@@ -431,7 +427,7 @@ impl Supervisor {
         }
         let names: Vec<String> = stuck
             .iter()
-            .map(|&t| self.eng.net.transition(t).name.clone())
+            .map(|&t| self.eng.net().transition(t).name.clone())
             .collect();
         for n in &names {
             let msg = format!("transition `{n}` was chosen by an action but never became enabled");
@@ -443,7 +439,7 @@ impl Supervisor {
 
     fn fast_path(&mut self) {
         for _ in 0..BATCH {
-            if self.stopping.is_some() || self.eng.running > 0 {
+            if self.stopping.is_some() || self.eng.running() > 0 {
                 break;
             }
             let Some((dt, t)) = self.eng.sample_race() else {
@@ -472,7 +468,7 @@ impl Supervisor {
         self.stopping = Some(reason);
         self.clock.cancel();
         self.cancel.cancel();
-        if self.eng.running == 0 {
+        if self.eng.running() == 0 {
             self.finish();
         } else {
             let me = self.me().clone();
@@ -517,7 +513,7 @@ impl Supervisor {
                 let msg = format!(
                     "agent {} in `{}`: gave up after {n} retries",
                     id.0,
-                    self.eng.net.place(place).name
+                    self.eng.net().place(place).name
                 );
                 self.errors.push(msg.clone());
                 self.emit(EventKind::Error { message: msg });

@@ -67,13 +67,14 @@ pub(crate) fn net_json(net: &Net, seed: u64) -> Value {
     let arcs: Vec<Value> = net
         .arcs()
         .iter()
-        .map(|a| {
+        .zip(&l.arcs)
+        .map(|(a, bends)| {
             let kind = match a.kind {
                 ArcKind::Input => "input",
                 ArcKind::Output => "output",
                 ArcKind::Inhibitor => "inhibitor",
             };
-            let points: Vec<Value> = a.points.iter().map(|p| json!([p.x, p.y])).collect();
+            let points: Vec<Value> = bends.iter().map(|p| json!([p.x, p.y])).collect();
             json!({
                 "kind": kind, "place": a.place.index(), "transition": a.transition.index(),
                 "weight": a.weight, "points": points,

@@ -190,21 +190,10 @@ impl Session {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::net::{NetBuilder, Servers};
+    use crate::net::Servers;
 
     fn cyc3() -> Arc<Net> {
-        let mut b = NetBuilder::new("cyc3");
-        let (p1, p2, p3) = (b.place("P1", 2), b.place("P2", 0), b.place("P3", 0));
-        let t1 = b.exponential("T1", 1.0, Servers::Single);
-        let t2 = b.immediate("t2", 1.0, 1);
-        let t3 = b.exponential("T3", 2.0, Servers::Single);
-        b.input(p1, t1, 1);
-        b.output(t1, p2, 1);
-        b.input(p2, t2, 1);
-        b.output(t2, p3, 1);
-        b.input(p3, t3, 1);
-        b.output(t3, p1, 1);
-        Arc::new(b.build().unwrap())
+        Arc::new(crate::net::cyc3(Servers::Single))
     }
 
     #[test]

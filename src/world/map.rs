@@ -44,6 +44,27 @@ pub struct Map {
     pub stuck_after: f64,
 }
 
+#[cfg(test)]
+impl Map {
+    /// A map of `locations` with no edges, walls or obstacles, default robots, one queue lane.
+    pub(crate) fn bare(locations: Vec<Location>) -> Map {
+        Map {
+            locations,
+            edges: vec![],
+            patrol: vec![],
+            walls: vec![],
+            obstacles: vec![],
+            robot: RobotSpec::default(),
+            queue: QueueSpec {
+                lanes: 1,
+                spacing: 0.5,
+            },
+            step_hz: 20.0,
+            stuck_after: 30.0,
+        }
+    }
+}
+
 /// One checked location.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Location {

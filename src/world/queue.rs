@@ -96,28 +96,21 @@ impl Queues {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::map::{Location, QueueSpec, RobotSpec};
+    use crate::world::map::{Location, QueueSpec};
 
     fn map() -> Map {
         Map {
-            locations: vec![Location {
+            queue: QueueSpec {
+                lanes: 2,
+                spacing: 0.5,
+            },
+            ..Map::bare(vec![Location {
                 name: "L".into(),
                 x: 1.0,
                 y: 1.0,
                 queue_dir: [0.0, 1.0],
                 places: vec![],
-            }],
-            edges: vec![],
-            patrol: vec![],
-            walls: vec![],
-            obstacles: vec![],
-            robot: RobotSpec::default(),
-            queue: QueueSpec {
-                lanes: 2,
-                spacing: 0.5,
-            },
-            step_hz: 20.0,
-            stuck_after: 30.0,
+            }])
         }
     }
 

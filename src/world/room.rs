@@ -411,22 +411,11 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::world::map::{QueueSpec, RobotSpec};
 
     fn open_map(walls: Vec<[f64; 4]>) -> Map {
         Map {
-            locations: vec![],
-            edges: vec![],
-            patrol: vec![],
             walls,
-            obstacles: vec![],
-            robot: RobotSpec::default(),
-            queue: QueueSpec {
-                lanes: 1,
-                spacing: 0.5,
-            },
-            step_hz: 20.0,
-            stuck_after: 30.0,
+            ..Map::bare(vec![])
         }
     }
 

@@ -59,7 +59,7 @@ fn lookup(model: &DecisionModel, net: &Net, policy: &Policy, s: usize) -> Vec<(u
     let m = model.marking(s);
     let firable = net.firable(&m);
     let d = policy
-        .distribution(net, &m, &firable)
+        .distribution(&m, &firable)
         .expect("a rule for every decision marking");
     d.iter()
         .map(|&(t, p)| {
@@ -130,7 +130,7 @@ fn compressed_rules_choose_like_the_exact_table_everywhere() {
         );
         let policy = Policy::new(&net, rules).unwrap();
         for (m, t) in &table {
-            let d = policy.distribution(&net, m, &net.firable(m)).unwrap();
+            let d = policy.distribution(m, &net.firable(m)).unwrap();
             assert_eq!(d, vec![(*t, 1.0)], "{name}: {m:?}");
         }
     }

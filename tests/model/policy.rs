@@ -56,13 +56,12 @@ fn an_exact_marking_wins_over_an_earlier_partial_pattern() {
         "[[policy]]\nmarking = { Decide = 1 }\npartial = true\nchoose = { a = 1.0 }\n\
          [[policy]]\nmarking = { Decide = 1, Key = 1 }\nchoose = { b = 0.25, c = 0.75 }\n",
     );
-    let net = &p.net;
     // (Decide, Busy, Key) = (1, 0, 1) is the exact rule's marking.
-    let d = p.policy.distribution(net, &[1, 0, 1], &[A, B, C]).unwrap();
+    let d = p.policy.distribution(&[1, 0, 1], &[A, B, C]).unwrap();
     assert_dist(&d, &[(B, 0.25), (C, 0.75)]);
     assert_eq!(p.policy.rule_for(&[1, 0, 1], &[A, B, C]).unwrap().0, 1);
     // One token more in Busy: not the exact marking, the partial rule applies.
-    let d = p.policy.distribution(net, &[1, 1, 1], &[A, B, C]).unwrap();
+    let d = p.policy.distribution(&[1, 1, 1], &[A, B, C]).unwrap();
     assert_dist(&d, &[(A, 1.0)]);
 }
 
@@ -73,16 +72,15 @@ fn partial_patterns_apply_in_file_order() {
          [[policy]]\nmarking = { Decide = 1 }\npartial = true\nchoose = { a = 1.0 }\n\
          [[policy]]\nmarking = { Decide = 1, Busy = 2 }\npartial = true\nchoose = { c = 1.0 }\n",
     );
-    let net = &p.net;
     // Both the first and the third match (1, 2, 1): the first in file order wins.
     assert_eq!(p.policy.rule_for(&[1, 2, 1], &[A, B, C]).unwrap().0, 0);
     assert_dist(
-        &p.policy.distribution(net, &[1, 2, 1], &[A, B, C]).unwrap(),
+        &p.policy.distribution(&[1, 2, 1], &[A, B, C]).unwrap(),
         &[(B, 1.0)],
     );
     // Busy = 0: only the second matches.
     assert_dist(
-        &p.policy.distribution(net, &[1, 0, 1], &[A, B, C]).unwrap(),
+        &p.policy.distribution(&[1, 0, 1], &[A, B, C]).unwrap(),
         &[(A, 1.0)],
     );
 }
@@ -95,7 +93,7 @@ fn probabilities_are_renormalised_over_the_transitions_that_can_fire() {
     // Key = 0: c is not enabled.
     let firable = net.firable(&[1, 0, 0]);
     assert_eq!(firable, vec![A, B]);
-    let d = p.policy.distribution(net, &[1, 0, 0], &firable).unwrap();
+    let d = p.policy.distribution(&[1, 0, 0], &firable).unwrap();
     assert_dist(&d, &[(A, 0.4), (B, 0.6)]);
     let total: f64 = d.iter().map(|x| x.1).sum();
     assert!((total - 1.0).abs() < 1e-12);
@@ -111,7 +109,7 @@ fn a_matching_rule_that_names_nothing_firable_is_skipped() {
     let firable = net.firable(&[1, 0, 0]);
     // Key = 0: c cannot fire, so the first rule gives nothing firable and the second applies.
     assert_dist(
-        &p.policy.distribution(net, &[1, 0, 0], &firable).unwrap(),
+        &p.policy.distribution(&[1, 0, 0], &firable).unwrap(),
         &[(A, 0.5), (B, 0.5)],
     );
 }
@@ -123,7 +121,7 @@ fn no_matching_rule_falls_back_to_the_net_weights() {
     let m = [1, 0, 1];
     let firable = net.firable(&m);
     assert_eq!(firable, vec![A, B, C]);
-    assert_eq!(p.policy.distribution(net, &m, &firable), None);
+    assert_eq!(p.policy.distribution(&m, &firable), None);
     // Weights 1, 3, 0: c (weight 0) is left to a policy, and there is none here.
     assert_dist(
         &p.policy.distribution_or_weights(net, &m, &firable),
@@ -186,6 +184,6 @@ proptest::proptest! {
         }
         // The rule applies exactly when it gives a firable transition positive mass.
         let applies = firable.iter().any(|t| probs[t.index()] > 0.0);
-        proptest::prop_assert_eq!(p.policy.distribution(&p.net, &[1, 0, 1], &firable).is_some(), applies);
+        proptest::prop_assert_eq!(p.policy.distribution(&[1, 0, 1], &firable).is_some(), applies);
     }
 }

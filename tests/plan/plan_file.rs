@@ -110,7 +110,7 @@ fn the_quickstart_plan_is_what_the_readme_promises() {
     }
     assert_eq!(plan.policy.rule_for(&m, &net.firable(&m)).unwrap().0, 0);
     let firable = net.firable(&m);
-    let d = plan.policy.distribution(net, &m, &firable).unwrap();
+    let d = plan.policy.distribution(&m, &firable).unwrap();
     let p_charge = d
         .iter()
         .find(|(t, _)| net.transition(*t).name == "t_charge")

@@ -211,20 +211,7 @@ impl Search<'_> {
     }
 }
 
-/// Searches the whole reachability graph from the initial marking.
-#[cfg(test)]
-pub(crate) fn explore(
-    net: &Net,
-    layout: Layout,
-    limits: Limits,
-    threads: usize,
-    progress: bool,
-    monitor: &Monitor,
-) -> Result<Raw, AnalysisError> {
-    explore_with(net, layout, limits, threads, progress, monitor, false)
-}
-
-/// As [`explore`]; with `wait`, a vanishing marking's group also holds its enabled
+/// Searches the whole reachability graph from the initial marking; with `wait`, a vanishing marking's group also holds its enabled
 /// exponential transitions (`rate > 0`, `prob == 0`) and their targets are searched too: the
 /// markings a WAIT choice reaches.
 pub(crate) fn explore_with(
@@ -405,8 +392,8 @@ mod tests {
         let narrow = Layout::new(&[Some(60), Some(1), Some(60), Some(1)], &[60, 0, 60, 0]);
         for threads in [1, 2] {
             let m = Monitor::new();
-            let a = explore(&net, exact.clone(), BIG, threads, false, &m).unwrap();
-            let b = explore(&net, narrow.clone(), BIG, threads, false, &m).unwrap();
+            let a = explore_with(&net, exact.clone(), BIG, threads, false, &m, false).unwrap();
+            let b = explore_with(&net, narrow.clone(), BIG, threads, false, &m, false).unwrap();
             assert_eq!(a.store.len(), 61 * 61);
             assert_eq!(b.store.len(), a.store.len());
             assert_eq!(b.moves.total(), a.moves.total());
@@ -425,12 +412,12 @@ mod tests {
         let net = cycles(60);
         let exact = Layout::new(&[Some(60); 4], &[60, 0, 60, 0]);
         let m = Monitor::new();
-        explore(&net, exact.clone(), BIG, 1, false, &m).unwrap();
+        explore_with(&net, exact.clone(), BIG, 1, false, &m, false).unwrap();
         assert_eq!(m.markings(), 61 * 61);
         let c = Monitor::new();
         c.cancel();
         // The first block (the initial marking) is expanded, then the flag is seen.
-        match explore(&net, exact, BIG, 1, false, &c) {
+        match explore_with(&net, exact, BIG, 1, false, &c, false) {
             Err(AnalysisError::Cancelled { markings }) => assert_eq!(markings, 3),
             other => panic!("expected a cancel, got {:?}", other.map(|r| r.store.len())),
         }

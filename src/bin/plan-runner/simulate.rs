@@ -292,24 +292,20 @@ fn summary_json(
     throughput: &[f64],
     ci: Option<(&[Estimate], &[Estimate])>,
 ) -> Value {
-    let by_place = |f: &dyn Fn(usize) -> Value| -> Value {
+    let named = |names: Vec<&String>, f: &dyn Fn(usize) -> Value| -> Value {
+        let row = |(i, name): (usize, &String)| (name.clone(), f(i));
         Value::Object(
-            net.places()
-                .iter()
+            names
+                .into_iter()
                 .enumerate()
-                .map(|(i, p)| (p.name.clone(), f(i)))
+                .map(row)
                 .collect::<Map<_, _>>(),
         )
     };
-    let by_transition = |f: &dyn Fn(usize) -> Value| -> Value {
-        Value::Object(
-            net.transitions()
-                .iter()
-                .enumerate()
-                .map(|(i, t)| (t.name.clone(), f(i)))
-                .collect::<Map<_, _>>(),
-        )
-    };
+    let by_place =
+        |f: &dyn Fn(usize) -> Value| named(net.places().iter().map(|p| &p.name).collect(), f);
+    let by_transition =
+        |f: &dyn Fn(usize) -> Value| named(net.transitions().iter().map(|t| &t.name).collect(), f);
     let pair = |e: Option<&Estimate>| match e {
         Some(e) if !e.half_width.is_nan() => json!([e.lo(), e.hi()]),
         _ => json!([null, null]),

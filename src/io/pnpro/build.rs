@@ -162,21 +162,34 @@ impl Env<'_> {
         if v.is_finite() && v.fract() == 0.0 && v >= min as f64 && v <= u32::MAX as f64 {
             return Ok(v as u32);
         }
-        Err(self.error(
+        let expected = if v.fract() == 0.0 && v > u32::MAX as f64 {
+            crate::net::TOO_MANY_TOKENS
+        } else if min == 0 {
+            "must be a whole number ≥ 0"
+        } else {
+            "must be a whole number ≥ 1"
+        };
+        Err(self.out_of_range(attr, owner, what, v, expected))
+    }
+
+    /// `what` of `owner` in `attr` has the value `v`, which is not what was `expected`.
+    fn out_of_range(
+        &self,
+        attr: &Attr,
+        owner: &str,
+        what: &'static str,
+        v: f64,
+        expected: &'static str,
+    ) -> LoadError {
+        self.error(
             attr.at,
             LoadErrorKind::OutOfRange {
                 what,
                 name: owner.to_string(),
                 value: shown(attr, v),
-                expected: if v.fract() == 0.0 && v > u32::MAX as f64 {
-                    crate::net::TOO_MANY_TOKENS
-                } else if min == 0 {
-                    "must be a whole number ≥ 0"
-                } else {
-                    "must be a whole number ≥ 1"
-                },
+                expected,
             },
-        ))
+        )
     }
 
     /// A real number from the expression in `attr`, checked by `ok`.
@@ -192,15 +205,7 @@ impl Env<'_> {
         if ok(v) {
             return Ok(v);
         }
-        Err(self.error(
-            attr.at,
-            LoadErrorKind::OutOfRange {
-                what,
-                name: owner.to_string(),
-                value: shown(attr, v),
-                expected,
-            },
-        ))
+        Err(self.out_of_range(attr, owner, what, v, expected))
     }
 
     fn coord(&self, attr: &Attr, owner: &str, what: &'static str) -> Result<f64, LoadError> {
@@ -377,6 +382,7 @@ pub(super) fn build(
         place_ids.insert(name, id);
     }
     let mut trans_ids = FxHashMap::default();
+    let mut transition_at = Vec::new();
     for r in of(Kind::Transition) {
         let name = name_of(&env, r, "transition")?;
         if let Some(g) = r.get("guard").filter(|g| g.value.trim() != "True") {
@@ -406,6 +412,7 @@ pub(super) fn build(
             position,
         });
         trans_ids.insert(name, id);
+        transition_at.push(env.span(r.at));
     }
     for r in of(Kind::Arc) {
         let get = |key: &str| {
@@ -438,7 +445,13 @@ pub(super) fn build(
             _ => (tail, head),
         };
         let owner = format!("{} → {}", tail.value, head.value);
-        let missing = |attr: &Attr, what: &'static str, other_kind: bool| {
+        // An endpoint that names nothing, or a node of the other kind.
+        let missing = |attr: &Attr, what: &'static str| {
+            let name = attr.value.as_ref();
+            let other_kind = match what {
+                "place" => trans_ids.contains_key(name),
+                _ => place_ids.contains_key(name),
+            };
             let kind = if other_kind {
                 LoadErrorKind::Invalid(format!(
                     "{} arc {owner}: `{}` is not a {what}",
@@ -452,20 +465,12 @@ pub(super) fn build(
             };
             env.error(attr.at, kind)
         };
-        let p = *place_ids.get(p_attr.value.as_ref()).ok_or_else(|| {
-            missing(
-                p_attr,
-                "place",
-                trans_ids.contains_key(p_attr.value.as_ref()),
-            )
-        })?;
-        let t = *trans_ids.get(t_attr.value.as_ref()).ok_or_else(|| {
-            missing(
-                t_attr,
-                "transition",
-                place_ids.contains_key(t_attr.value.as_ref()),
-            )
-        })?;
+        let p = *place_ids
+            .get(p_attr.value.as_ref())
+            .ok_or_else(|| missing(p_attr, "place"))?;
+        let t = *trans_ids
+            .get(t_attr.value.as_ref())
+            .ok_or_else(|| missing(t_attr, "transition"))?;
         let weight = match r.get("mult") {
             Some(m) => env.whole(m, &owner, "arc multiplicity", 1)?,
             None => 1,
@@ -498,6 +503,7 @@ pub(super) fn build(
         net,
         format: Format::Pnpro,
         warnings,
+        transition_at,
     })
 }
 

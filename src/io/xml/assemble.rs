@@ -152,9 +152,11 @@ pub(crate) fn read(
         p.name = name;
         b.add_place(p);
     }
-    for ((_, mut t), name) in transitions.into_iter().zip(transition_names) {
+    let mut transition_at = Vec::with_capacity(transitions.len());
+    for ((pending, mut t), name) in transitions.into_iter().zip(transition_names) {
         t.name = name;
         b.add_transition(t);
+        transition_at.push(x.span(pending.at));
     }
     for a in deferred {
         arcs.push(resolve_arc(&x, &ids, &a, true)?.expect("final resolution errs or resolves"));
@@ -173,6 +175,7 @@ pub(crate) fn read(
         net,
         format,
         warnings,
+        transition_at,
     })
 }
 

@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use super::PredicateError;
+use super::{PredicateError, PredicateErrorKind};
 
 #[derive(Clone, Debug, PartialEq)]
 pub(super) enum TokKind {
@@ -111,6 +111,7 @@ pub(super) fn lex(text: &str) -> Result<Vec<Tok>, PredicateError> {
                 return Err(PredicateError {
                     column,
                     name: Some(word.clone()),
+                    kind: PredicateErrorKind::Syntax,
                     message: format!(
                         "`{word}` starts with a digit: quote the place name with backticks"
                     ),

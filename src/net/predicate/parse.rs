@@ -1,7 +1,7 @@
 //! The recursive-descent parser of [`Predicate`](super::Predicate), with its depth limit.
 
 use super::lex::{Tok, TokKind, lex};
-use super::{CmpOp, Linear, MAX_DEPTH, Node, PredicateError};
+use super::{CmpOp, Linear, MAX_DEPTH, Node, PredicateError, PredicateErrorKind};
 use crate::net::Net;
 
 /// Parses `text` against `net`'s place names into the root of a predicate.
@@ -227,6 +227,7 @@ impl Parser<'_> {
                 None => Err(PredicateError {
                     column: tok.column,
                     message: format!("place `{name}` does not exist"),
+                    kind: PredicateErrorKind::UnknownPlace,
                     name: Some(name),
                 }),
             },

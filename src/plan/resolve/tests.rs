@@ -86,11 +86,11 @@ max_firings = 500
     // Exact rule first: marking (1,1,0) → t3 only.
     let t = [TransitionId(1), TransitionId(2)];
     assert_eq!(
-        plan.policy.distribution(&plan.net, &[1, 1, 0], &t),
+        plan.policy.distribution(&[1, 1, 0], &t),
         Some(vec![(TransitionId(2), 1.0)])
     );
     assert_eq!(
-        plan.policy.distribution(&plan.net, &[0, 1, 1], &t),
+        plan.policy.distribution(&[0, 1, 1], &t),
         Some(vec![(TransitionId(1), 0.25), (TransitionId(2), 0.75)])
     );
     let when = plan.stop.when.as_ref().unwrap();

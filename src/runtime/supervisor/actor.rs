@@ -25,7 +25,7 @@ impl Actor for Supervisor {
         let mut initial = Vec::new();
         for s in 0..sup.setups.len() {
             let p = sup.setups[s].place;
-            for _ in 0..sup.eng.m[p] {
+            for _ in 0..sup.eng.marking()[p] {
                 let id = sup.eng.new_agent(p);
                 initial.push((id, p));
             }
@@ -38,7 +38,7 @@ impl Actor for Supervisor {
         sup.spawn_agent_actors(&initial);
         for &(id, p) in &initial {
             if observed {
-                let robot = sup.eng.agents.get(&id).and_then(|r| r.robot.clone());
+                let robot = sup.eng.agent(id).and_then(|r| r.robot.clone());
                 sup.emit(EventKind::AgentSpawned {
                     agent: id,
                     place: p,

@@ -63,7 +63,7 @@ impl Supervisor {
     /// Records one action's end; true when the caller should fire what is ready and
     /// reschedule (reports arriving together are recorded first, in order, then settled once).
     pub(super) fn action_done(&mut self, msg: ActionDone) -> bool {
-        let Some(rec) = self.eng.agents.get(&msg.agent) else {
+        let Some(rec) = self.eng.agent(msg.agent) else {
             return false;
         };
         if rec.ticket != msg.ticket || rec.state != AgentState::Occupied {
@@ -81,7 +81,7 @@ impl Supervisor {
             });
         }
         if self.stopping.is_some() {
-            if self.eng.running == 0 {
+            if self.eng.running() == 0 {
                 self.finish();
             }
             return false;
@@ -93,17 +93,16 @@ impl Supervisor {
             self.begin_stop(StopReason::TimeLimit);
             return false;
         }
-        let pname = || self.eng.net.place(place).name.clone();
+        let pname = || self.eng.net().place(place).name.clone();
         match msg.outcome {
             Outcome::Fire(t) => {
-                let a = self.ap(place);
-                if self.eng.aps[a].consumers.contains(&t) {
+                if self.eng.consumes(place, t) {
                     self.eng.ready(msg.agent, Ready::Fire(t));
                 } else {
                     let pname = pname();
                     let tname = self
                         .eng
-                        .net
+                        .net()
                         .transitions()
                         .get(t.index())
                         .map_or_else(|| format!("#{}", t.0), |x| x.name.clone());
@@ -164,7 +163,7 @@ impl Message<Continue> for Supervisor {
     async fn handle(&mut self, _: Continue, ctx: &mut Context<Self, ()>) {
         self.continue_pending = false;
         if self.stopping.is_none() {
-            if self.clock.is_virtual() && self.eng.running == 0 {
+            if self.clock.is_virtual() && self.eng.running() == 0 {
                 self.fast_path();
             } else {
                 self.schedule();
@@ -191,7 +190,8 @@ impl Message<StopDeadline> for Supervisor {
         if !self.finished {
             let m = format!(
                 "{} action(s) did not end within {:?} of the stop",
-                self.eng.running, self.grace
+                self.eng.running(),
+                self.grace
             );
             self.errors.push(m.clone());
             self.emit(EventKind::Error { message: m });
@@ -205,7 +205,7 @@ impl Message<GetMarking> for Supervisor {
     type Reply = Vec<u32>;
 
     async fn handle(&mut self, _: GetMarking, _: &mut Context<Self, Vec<u32>>) -> Vec<u32> {
-        self.eng.m.to_vec()
+        self.eng.marking().to_vec()
     }
 }
 
@@ -220,8 +220,7 @@ impl Message<GetAgents> for Supervisor {
         self.eng.mark_waiting();
         let mut v: Vec<AgentInfo> = self
             .eng
-            .agents
-            .iter()
+            .agents()
             .map(|(&id, r)| AgentInfo {
                 id,
                 place: r.place,

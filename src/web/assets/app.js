@@ -239,15 +239,6 @@ function arcPoints(i) {
   const tc = [t.x, t.y];
   const fromPlace = a.kind !== 'output';
   const bends = a.points.map((q) => [q[0], q[1]]);
-  const [from, to] = fromPlace ? [pc, tc] : [tc, pc];
-  if (net.layout === 'layered' && !bends.length && from[0] > to[0] + 1 &&
-      Math.abs(from[1] - to[1]) < 1) {
-    // A layered layout's arc back to an earlier layer of the same row would run over the
-    // arcs between them: route it under the row, leaving and entering on a slant so that it
-    // misses the names under the nodes.
-    const below = from[1] + 38;
-    bends.push([from[0] + 40, below], [to[0] - 40, below]);
-  }
   const pts = fromPlace ? [pc, ...bends, tc] : [tc, ...bends, pc];
   const n = pts.length;
   const clipT = (c, o) => clipBox(c, o, transitionWidth(t) / 2 + 1, TH / 2 + 1);
@@ -390,12 +381,16 @@ function fit() {
   const all = net.places.concat(net.transitions);
   if (!all.length) return;
   let [xa, ya, xb, yb] = [Infinity, Infinity, -Infinity, -Infinity];
-  for (const n of all) {
-    xa = Math.min(xa, n.x);
-    ya = Math.min(ya, n.y);
-    xb = Math.max(xb, n.x);
-    yb = Math.max(yb, n.y);
-  }
+  const grow = (x, y) => {
+    xa = Math.min(xa, x);
+    ya = Math.min(ya, y);
+    xb = Math.max(xb, x);
+    yb = Math.max(yb, y);
+  };
+  for (const n of all) grow(n.x, n.y);
+  // Routed arcs may run round the outside of the nodes.
+  for (const a of net.arcs) for (const q of a.points) grow(q[0] + 60, q[1] + 30);
+  for (const a of net.arcs) for (const q of a.points) grow(q[0] - 60, q[1] - 30);
   // Room for the labels, which are wider than the nodes.
   const x0 = xa - 90;
   const y0 = ya - 50;
