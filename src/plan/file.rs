@@ -155,9 +155,9 @@ pub struct StopFile {
     /// Stop at this model time (seconds).
     #[schemars(with = "Option<f64>", range(min = 0.0))]
     pub time_limit: Option<Spanned<f64>>,
-    /// Stop after this many firings.
-    #[schemars(range(min = 1))]
-    pub max_firings: Option<u64>,
+    /// Stop after this many firings (≥ 1).
+    #[schemars(with = "Option<u64>", range(min = 1))]
+    pub max_firings: Option<Spanned<u64>>,
 }
 
 /// The JSON Schema of plan files, as committed in `docs/plan.schema.json`.

@@ -122,10 +122,20 @@ impl PlanFile {
                 }
                 stop.time_limit = Some(v);
             }
-            if s.max_firings == Some(0) {
-                warnings.push("stop.max_firings = 0: the run stops before any firing".into());
+            if let Some(n) = &s.max_firings {
+                if *n.get_ref() == 0 {
+                    return Err(at(
+                        n.span(),
+                        LoadErrorKind::OutOfRange {
+                            what: "max_firings",
+                            name: "stop".into(),
+                            value: "0".into(),
+                            expected: "must be at least 1 (a run that may not fire at all would do nothing)",
+                        },
+                    ));
+                }
+                stop.max_firings = Some(*n.get_ref());
             }
-            stop.max_firings = s.max_firings;
         }
 
         let mut robots: Vec<String> = Vec::with_capacity(self.robots.len());

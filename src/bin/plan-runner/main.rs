@@ -9,6 +9,7 @@ mod check;
 mod common;
 mod convert;
 mod import_thesis;
+mod progress;
 mod replay;
 #[cfg(feature = "ros2")]
 mod ros2;
