@@ -143,6 +143,24 @@ fn a_rate_of_1e_minus_30_in_a_bare_net_is_refused_at_the_transition_for_time_sca
 }
 
 #[test]
+fn a_slow_rate_in_a_bare_pnpro_net_is_refused_at_the_transition() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(crate::support::fixture("greatspn/cyc3/cyc3.PNPRO"))
+        .unwrap()
+        .replace("delay=\"2.0\"", "delay=\"1e-30\"");
+    let net = dir.path().join("cyc3.PNPRO");
+    std::fs::write(&net, text).unwrap();
+    let stderr = refused(&["run", "--time-scale", "2"], &net);
+    // Line 10 is T3's `<transition …/>`, from column 7.
+    assert!(
+        stderr.contains(
+            "cyc3.PNPRO:10:7: --time-scale 2: transition `T3` (rate 1e-30) would wait 2.0e30 s"
+        ),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn an_invalid_utf8_byte_in_a_plan_is_refused_at_its_line_and_column() {
     let (_dir, path) = plan_dir(b"net = \"patrol.xml\"\n# caf\xe9\n", |n| n);
     let stderr = refused(&["check"], &path);

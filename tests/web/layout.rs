@@ -1,6 +1,7 @@
-//! The automatic layout in a real browser: on the thesis's temperature patrol (a file with no
-//! positions) no arc passes through a node and at most 4 arc–label crossings remain, counted
-//! from the SVG geometry the page drew (paths, circles, rectangles, text boxes).
+//! The drawing in a real browser: on the thesis's temperature patrol (a file with no
+//! positions: the automatic layout) and on GreatSPN's FMS (the file's positions, rotations
+//! and label offsets) no arc passes through a node and at most 4 arc–label crossings remain,
+//! counted from the SVG geometry the page drew (paths, circles, rectangles, text boxes).
 #![cfg(feature = "web")]
 
 use crate::browser::{BROWSER, PATROL, WAIT, screenshot_path};
@@ -70,7 +71,7 @@ return { arcs: paths.length, nodes: nodes.length, labels: labels.length, hitsNod
 "#;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn the_patrol_has_no_arc_through_a_node_and_at_most_four_through_a_label() {
+async fn the_patrol_and_fms_have_no_arc_through_a_node_and_at_most_four_through_a_label() {
     let _one = BROWSER.lock().await;
     let net = read_net(&common::fixture(PATROL), &ReadOptions::default())
         .unwrap()
@@ -98,6 +99,43 @@ async fn the_patrol_has_no_arc_through_a_node_and_at_most_four_through_a_label()
         crossings.len() <= 4,
         "{} arc–label crossings: {crossings:?}",
         crossings.len()
+    );
+    server.abort();
+
+    // FMS, a GreatSPN project: its rotations and label offsets are honoured (the file's
+    // layout, the file's look).
+    let path = common::fixture("greatspn/greatspn_examples/fms.PNPRO");
+    let net = read_net(&path, &ReadOptions::default()).unwrap().net;
+    let (addr, server) = start_server(WebState::new(net.clone(), None, 0).with_source(&path)).await;
+    b.client.goto(&format!("http://{addr}/")).await.unwrap();
+    b.wait_js(
+        "return window.gspnPerf && window.gspnPerf.drawn;",
+        WAIT,
+        "the first drawing",
+    )
+    .await;
+    let g: Value = b.js(GEOMETRY, vec![]).await;
+    b.screenshot(&screenshot_path("fms.png")).await;
+    // `repM2` is turned a quarter round: its bar lies down.
+    let rep = b
+        .js(
+            "const r = document.querySelector('[data-transition=\"repM2\"] rect').getBBox();\
+             return [r.width, r.height];",
+            vec![],
+        )
+        .await;
+    assert_eq!(rep, serde_json::json!([30, 6]));
+    let crossings = g["hitsLabel"].as_array().unwrap();
+    // 22 arc–label crossings when rotations and offsets were ignored.
+    assert!(
+        crossings.len() <= 4,
+        "FMS: {} arc–label crossings: {crossings:?}",
+        crossings.len()
+    );
+    assert_eq!(
+        g["hitsNode"],
+        serde_json::json!([]),
+        "FMS: arcs through nodes"
     );
     b.close().await;
     server.abort();

@@ -412,7 +412,7 @@ pub(super) fn build(
             position,
         });
         trans_ids.insert(name, id);
-        transition_at.push(env.span(r.at));
+        transition_at.push(r.at);
     }
     for r in of(Kind::Arc) {
         let get = |key: &str| {
@@ -503,7 +503,7 @@ pub(super) fn build(
         net,
         format: Format::Pnpro,
         warnings,
-        transition_at,
+        transition_at: Span::locate_all(text.as_bytes(), transition_at),
     })
 }
 
