@@ -4,16 +4,10 @@
 //! (`--quiet`: none); `max_firings = 0` and other stop values no run can use are refused.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::Duration;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_plan-runner"))
-}
-
-fn repo(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
-}
+use crate::program_actions::{bin, interrupt, repo};
 
 /// A plan over the quickstart's patrol (bounded, never dead) with `stop` as its `[stop]`.
 fn patrol(dir: &Path, stop: &str) -> PathBuf {
@@ -153,14 +147,7 @@ fn run_then_interrupt(plan: &Path, extra: &[&str], secs: f64) -> String {
         .spawn()
         .unwrap();
     std::thread::sleep(Duration::from_secs_f64(secs));
-    assert!(
-        Command::new("kill")
-            .args(["-INT", &child.id().to_string()])
-            .status()
-            .unwrap()
-            .success()
-    );
-    let out = child.wait_with_output().unwrap();
+    let out = interrupt(child);
     assert_eq!(out.status.code(), Some(130));
     String::from_utf8_lossy(&out.stderr).into_owned()
 }

@@ -9,11 +9,11 @@ use std::time::Duration;
 
 use serde_json::Value;
 
-fn bin() -> Command {
+pub(crate) fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_plan-runner"))
 }
 
-fn repo(p: &str) -> std::path::PathBuf {
+pub(crate) fn repo(p: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
 }
 
@@ -35,7 +35,8 @@ fn patrol_plan(dir: &Path, command: &str, extra: &str) -> std::path::PathBuf {
     plan
 }
 
-fn journal(path: &Path) -> Vec<Value> {
+/// The journal at `path`, one JSON value per line.
+pub(crate) fn journal(path: &Path) -> Vec<Value> {
     std::fs::read_to_string(path)
         .unwrap()
         .lines()
@@ -141,14 +142,7 @@ fn ctrl_c_leaves_no_action_process_alive() {
         .map(|l| l.trim().parse().unwrap())
         .collect();
     assert!(all.iter().all(|&p| alive(p)));
-    assert!(
-        Command::new("kill")
-            .args(["-INT", &child.id().to_string()])
-            .status()
-            .unwrap()
-            .success()
-    );
-    let out = child.wait_with_output().unwrap();
+    let out = interrupt(child);
     assert_eq!(
         out.status.code(),
         Some(130),
@@ -221,4 +215,16 @@ fn an_unknown_action_name_is_bad_input_at_its_line_and_column() {
         );
         assert!(err.contains("known actions: `wait [S]`"), "{cmd}: {err}");
     }
+}
+
+/// Sends SIGINT (Ctrl-C) to `child` and waits for it.
+pub(crate) fn interrupt(child: std::process::Child) -> std::process::Output {
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+    child.wait_with_output().unwrap()
 }

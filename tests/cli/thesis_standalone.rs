@@ -4,18 +4,10 @@
 //! firings they chose; `plans/thesis-standalone/` is what the importer writes; the
 //! `plans/python-workers/` example runs its Python worker.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
 use serde_json::Value;
+use std::path::{Path, PathBuf};
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_plan-runner"))
-}
-
-fn repo(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
-}
+use crate::program_actions::{bin, journal, repo};
 
 fn ok(out: &std::process::Output) -> String {
     let err = String::from_utf8_lossy(&out.stderr).into_owned();
@@ -46,14 +38,6 @@ fn import_standalone(dir: &Path, project: Option<&Path>) -> PathBuf {
     }
     ok(&cmd.output().unwrap());
     out.join("plan.toml")
-}
-
-fn journal(path: &Path) -> Vec<Value> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
 }
 
 #[test]
