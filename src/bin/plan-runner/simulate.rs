@@ -39,6 +39,10 @@ pub(crate) struct Args {
     /// Print JSON: `runs, firings, mean_tokens, throughput, ci95` (a single run adds `trace`).
     #[arg(long)]
     json: bool,
+    /// Start from the marking of a recorded run: after the last firing with sequence number
+    /// ≤ SEQ (the end of the run without one); times count from that point.
+    #[arg(long, value_name = "JOURNAL[:SEQ]")]
+    from: Option<String>,
     #[command(flatten)]
     net: NetArgs,
 }
@@ -77,7 +81,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     if args.runs == Some(0) {
         return Err(BadInput("--runs 0: at least one run is needed".into()).into());
     }
-    let input = load(&args)?;
+    let mut input = load(&args)?;
+    if let Some(spec) = &args.from {
+        input.net = crate::conform::start_from(spec, &input.net)?;
+    }
     let seed = args.seed.or(input.seed).unwrap_or(0);
     let horizon = match (args.until, args.steps) {
         (Some(t), _) => Horizon::Until(t),
