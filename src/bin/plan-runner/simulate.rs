@@ -212,6 +212,20 @@ fn trace(
     Ok(())
 }
 
+/// One table of estimates: a header, then a row per name with the mean and its interval.
+fn section<'a>(
+    out: &mut impl Write,
+    width: usize,
+    (what, measure): (&str, &str),
+    rows: impl Iterator<Item = (&'a str, &'a Estimate)>,
+) -> std::io::Result<()> {
+    writeln!(out, "{what:<width$}  {measure:>12}  95% interval")?;
+    for (name, e) in rows {
+        writeln!(out, "{name:<width$}  {:>12.6}  {}", e.mean, interval(e))?;
+    }
+    Ok(())
+}
+
 fn monte_carlo(
     args: &Args,
     input: &Input,
@@ -262,22 +276,20 @@ fn monte_carlo(
         .max()
         .unwrap_or(0)
         .max(10);
-    writeln!(
+    let places = net.places().iter().map(|p| p.name.as_str());
+    let transitions = net.transitions().iter().map(|t| t.name.as_str());
+    section(
         out,
-        "{:<width$}  {:>12}  95% interval",
-        "place", "mean tokens"
+        width,
+        ("place", "mean tokens"),
+        places.zip(&est.mean_tokens),
     )?;
-    for (p, e) in net.places().iter().zip(&est.mean_tokens) {
-        writeln!(out, "{:<width$}  {:>12.6}  {}", p.name, e.mean, interval(e))?;
-    }
-    writeln!(
+    section(
         out,
-        "{:<width$}  {:>12}  95% interval",
-        "transition", "throughput"
+        width,
+        ("transition", "throughput"),
+        transitions.zip(&est.throughput),
     )?;
-    for (t, e) in net.transitions().iter().zip(&est.throughput) {
-        writeln!(out, "{:<width$}  {:>12.6}  {}", t.name, e.mean, interval(e))?;
-    }
     Ok(())
 }
 
