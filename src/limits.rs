@@ -4,7 +4,8 @@
 //! - a token count is at most [`MAX_TOKENS`] (2³² − 1): a file asking for more is refused
 //!   with its position, a firing that would go past it is refused ([`Net::fire`]);
 //! - a duration is at most [`MAX_SECONDS`] (10 years): plan timeouts, time limits, the
-//!   time scale, ROS 2 heartbeats are refused above it at load, and every conversion to a
+//!   time scale, ROS 2 heartbeats, the waits in action names (`wait S`, `fire T after S`,
+//!   the robot world's `measure S`) are refused above it at load, and every conversion to a
 //!   [`Duration`] goes through [`duration`], which clamps instead of panicking.
 //!
 //! [`Net::fire`]: crate::net::Net::fire
@@ -12,6 +13,7 @@
 use std::time::Duration;
 
 pub use crate::net::{MAX_TOKENS, TOO_MANY_TOKENS};
+use crate::net::{Net, Timing, TransitionId};
 
 /// The longest duration a user may give, in seconds: 10 years of 365.25 days.
 pub const MAX_SECONDS: f64 = 315_576_000.0;
@@ -23,6 +25,26 @@ pub const SECONDS_EXPECTED: &str =
 /// True when `secs` is a duration a user may give: finite, > 0 and ≤ [`MAX_SECONDS`].
 pub fn valid_seconds(secs: f64) -> bool {
     secs.is_finite() && secs > 0.0 && secs <= MAX_SECONDS
+}
+
+/// True when `secs` is a wait a user may write in an action (`wait S`, `fire T after S`,
+/// `measure S`): like [`valid_seconds`] but 0 is allowed.
+pub fn valid_wait(secs: f64) -> bool {
+    secs == 0.0 || valid_seconds(secs)
+}
+
+/// In real time (`scale > 0`), the first exponential transition whose mean delay
+/// `scale / rate` is longer than [`MAX_SECONDS`]: a wait on the clock that would never end.
+/// The plan reader, the CLI and the runtime builder all refuse a run with one.
+pub fn too_slow_for_real_time(net: &Net, scale: f64) -> Option<(TransitionId, f64)> {
+    if scale <= 0.0 {
+        return None;
+    }
+    net.transition_ids()
+        .find_map(|t| match net.transition(t).timing {
+            Timing::Exponential { rate, .. } if scale / rate > MAX_SECONDS => Some((t, rate)),
+            _ => None,
+        })
 }
 
 /// `secs` as a [`Duration`], clamped to `0..=MAX_SECONDS` (NaN gives 0): where a computed

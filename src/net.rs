@@ -458,12 +458,9 @@ pub(crate) fn cyc3(servers: Servers) -> Net {
     let t1 = b.exponential("T1", 1.0, servers);
     let t2 = b.immediate("t2", 1.0, 1);
     let t3 = b.exponential("T3", 2.0, servers);
-    b.input(p1, t1, 1);
-    b.output(t1, p2, 1);
-    b.input(p2, t2, 1);
-    b.output(t2, p3, 1);
-    b.input(p3, t3, 1);
-    b.output(t3, p1, 1);
+    b.moves(p1, t1, p2);
+    b.moves(p2, t2, p3);
+    b.moves(p3, t3, p1);
     b.build().unwrap()
 }
 

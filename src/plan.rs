@@ -93,6 +93,8 @@ pub struct Plan {
     pub rewards: Vec<RewardSpec>,
     /// What a policy controls: `controllable` transitions and `wait`.
     pub controls: Controls,
+    /// Where each transition is defined in the net file ([`Loaded::transition_at`]).
+    pub transition_at: Vec<Span>,
 }
 
 impl Plan {
@@ -118,7 +120,23 @@ impl Plan {
             ros2: Ros2Settings::default(),
             rewards: Vec::new(),
             controls,
+            transition_at: loaded.transition_at,
         }
+    }
+
+    /// Refuses a time scale under which some exponential transition would wait longer than
+    /// 10 years of real time on average, pointing at the transition in the net file: for a
+    /// time scale given on the command line (`what`, e.g. `--time-scale 1`), which the plan
+    /// reader did not see. Plans check their own `time_scale` when they are read.
+    pub fn check_time_scale(&self, what: &str, scale: f64) -> Result<(), LoadError> {
+        let Some((t, rate)) = crate::limits::too_slow_for_real_time(&self.net, scale) else {
+            return Ok(());
+        };
+        let kind = LoadErrorKind::Invalid(resolve::real_time_wait(what, &self.net, t, rate, scale));
+        Err(match self.transition_at.get(t.index()) {
+            Some(&span) => LoadError::at(&self.net_path, span, kind),
+            None => LoadError::file(&self.net_path, kind),
+        })
     }
 
     /// The role of place `p`.
@@ -217,6 +235,7 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
     })?;
     let mut plan = file.resolve(path, &text, loaded.net)?;
     plan.net_path = net_path;
+    plan.transition_at = loaded.transition_at;
     plan.page = page;
     let mut warnings = loaded.warnings;
     warnings.append(&mut plan.warnings);

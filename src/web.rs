@@ -55,6 +55,7 @@
 
 mod analysis_job;
 mod api;
+mod greatspn;
 mod guard;
 pub mod layout;
 mod live;
@@ -149,6 +150,7 @@ struct Inner {
     analysis: Arc<analysis_job::AnalysisJob>,
     live: OnceLock<LiveRun>,
     replay: OnceLock<Arc<Vec<Frame>>>,
+    source: OnceLock<greatspn::Source>,
 }
 
 impl WebState {
@@ -176,6 +178,7 @@ impl WebState {
                 analysis,
                 live: OnceLock::new(),
                 replay: OnceLock::new(),
+                source: OnceLock::new(),
             }),
         }
     }
@@ -195,6 +198,16 @@ impl WebState {
         let state = WebState::new(net, None, 0);
         let _ = state.inner.replay.set(Arc::new(frames));
         state
+    }
+
+    /// The net came from `path`: when that is a GreatSPN project whose page is this net, the
+    /// page draws its nodes as the file does (transition rotation, label offsets) and `save
+    /// layout` writes the file back with only the positions changed.
+    pub fn with_source(self, path: &std::path::Path) -> WebState {
+        if let Some(source) = greatspn::Source::read(path, &self.inner.net) {
+            let _ = self.inner.source.set(source);
+        }
+        self
     }
 
     fn live(&self) -> Option<&LiveRun> {

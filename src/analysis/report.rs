@@ -223,9 +223,7 @@ impl MeasuresReport {
     pub fn transient(net: &Net, t: f64, m: &Measures) -> Self {
         MeasuresReport {
             t: Some(t),
-            mean_tokens: by_place(net, &m.mean_tokens),
-            throughput: by_transition(net, &m.throughput),
-            ..MeasuresReport::default()
+            ..MeasuresReport::tokens_and_throughput(net, m)
         }
     }
 
@@ -233,6 +231,12 @@ impl MeasuresReport {
     pub fn panel(net: &Net, ergodic: bool, m: &Measures) -> Self {
         MeasuresReport {
             ergodic: Some(ergodic),
+            ..MeasuresReport::tokens_and_throughput(net, m)
+        }
+    }
+
+    fn tokens_and_throughput(net: &Net, m: &Measures) -> Self {
+        MeasuresReport {
             mean_tokens: by_place(net, &m.mean_tokens),
             throughput: by_transition(net, &m.throughput),
             ..MeasuresReport::default()

@@ -178,6 +178,13 @@ impl NetBuilder {
         self.arc(ArcKind::Output, p, t, w, Vec::new());
     }
 
+    /// Adds the arcs `from → t → to`, both of weight 1: `t` moves one token (a robot, a
+    /// job) from `from` to `to`, the most common shape in a plan's net.
+    pub fn moves(&mut self, from: PlaceId, t: TransitionId, to: PlaceId) {
+        self.input(from, t, 1);
+        self.output(t, to, 1);
+    }
+
     /// Adds an inhibitor arc `p —o t` of threshold `w`.
     pub fn inhibitor(&mut self, p: PlaceId, t: TransitionId, w: u32) {
         self.arc(ArcKind::Inhibitor, p, t, w, Vec::new());

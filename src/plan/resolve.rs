@@ -34,25 +34,15 @@ impl PlanFile {
                 ));
             }
             // In real time a rate is a wait on the clock: refuse one that would never end.
-            if v > 0.0
-                && let Some((t, rate)) = net.transitions().iter().find_map(|t| match t.timing {
-                    crate::net::Timing::Exponential { rate, .. }
-                        if v / rate > crate::limits::MAX_SECONDS =>
-                    {
-                        Some((t, rate))
-                    }
-                    _ => None,
-                })
-            {
+            if let Some((t, rate)) = crate::limits::too_slow_for_real_time(&net, v) {
                 return Err(at(
                     ts.span(),
-                    LoadErrorKind::Invalid(format!(
-                        "time_scale = {}: transition `{}` (rate {}) would wait {:.1e} s of real time on average, more than the maximum {} s (10 years)",
-                        show(v),
-                        t.name,
-                        show(rate),
-                        v / rate,
-                        crate::limits::MAX_SECONDS
+                    LoadErrorKind::Invalid(real_time_wait(
+                        &format!("time_scale = {}", show(v)),
+                        &net,
+                        t,
+                        rate,
+                        v,
                     )),
                 ));
             }
@@ -183,6 +173,7 @@ impl PlanFile {
             ros2,
             rewards,
             controls,
+            transition_at: Vec::new(),
         })
     }
 }
@@ -441,3 +432,21 @@ fn policy_error_span(e: &PolicyError, rule: &RuleFile) -> Option<Range<usize>> {
 
 #[cfg(test)]
 mod tests;
+
+/// The message for a transition too slow for real time ([`crate::limits::too_slow_for_real_time`]):
+/// `what` names the time scale's source (`time_scale = 1`, `--time-scale 1`).
+pub(crate) fn real_time_wait(
+    what: &str,
+    net: &Net,
+    t: TransitionId,
+    rate: f64,
+    scale: f64,
+) -> String {
+    format!(
+        "{what}: transition `{}` (rate {}) would wait {:.1e} s of real time on average, more than the maximum {} s (10 years)",
+        net.transition(t).name,
+        show(rate),
+        scale / rate,
+        crate::limits::MAX_SECONDS
+    )
+}

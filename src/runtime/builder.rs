@@ -19,7 +19,7 @@ use super::journal::Journal;
 use super::supervisor::{PlaceSetup, Supervisor, SupervisorArgs};
 use super::{FailurePolicy, Role, RuntimeError, StopConditions, conservation};
 use crate::net::predicate::Predicate;
-use crate::net::{Net, NetError, PlaceId, Timing};
+use crate::net::{Net, NetError, PlaceId};
 use crate::policy::Policy;
 
 /// Configures a run; [`RuntimeBuilder::spawn`] starts it inside the current tokio runtime.
@@ -218,19 +218,13 @@ impl RuntimeBuilder {
         if !(scale.is_finite() && (0.0..=crate::limits::MAX_SECONDS).contains(&scale)) {
             return Err(RuntimeError::BadTimeScale(scale));
         }
-        if scale > 0.0 {
-            for t in self.net.transitions() {
-                if let Timing::Exponential { rate, .. } = t.timing
-                    && scale / rate > crate::limits::MAX_SECONDS
-                {
-                    return Err(RuntimeError::DelayTooLong {
-                        transition: t.name.clone(),
-                        rate,
-                        scale,
-                        seconds: scale / rate,
-                    });
-                }
-            }
+        if let Some((t, rate)) = crate::limits::too_slow_for_real_time(&self.net, scale) {
+            return Err(RuntimeError::DelayTooLong {
+                transition: self.net.transition(t).name.clone(),
+                rate,
+                scale,
+                seconds: scale / rate,
+            });
         }
         let net = Arc::clone(&self.net);
         for (place, action) in std::mem::take(&mut self.binds) {

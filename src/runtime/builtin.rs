@@ -44,9 +44,9 @@ impl Builtin {
         let rest = rest.trim();
         let seconds = |s: &str| -> Result<f64, String> {
             match s.parse::<f64>() {
-                Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+                Ok(v) if crate::limits::valid_wait(v) => Ok(v),
                 _ => Err(format!(
-                    "`{text}`: `{s}` is not a number of seconds (finite, ≥ 0)"
+                    "`{text}`: `{s}` is not a number of seconds (finite, ≥ 0, ≤ 315576000: 10 years)"
                 )),
             }
         };

@@ -10,6 +10,7 @@ use serde_json::{Value, json};
 use crate::net::{ArcKind, Net, Servers, Timing};
 use crate::web::WebState;
 use crate::web::analysis_job::Outcome;
+use crate::web::greatspn::Source;
 use crate::web::layout::layout;
 use crate::web::session::SessionError;
 
@@ -20,11 +21,15 @@ pub(crate) fn error(status: StatusCode, message: impl Into<String>) -> Response 
 
 /// `GET /api/net`: places, transitions, arcs and the layout.
 pub(crate) async fn net(State(state): State<WebState>) -> Json<Value> {
-    Json(net_json(&state.inner.net, state.inner.seed))
+    Json(net_json(
+        &state.inner.net,
+        state.inner.seed,
+        state.inner.source.get(),
+    ))
 }
 
-/// The net as the page draws it.
-pub(crate) fn net_json(net: &Net, seed: u64) -> Value {
+/// The net as the page draws it (with the look of its nodes in `source`, when it has one).
+pub(crate) fn net_json(net: &Net, seed: u64, source: Option<&Source>) -> Value {
     let l = layout(net);
     let places: Vec<Value> = net
         .places()
@@ -32,10 +37,14 @@ pub(crate) fn net_json(net: &Net, seed: u64) -> Value {
         .zip(&l.places)
         .enumerate()
         .map(|(i, (p, pos))| {
-            json!({
+            let mut v = json!({
                 "id": i, "name": p.name, "tokens": p.initial, "capacity": p.capacity,
                 "x": pos.x, "y": pos.y,
-            })
+            });
+            if let Some(s) = source {
+                v["look"] = s.look_json(true, i);
+            }
+            v
         })
         .collect();
     let transitions: Vec<Value> = net
@@ -45,6 +54,9 @@ pub(crate) fn net_json(net: &Net, seed: u64) -> Value {
         .enumerate()
         .map(|(i, (t, pos))| {
             let mut v = json!({ "id": i, "name": t.name, "x": pos.x, "y": pos.y });
+            if let Some(s) = source {
+                v["look"] = s.look_json(false, i);
+            }
             match t.timing {
                 Timing::Immediate { weight, priority } => {
                     v["kind"] = json!("immediate");
@@ -67,13 +79,14 @@ pub(crate) fn net_json(net: &Net, seed: u64) -> Value {
     let arcs: Vec<Value> = net
         .arcs()
         .iter()
-        .map(|a| {
+        .zip(&l.arcs)
+        .map(|(a, bends)| {
             let kind = match a.kind {
                 ArcKind::Input => "input",
                 ArcKind::Output => "output",
                 ArcKind::Inhibitor => "inhibitor",
             };
-            let points: Vec<Value> = a.points.iter().map(|p| json!([p.x, p.y])).collect();
+            let points: Vec<Value> = bends.iter().map(|p| json!([p.x, p.y])).collect();
             json!({
                 "kind": kind, "place": a.place.index(), "transition": a.transition.index(),
                 "weight": a.weight, "points": points,
@@ -229,7 +242,9 @@ pub(crate) struct LayoutBody {
 }
 
 /// `POST /api/layout {places, transitions}`: the net with these positions, as a GreatSPN
-/// PNPRO document (`{"pnpro": "..."}`) for the page to save.
+/// PNPRO document (`{"pnpro": "...", "file": name}`) for the page to save: the project the
+/// net came from with only its nodes' positions changed when there is one, else the net
+/// written anew.
 pub(crate) async fn save_layout(
     State(state): State<WebState>,
     Json(b): Json<LayoutBody>,
@@ -240,6 +255,17 @@ pub(crate) async fn save_layout(
             .collect()
     };
     let net = &state.inner.net;
+    if let Some(source) = state.inner.source.get()
+        && b.places.len() == net.place_count()
+        && b.transitions.len() == net.transition_count()
+    {
+        let text = source.with_positions(&pos(&b.places), &pos(&b.transitions));
+        let file = source
+            .path()
+            .file_name()
+            .map(|f| f.to_string_lossy().into_owned());
+        return Json(json!({ "pnpro": text, "file": file })).into_response();
+    }
     match crate::web::layout::with_positions(net, &pos(&b.places), &pos(&b.transitions)) {
         None => error(
             StatusCode::BAD_REQUEST,

@@ -37,8 +37,8 @@ pub enum ProgramError {
         /// The step, trimmed.
         step: String,
     },
-    /// `measure`/`wait` with a duration that is not a number of seconds ≥ 0.
-    #[error("`{step}`: `{value}` is not a number of seconds ≥ 0")]
+    /// `measure`/`wait` with a duration that is not a number of seconds ≥ 0 and ≤ 10 years.
+    #[error("`{step}`: `{value}` is not a number of seconds ≥ 0 and ≤ 315576000 (10 years)")]
     BadSeconds {
         /// The step, as written (untrimmed).
         step: String,
@@ -72,7 +72,7 @@ impl Map {
                 match w {
                     None => Ok(None),
                     Some(s) => match s.parse::<f64>() {
-                        Ok(v) if v.is_finite() && v >= 0.0 => Ok(Some(v)),
+                        Ok(v) if crate::limits::valid_wait(v) => Ok(Some(v)),
                         _ => Err(ProgramError::BadSeconds {
                             step: part.to_string(),
                             value: s.to_string(),
@@ -159,7 +159,15 @@ mod tests {
         );
         assert_eq!(
             m.program("wait -1").unwrap_err().to_string(),
-            "`wait -1`: `-1` is not a number of seconds ≥ 0"
+            "`wait -1`: `-1` is not a number of seconds ≥ 0 and ≤ 315576000 (10 years)"
+        );
+        assert!(matches!(
+            m.program("measure 1e300"),
+            Err(ProgramError::BadSeconds { value, .. }) if value == "1e300"
+        ));
+        assert_eq!(
+            m.program("wait 315576000").unwrap(),
+            Some(vec![Step::Wait(Some(315576000.0))])
         );
         assert!(matches!(
             m.program("goto A; beep"),

@@ -115,6 +115,52 @@ fn a_rate_of_1e_minus_30_in_real_time_is_refused_at_the_time_scale() {
 }
 
 #[test]
+fn a_rate_of_1e_minus_30_in_a_bare_net_is_refused_at_the_transition_for_time_scale_1() {
+    let (dir, _) = plan_dir(b"", |n| {
+        n.replacen(
+            "<rate>\n<value>1.0</value>",
+            "<rate>\n<value>1e-30</value>",
+            1,
+        )
+    });
+    let net = dir.path().join("patrol.xml");
+    let stderr = refused(&["run", "--time-scale", "1"], &net);
+    // Line 108 is `<transition id="T_A_done">`; the column is its id's value.
+    assert!(
+        stderr.contains(
+            "patrol.xml:108:17: --time-scale 1: transition `T_A_done` (rate 1e-30) would wait 1.0e30 s of real time on average, more than the maximum 315576000 s (10 years)"
+        ),
+        "{stderr}"
+    );
+    // In virtual time the same net runs.
+    let out = bin()
+        .arg("run")
+        .arg(&net)
+        .args(["--time-scale", "0", "--max-firings", "3"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+}
+
+#[test]
+fn a_slow_rate_in_a_bare_pnpro_net_is_refused_at_the_transition() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(crate::support::fixture("greatspn/cyc3/cyc3.PNPRO"))
+        .unwrap()
+        .replace("delay=\"2.0\"", "delay=\"1e-30\"");
+    let net = dir.path().join("cyc3.PNPRO");
+    std::fs::write(&net, text).unwrap();
+    let stderr = refused(&["run", "--time-scale", "2"], &net);
+    // Line 10 is T3's `<transition …/>`, from column 7.
+    assert!(
+        stderr.contains(
+            "cyc3.PNPRO:10:7: --time-scale 2: transition `T3` (rate 1e-30) would wait 2.0e30 s"
+        ),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn an_invalid_utf8_byte_in_a_plan_is_refused_at_its_line_and_column() {
     let (_dir, path) = plan_dir(b"net = \"patrol.xml\"\n# caf\xe9\n", |n| n);
     let stderr = refused(&["check"], &path);

@@ -6,6 +6,7 @@ mod support;
 mod analyze;
 mod bad_limits;
 mod check;
+mod conform;
 mod journal_survives_signals;
 mod program_actions;
 mod readme;

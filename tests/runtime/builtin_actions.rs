@@ -116,7 +116,11 @@ async fn a_malformed_builtin_is_refused_naming_the_place_and_the_text() {
         ),
         (
             "wait soon",
-            "place `look`: `wait soon`: `soon` is not a number of seconds (finite, ≥ 0)",
+            "place `look`: `wait soon`: `soon` is not a number of seconds (finite, ≥ 0, ≤ 315576000: 10 years)",
+        ),
+        (
+            "fire t1 after 1e300",
+            "place `look`: `fire t1 after 1e300`: `1e300` is not a number of seconds (finite, ≥ 0, ≤ 315576000: 10 years)",
         ),
         (
             "fire t1 later 3",

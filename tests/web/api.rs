@@ -423,6 +423,77 @@ async fn save_layout_gives_a_pnpro_with_the_moved_positions() {
     assert_eq!(status, StatusCode::BAD_REQUEST);
 }
 
+/// A GreatSPN project saved from the page is the same file with only the moved nodes'
+/// `x` and `y` changed: its constants, rotations, label offsets and arcs' bends survive, and
+/// it reads back as the same net with the new positions.
+#[tokio::test]
+async fn save_layout_of_a_greatspn_project_changes_only_the_positions() {
+    let path = common::fixture("greatspn/greatspn_examples/fms.PNPRO");
+    let original = std::fs::read_to_string(&path).unwrap();
+    let state = state_for(&path, 0).with_source(&path);
+    let (_, net) = call(&state, "GET", "/api/net", None).await;
+    // The look the file gives: `load` turned half a round, `repM2`'s name moved.
+    let load = &net["transitions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["name"] == "load")
+        .unwrap()["look"];
+    assert_eq!(load["rotation"], json!(std::f64::consts::PI));
+    assert_eq!(load["label"], json!([1.625, -0.75]));
+    assert_eq!(load["param"], json!([0.25, null]));
+    let at = |kind: &str| -> Vec<[f64; 2]> {
+        net[kind]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| [n["x"].as_f64().unwrap(), n["y"].as_f64().unwrap()])
+            .collect()
+    };
+    let (mut places, transitions) = (at("places"), at("transitions"));
+    // Unmoved: the very same file.
+    let body = json!({ "places": places, "transitions": transitions });
+    let (status, v) = call(&state, "POST", "/api/layout", Some(body)).await;
+    assert_eq!(status, StatusCode::OK, "{v}");
+    assert_eq!(v["pnpro"].as_str().unwrap(), original);
+    assert_eq!(v["file"], "fms.PNPRO");
+    // `Pallets` moved: one line changes, and only its position.
+    places[0] = [21.5, 3.0];
+    let body = json!({ "places": places, "transitions": transitions });
+    let (_, v) = call(&state, "POST", "/api/layout", Some(body)).await;
+    let saved = v["pnpro"].as_str().unwrap();
+    let changed: Vec<(&str, &str)> = original
+        .lines()
+        .zip(saved.lines())
+        .filter(|(a, b)| a != b)
+        .collect();
+    assert_eq!(
+        changed,
+        vec![(
+            r#"      <place marking="N" name="Pallets" x="20.0" y="4.0"/>"#,
+            r#"      <place marking="N" name="Pallets" x="21.5" y="3.0"/>"#
+        )]
+    );
+    assert_eq!(original.lines().count(), saved.lines().count());
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("fms.PNPRO");
+    std::fs::write(&file, saved).unwrap();
+    let back = read_net(&file, &ReadOptions::default()).unwrap().net;
+    assert!(
+        back.diff(state.net()).is_empty(),
+        "{:?}",
+        back.diff(state.net())
+    );
+    let pallets = back.places()[0].position.unwrap();
+    assert_eq!((pallets.x, pallets.y), (21.5, 3.0));
+    for (a, b) in back.places().iter().zip(state.net().places()).skip(1) {
+        assert_eq!(a.position, b.position, "{}", a.name);
+    }
+    for (a, b) in back.transitions().iter().zip(state.net().transitions()) {
+        assert_eq!(a.position, b.position, "{}", a.name);
+    }
+}
+
 #[test]
 fn serve_refuses_bad_input_with_exit_code_2() {
     let bad = common::fixture("thesis/azevedo_2020/ros/gspn_thesis_test_case.xml");

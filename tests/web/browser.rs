@@ -30,16 +30,16 @@ use gspn::web::{CONTENT_SECURITY_POLICY, LiveRun, WebState};
 use serde_json::{Value, json};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
-const PATROL: &str =
+pub(crate) const PATROL: &str =
     "thesis/caldeira_2020_package/ros_TemperaturePatrolV2/gspn_temperature_patrol.xml";
 
 /// One browser at a time: the machine has two cores.
-static BROWSER: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
+pub(crate) static BROWSER: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
 
 /// Generous: a loaded CI machine may be slow, and a wait that runs out fails the test.
-const WAIT: Duration = Duration::from_secs(60);
+pub(crate) const WAIT: Duration = Duration::from_secs(60);
 
-fn screenshot_path(name: &str) -> PathBuf {
+pub(crate) fn screenshot_path(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
         .parent()
         .expect("target dir")

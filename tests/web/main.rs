@@ -6,5 +6,6 @@ mod support;
 
 mod api;
 mod browser;
+mod layout;
 mod live;
 mod security;

@@ -50,12 +50,20 @@ pub(crate) struct Args {
     /// Probability of a marking predicate, e.g. `P1>0 && P3==0` (repeatable).
     #[arg(long = "prob", value_name = "EXPR")]
     prob: Vec<String>,
+    /// Start from the marking of a recorded run (`plan-runner run --journal`): after the last
+    /// firing with sequence number ≤ SEQ (the end of the run without one); transient times
+    /// count from that point.
+    #[arg(long, value_name = "JOURNAL[:SEQ]")]
+    from: Option<String>,
     #[command(flatten)]
     net: NetArgs,
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let plan = open(&args.file, &args.net.read_options())?.into_plan();
+    let mut plan = open(&args.file, &args.net.read_options())?.into_plan();
+    if let Some(spec) = &args.from {
+        plan.net = crate::conform::start_from(spec, &plan.net)?;
+    }
     let net = &plan.net;
     let regime = if plan.policy.is_empty() {
         Regime::BareNet

@@ -67,6 +67,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             .into());
         }
         plan.time_scale = Some(x);
+        plan.check_time_scale(&format!("--time-scale {x}"), x)?;
     }
     if let Some(s) = args.seed {
         plan.seed = Some(s);

@@ -46,7 +46,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     }
     let seed = args.seed.or(plan.seed).unwrap_or(0);
     let policy = (!plan.policy.is_empty()).then_some(plan.policy);
-    let state = WebState::new(plan.net, policy, seed);
+    let state = WebState::new(plan.net, policy, seed).with_source(&plan.net_path);
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()

@@ -95,6 +95,27 @@ function transitionWidth(t) {
   return t.kind === 'immediate' ? 6 : 20;
 }
 
+// Half the width and half the height of a transition as drawn: a GreatSPN rotation of a
+// quarter turn lays the bar down.
+function transitionHalf(t) {
+  const w = transitionWidth(t) / 2;
+  const r = t.look && t.look.rotation;
+  return r && Math.abs(Math.sin(r)) > 0.5 ? [TH / 2, w] : [w, TH / 2];
+}
+
+// A text's place from the file's offset (GreatSPN's label-x/label-y, delay-x/delay-y, in
+// the file's units, from the node's centre), else the default `y` under or over the node.
+function placeText(text, offset, y) {
+  if (!offset) {
+    text.setAttribute('y', y);
+    return;
+  }
+  const [dx, dy] = offset;
+  text.setAttribute('x', ((dx || 0) * scale).toFixed(1));
+  text.setAttribute('y', dy === null || dy === undefined ? y : (dy * scale).toFixed(1));
+  text.setAttribute('dominant-baseline', 'central');
+}
+
 function paramText(t) {
   if (t.kind === 'immediate') {
     return 'w=' + fmt(t.weight) + (t.priority !== 1 ? ' π=' + t.priority : '');
@@ -165,7 +186,8 @@ function drawNet() {
     g.dataset.index = i;
     el('circle', { class: 'body', r: R }, g);
     g.tokens = el('g', {}, g);
-    const label = el('text', { class: 'label', y: R + 13 }, g);
+    const label = el('text', { class: 'label' }, g);
+    placeText(label, p.look && p.look.label, R + 13);
     label.textContent = p.name;
     if (p.capacity !== null && p.capacity !== undefined) {
       const cap = el('text', { class: 'param', y: -R - 5 }, g);
@@ -184,11 +206,20 @@ function drawNet() {
       'data-enabled': 'false',
     }, nodes);
     g.dataset.index = i;
-    const w = transitionWidth(t);
-    el('rect', { x: -w / 2, y: -TH / 2, width: w, height: TH }, g);
-    const label = el('text', { class: 'label', y: TH / 2 + 13 }, g);
+    const [hw, hh] = transitionHalf(t);
+    el('rect', { x: -hw, y: -hh, width: 2 * hw, height: 2 * hh }, g);
+    const label = el('text', { class: 'label' }, g);
+    placeText(label, t.look && t.look.label, hh + 13);
     label.textContent = t.name;
-    const param = el('text', { class: 'param', y: -TH / 2 - 5 }, g);
+    const param = el('text', { class: 'param' }, g);
+    placeText(param, t.look && t.look.param, -hh - 5);
+    if (hw > hh && !(t.look && t.look.param)) {
+      // A bar laid down has its arcs above and below: the rate goes beside it.
+      param.setAttribute('x', hw + 3);
+      param.setAttribute('y', -3);
+      param.setAttribute('text-anchor', 'start');
+      param.style.textAnchor = 'start';
+    }
     param.textContent = paramText(t);
     const title = el('title', {}, g);
     title.textContent = t.name + ' (' + t.kind + ', ' + paramText(t) + ')';
@@ -239,18 +270,10 @@ function arcPoints(i) {
   const tc = [t.x, t.y];
   const fromPlace = a.kind !== 'output';
   const bends = a.points.map((q) => [q[0], q[1]]);
-  const [from, to] = fromPlace ? [pc, tc] : [tc, pc];
-  if (net.layout === 'layered' && !bends.length && from[0] > to[0] + 1 &&
-      Math.abs(from[1] - to[1]) < 1) {
-    // A layered layout's arc back to an earlier layer of the same row would run over the
-    // arcs between them: route it under the row, leaving and entering on a slant so that it
-    // misses the names under the nodes.
-    const below = from[1] + 38;
-    bends.push([from[0] + 40, below], [to[0] - 40, below]);
-  }
   const pts = fromPlace ? [pc, ...bends, tc] : [tc, ...bends, pc];
   const n = pts.length;
-  const clipT = (c, o) => clipBox(c, o, transitionWidth(t) / 2 + 1, TH / 2 + 1);
+  const [hw, hh] = transitionHalf(t);
+  const clipT = (c, o) => clipBox(c, o, hw + 1, hh + 1);
   const clipP = (c, o) => clipCircle(c, o, R + 1);
   pts[0] = fromPlace ? clipP(pts[0], pts[1]) : clipT(pts[0], pts[1]);
   pts[n - 1] = fromPlace ? clipT(pts[n - 1], pts[n - 2]) : clipP(pts[n - 1], pts[n - 2]);
@@ -390,12 +413,16 @@ function fit() {
   const all = net.places.concat(net.transitions);
   if (!all.length) return;
   let [xa, ya, xb, yb] = [Infinity, Infinity, -Infinity, -Infinity];
-  for (const n of all) {
-    xa = Math.min(xa, n.x);
-    ya = Math.min(ya, n.y);
-    xb = Math.max(xb, n.x);
-    yb = Math.max(yb, n.y);
-  }
+  const grow = (x, y) => {
+    xa = Math.min(xa, x);
+    ya = Math.min(ya, y);
+    xb = Math.max(xb, x);
+    yb = Math.max(yb, y);
+  };
+  for (const n of all) grow(n.x, n.y);
+  // Routed arcs may run round the outside of the nodes.
+  for (const a of net.arcs) for (const q of a.points) grow(q[0] + 60, q[1] + 30);
+  for (const a of net.arcs) for (const q of a.points) grow(q[0] - 60, q[1] - 30);
   // Room for the labels, which are wider than the nodes.
   const x0 = xa - 90;
   const y0 = ya - 50;
@@ -478,7 +505,7 @@ async function saveLayout() {
     });
     const a = document.createElement('a');
     a.href = URL.createObjectURL(new Blob([r.pnpro], { type: 'application/xml' }));
-    a.download = net.name + '.PNPRO';
+    a.download = r.file || net.name + '.PNPRO';
     a.click();
     URL.revokeObjectURL(a.href);
   } catch (e) {
