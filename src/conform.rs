@@ -28,7 +28,10 @@
 //! [`fit`] writes the maximum-likelihood parameters back into the net: rates per unit of
 //! enabled time and weights from the decisions the net (not a policy) made.
 
+mod monitor;
 pub mod stats;
+
+pub use monitor::{Drift, Monitor, MonitorOptions};
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -155,6 +158,15 @@ impl Trace {
             Some(s) => (s.marking.clone(), s.time),
             None => (self.initial.clone(), 0.0),
         }
+    }
+}
+
+/// The servers of exponential `t` at work in `m`: `min(servers, enabling degree)` (0 for an
+/// immediate transition) — the rate at which its exposure grows.
+pub fn active_servers(net: &Net, m: &[u32], t: TransitionId) -> u32 {
+    match net.transition(t).timing {
+        Timing::Exponential { servers, .. } => servers.active(net.enabled_degree(m, t)),
+        Timing::Immediate { .. } => 0,
     }
 }
 
@@ -292,10 +304,7 @@ pub fn observe(
     let mut m = trace.initial.clone();
     let mut mf: Vec<f64> = m.iter().map(|&k| k as f64).collect();
     let mut now = 0.0;
-    let active = |m: &[u32], t: TransitionId| match net.transition(t).timing {
-        Timing::Exponential { servers, .. } => servers.active(net.enabled_degree(m, t)),
-        Timing::Immediate { .. } => 0,
-    };
+    let active = |m: &[u32], t: TransitionId| active_servers(net, m, t);
     let pass_time = |m: &[u32],
                      mf: &[f64],
                      from: f64,

@@ -62,6 +62,29 @@ fn false_alarms(net: &Net, runs: u64, until: f64) -> (usize, usize, usize, usize
     (diverging, tested, hits, covered.len())
 }
 
+/// cyc3 with T3's rate set to `rate`.
+fn cyc3_with_t3(rate: f64) -> Net {
+    let model = cyc3(Servers::Single);
+    let mut b = gspn::net::NetBuilder::new("cyc3");
+    for p in model.places() {
+        b.add_place(p.clone());
+    }
+    for t in model.transitions() {
+        let mut t = t.clone();
+        if t.name == "T3" {
+            t.timing = Timing::Exponential {
+                rate,
+                servers: Servers::Single,
+            };
+        }
+        b.add_transition(t);
+    }
+    for a in model.arcs() {
+        b.arc(a.kind, a.place, a.transition, a.weight, a.points.clone());
+    }
+    b.build().unwrap()
+}
+
 #[test]
 fn cyc3_runs_raise_false_alarms_at_about_the_level() {
     let (d, n, hits, fits) = false_alarms(&cyc3(Servers::Single), 100, 2000.0);
@@ -95,26 +118,7 @@ fn temperature_patrol_runs_raise_false_alarms_at_about_the_level() {
 fn a_run_of_another_net_diverges_on_the_changed_rate() {
     // T3 three times slower in the run than in the model.
     let model = cyc3(Servers::Single);
-    let slow = {
-        let mut b = gspn::net::NetBuilder::new("cyc3");
-        for p in model.places() {
-            b.add_place(p.clone());
-        }
-        for t in model.transitions() {
-            let mut t = t.clone();
-            if t.name == "T3" {
-                t.timing = Timing::Exponential {
-                    rate: 2.0 / 3.0,
-                    servers: Servers::Single,
-                };
-            }
-            b.add_transition(t);
-        }
-        for a in model.arcs() {
-            b.arc(a.kind, a.place, a.transition, a.weight, a.points.clone());
-        }
-        b.build().unwrap()
-    };
+    let slow = cyc3_with_t3(2.0 / 3.0);
     let (reports, _) = reports(&slow, &model, 1, 2000.0);
     let r = &reports[0];
     let row = |kind, item: &str| {
@@ -175,4 +179,53 @@ fn transient_from_a_trace_point_matches_monte_carlo_from_that_marking() {
             exact[p]
         );
     }
+}
+
+/// Drifts a monitor reports on a trace.
+fn drifts(model: &Net, trace: &Trace) -> Vec<gspn::conform::Drift> {
+    let mut m = gspn::conform::Monitor::new(model, trace.initial.clone(), Default::default());
+    trace
+        .steps
+        .iter()
+        .filter_map(|s| m.fired(s.time, s.transition, &s.marking))
+        .collect()
+}
+
+#[test]
+fn the_monitor_raises_drift_when_a_duration_changes_half_way_and_not_otherwise() {
+    use gspn::sim::Simulator;
+    let model = cyc3(Servers::Single);
+    let arc = Arc::new(model.clone());
+    // Unchanged: 50 runs of 1500 time units, no drift.
+    for i in 0..50 {
+        let trace = Trace::simulate(&arc, None, 99, i, 1500.0).unwrap();
+        assert_eq!(drifts(&model, &trace), vec![], "run {i}");
+    }
+    // T3's action 3× slower from time 750 on (the same net with T3's rate 2/3, from the
+    // marking reached at 750).
+    let trace = {
+        let first = Trace::simulate(&arc, None, 5, 0, 750.0).unwrap();
+        let (m, _) = first.at(None);
+        let mut sim = Simulator::from_marking(cyc3_with_t3(2.0 / 3.0), m.into(), 5).with_stream(1);
+        let mut steps = first.steps.clone();
+        while let Some(s) = sim.step_until(750.0).unwrap() {
+            steps.push(gspn::conform::TraceStep {
+                seq: steps.len() as u64,
+                time: 750.0 + s.time,
+                transition: s.transition,
+                marking: sim.marking().to_vec(),
+            });
+        }
+        Trace {
+            initial: first.initial,
+            steps,
+            end: 1500.0,
+        }
+    };
+    let d = drifts(&model, &trace);
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert_eq!(d[0].transition, "T3");
+    assert!(d[0].time > 750.0 && d[0].time < 900.0, "{:?}", d[0]);
+    // The window still holds firings from before the change: the rate is between 2/3 and 2.
+    assert!(d[0].observed < 1.6 && d[0].interval[1] < 2.0, "{:?}", d[0]);
 }
