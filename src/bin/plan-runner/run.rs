@@ -13,6 +13,7 @@
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
@@ -45,6 +46,10 @@ pub(crate) struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
+    /// Check every exponential transition's rate while running (gspn::conform::Monitor) and
+    /// report each drift on stderr.
+    #[arg(long)]
+    monitor: bool,
     #[command(flatten)]
     backends: BackendArgs,
     #[command(flatten)]
@@ -130,7 +135,12 @@ async fn execute(
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
-    let handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    let mut handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    let monitor = args.monitor.then(|| {
+        // Subscribed before the backends start, so it sees the run from its first event.
+        let events = handle.events();
+        tokio::spawn(crate::conform::monitor(Arc::clone(handle.net()), events))
+    });
     let handle = match backends.start(handle).await {
         Ok(h) => h,
         Err(e) => {
@@ -172,6 +182,10 @@ async fn execute(
     };
     if let Some(bar) = bar {
         bar.finish_and_clear();
+    }
+    if let Some(m) = monitor {
+        let drifts = m.await.unwrap_or(0);
+        eprintln!("monitor: {drifts} drift(s)");
     }
     eprintln!("seed {}", handle.seed());
     let sections = backends.finish(&summary).await;
