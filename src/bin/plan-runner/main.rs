@@ -10,6 +10,7 @@ mod common;
 mod conform;
 mod convert;
 mod import_thesis;
+mod progress;
 mod replay;
 #[cfg(feature = "ros2")]
 mod ros2;

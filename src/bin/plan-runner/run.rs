@@ -1,9 +1,11 @@
 //! `plan-runner run PLAN|NET`: execute a plan (or a bare net, every place net-timed) on agents.
 //!
-//! Places whose action is not registered in this binary run net-timed (the CLI has no user
-//! code); a live one-line progress display on a terminal; a summary at the end (`--json`:
-//! `stopped, firings, time, agents_spawned, agents_ended, final_marking, mean_tokens,
-//! throughput, errors`). Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the run cleanly (actions
+//! Action places run built-in actions or programs (`command`, `worker`); a name that is
+//! neither is refused at load. A live one-line progress display on a terminal, else a
+//! progress line on stderr every few seconds (`--quiet`: none); a warning before a run in
+//! virtual time that has no stop condition and cannot end on its own; a summary at the end
+//! (`--json`: `stopped, firings, time, agents_spawned, agents_ended, final_marking,
+//! mean_tokens, throughput, errors`). Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the run cleanly (actions
 //! cancelled, a final `stopped` event, journal flushed) with exit code 130, 143 and 129.
 //!
 //! The backends (simulated robots for a plan with a `[map]`, ROS 2 for `ros2` places, the
@@ -17,7 +19,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use gspn::plan::open;
+
 use gspn::runtime::{Backends, RuntimeBuilder, Section, StopReason, Summary};
 
 use crate::backends::{self, BackendArgs};
@@ -50,6 +52,10 @@ pub(crate) struct Args {
     /// report each drift on stderr.
     #[arg(long)]
     monitor: bool,
+    /// No progress lines on stderr (printed every few seconds when stderr is not a
+    /// terminal).
+    #[arg(long)]
+    quiet: bool,
     #[command(flatten)]
     backends: BackendArgs,
     #[command(flatten)]
@@ -57,7 +63,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let mut plan = open(&args.file, &args.net.read_options())?.into_plan();
+    let mut plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && (0.0..=gspn::limits::MAX_SECONDS).contains(&x)) {
             let shown = if x.abs() >= 1e15 {
@@ -77,13 +83,18 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(s) = args.seed {
         plan.seed = Some(s);
     }
+    crate::progress::check_stop_flags(args.until, args.max_firings)?;
     if let Some(t) = args.until {
         plan.stop.time_limit = Some(t);
     }
     if let Some(n) = args.max_firings {
         plan.stop.max_firings = Some(n);
     }
-    for w in &plan.warnings {
+    for w in plan
+        .warnings
+        .iter()
+        .chain(&crate::progress::endless_warning(&plan))
+    {
         eprintln!("warning: {w}");
     }
     backends::check(&plan, &args.backends)?;
@@ -161,6 +172,7 @@ async fn execute(
     let wait = handle.wait();
     tokio::pin!(wait);
     let mut ticker = tokio::time::interval(Duration::from_millis(200));
+    let mut lines = (!live && !args.quiet).then(crate::progress::Lines::new);
     let mut interrupted: Option<u8> = None;
     let summary = loop {
         tokio::select! {
@@ -176,6 +188,9 @@ async fn execute(
                         progress.firings(),
                         progress.time()
                     ));
+                }
+                if let Some(lines) = &mut lines {
+                    lines.tick(&progress);
                 }
             }
         }

@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
-use gspn::plan::open;
+
 use gspn::policy::Policy;
 use gspn::sim::{Estimate, Horizon, MonteCarlo, SimError, Simulator};
 use serde_json::{Map, Value, json};
@@ -58,7 +58,7 @@ struct Input {
 }
 
 fn load(args: &Args) -> anyhow::Result<Input> {
-    let plan = open(&args.file, &args.net.read_options())?.into_plan();
+    let plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     for w in &plan.warnings {
         eprintln!("warning: {w}");
     }
