@@ -98,6 +98,16 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         eprintln!("warning: {w}");
     }
     backends::check(&plan, &args.backends)?;
+    // The summary lists places and transitions in net order (as `analyze` does).
+    let order = NetOrder {
+        places: plan.net.places().iter().map(|p| p.name.clone()).collect(),
+        transitions: plan
+            .net
+            .transitions()
+            .iter()
+            .map(|t| t.name.clone())
+            .collect(),
+    };
     let rt = backends::tokio_runtime(&plan).context("starting tokio")?;
     let (summary, sections, code) = rt.block_on(async {
         // Registered before the backends start: a signal while ROS 2 waits for its robots
@@ -123,7 +133,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             println!("{}", serde_json::to_string_pretty(&v)?);
         }
     } else {
-        print_summary(&summary)?;
+        print_summary(&summary, &order)?;
         for (_, s) in &sections {
             if !s.text.is_empty() {
                 println!("{}", s.text);
@@ -212,7 +222,13 @@ async fn execute(
     Ok((summary, sections, code))
 }
 
-fn print_summary(s: &Summary) -> anyhow::Result<()> {
+/// The names of the net's places and transitions, in net order.
+struct NetOrder {
+    places: Vec<String>,
+    transitions: Vec<String>,
+}
+
+fn print_summary(s: &Summary, order: &NetOrder) -> anyhow::Result<()> {
     println!(
         "stopped: {} after {} firings at time {:.4}",
         s.stopped, s.firings, s.time
@@ -222,12 +238,16 @@ fn print_summary(s: &Summary) -> anyhow::Result<()> {
         s.agents_spawned, s.agents_ended
     );
     println!("place                          final    mean tokens");
-    for (p, k) in &s.final_marking {
-        println!("  {p:<28} {k:>6}   {:>12.6}", s.mean_tokens[p]);
+    for p in &order.places {
+        if let (Some(k), Some(m)) = (s.final_marking.get(p), s.mean_tokens.get(p)) {
+            println!("  {p:<28} {k:>6}   {m:>12.6}");
+        }
     }
     println!("transition                     throughput");
-    for (t, x) in &s.throughput {
-        println!("  {t:<28} {x:>12.6}");
+    for t in &order.transitions {
+        if let Some(x) = s.throughput.get(t) {
+            println!("  {t:<28} {x:>12.6}");
+        }
     }
     for e in &s.errors {
         println!("error: {e}");
