@@ -84,6 +84,12 @@ impl Monitor {
         }
     }
 
+    /// The same monitor started at model time `time` (a run joined midway).
+    pub fn at(mut self, time: f64) -> Monitor {
+        self.now = time;
+        self
+    }
+
     /// Transitions drifting now.
     pub fn drifting(&self) -> impl Iterator<Item = TransitionId> + '_ {
         self.drifting

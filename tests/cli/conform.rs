@@ -244,3 +244,51 @@ fn simulate_and_analyze_start_from_a_journal_point() {
     ]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn run_monitor_reports_no_drift_on_a_net_timed_run() {
+    let out = run(&[
+        "run",
+        repo("plans/cyc3.toml").to_str().unwrap(),
+        "--until",
+        "1500",
+        "--monitor",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("monitor: 0 drift(s)"), "{stderr}");
+    assert!(!stderr.contains("drift:"), "{stderr}");
+}
+
+#[cfg(feature = "sim")]
+#[test]
+fn run_monitor_reports_drift_on_the_goto_transitions_of_robots() {
+    let out = run(&[
+        "run",
+        repo("plans/temperature-patrol/plan.toml").to_str().unwrap(),
+        "--robots",
+        "3",
+        "--until",
+        "1200",
+        "--monitor",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let drifts: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("drift: "))
+        .collect();
+    assert!(drifts.len() >= 4, "{stderr}");
+    assert!(
+        drifts.iter().all(|l| l.contains(":Temperature_")),
+        "{stderr}"
+    );
+    // Once per transition.
+    let mut names: Vec<&str> = drifts
+        .iter()
+        .map(|l| l.split(' ').nth(1).unwrap())
+        .collect();
+    names.sort();
+    names.dedup();
+    assert_eq!(names.len(), drifts.len(), "{stderr}");
+}

@@ -228,3 +228,36 @@ pub(crate) fn interrupt(child: std::process::Child) -> std::process::Output {
     );
     child.wait_with_output().unwrap()
 }
+
+#[test]
+fn the_text_summary_lists_places_and_transitions_in_net_order() {
+    let path = repo("plans/quickstart.toml");
+    let out = bin()
+        .args(["run", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let net = gspn::io::read_net(
+        &repo("plans/nets/two_robot_patrol.xml"),
+        &gspn::io::ReadOptions::default(),
+    )
+    .unwrap()
+    .net;
+    let first_words = |header: &str, stop: &str| -> Vec<String> {
+        text.lines()
+            .skip_while(|l| !l.starts_with(header))
+            .skip(1)
+            .take_while(|l| l.starts_with("  ") && !l.starts_with(stop))
+            .map(|l| l.split_whitespace().next().unwrap().to_string())
+            .collect()
+    };
+    let places: Vec<String> = net.places().iter().map(|p| p.name.clone()).collect();
+    let transitions: Vec<String> = net.transitions().iter().map(|t| t.name.clone()).collect();
+    assert_eq!(first_words("place ", "transition"), places, "{text}");
+    assert_eq!(first_words("transition ", "error"), transitions, "{text}");
+    // Net order is not name order here (the test would prove nothing otherwise).
+    let mut sorted = places.clone();
+    sorted.sort();
+    assert_ne!(sorted, places);
+}

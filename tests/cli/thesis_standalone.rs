@@ -125,6 +125,27 @@ fn the_imported_standalone_example_runs_its_python_functions() {
         [(0, "t1".into()), (0, "t2".into()), (1, "t2".into())],
         "{ended:?}"
     );
+    // Every event with a place or a transition names it too (`place_name`, `transition_name`).
+    let mut named = 0;
+    for l in &lines[1..] {
+        if let Some(p) = l["place"].as_u64() {
+            assert_eq!(l["place_name"], places[p as usize].as_str(), "{l}");
+            named += 1;
+        }
+        if let Some(t) = l["transition"].as_u64() {
+            assert_eq!(
+                l["transition_name"],
+                transitions[t as usize].as_str(),
+                "{l}"
+            );
+            named += 1;
+        }
+        if l["event"] == "action_ended" {
+            let t = l["outcome"]["detail"].as_u64().unwrap() as usize;
+            assert_eq!(l["transition_name"], transitions[t].as_str(), "{l}");
+        }
+    }
+    assert!(named >= 12, "{named}");
     let mut fired: Vec<String> = lines
         .iter()
         .filter(|l| l["event"] == "fired")

@@ -6,15 +6,15 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use gspn::conform::{
-    Fitted, Options, Predictions, Report, Trace, Verdict, compare, fit, marking_before, observe,
-    steady_predictions,
+    Fitted, Monitor, Options, Predictions, Report, Trace, Verdict, compare, fit, marking_before,
+    observe, steady_predictions,
 };
 use gspn::io::{Format, write_net};
 use gspn::net::Net;
 use gspn::plan::open;
 use gspn::policy::Policy;
 use gspn::runtime::journal::{JournalError, read_events, split_torn};
-use gspn::runtime::{Event, EventKind};
+use gspn::runtime::{Event, EventKind, Events, Received};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -285,4 +285,54 @@ pub(crate) fn start_from(spec: &str, net: &Net) -> anyhow::Result<Net> {
         started.format_marking(&marking)
     );
     Ok(started)
+}
+
+/// `run --monitor`: feeds the run's firings to a [`gspn::conform::Monitor`] and prints each
+/// drift on stderr; the number of drifts. When the monitor falls behind the event bus it
+/// starts over from the next firing (a warning says so).
+pub(crate) async fn monitor(net: std::sync::Arc<Net>, mut events: Events) -> u64 {
+    let mut mon: Option<Monitor> = Some(Monitor::new(
+        &net,
+        net.initial_marking().into_vec(),
+        Default::default(),
+    ));
+    let mut drifts = 0;
+    while let Some(r) = events.recv().await {
+        match r {
+            Received::Event(Event {
+                time,
+                kind:
+                    EventKind::Fired {
+                        transition,
+                        marking,
+                        ..
+                    },
+                ..
+            }) => {
+                let m = mon.get_or_insert_with(|| {
+                    Monitor::new(&net, marking.to_vec(), Default::default()).at(time)
+                });
+                if let Some(d) = m.fired(time, transition, &marking) {
+                    drifts += 1;
+                    eprintln!(
+                        "drift: {} at time {:.3}: {:.4} firings per unit of enabled time over the last {}, 95% [{:.4}, {:.4}]; the net says {} (p {:.1e})",
+                        d.transition,
+                        d.time,
+                        d.observed,
+                        d.n,
+                        d.interval[0],
+                        d.interval[1],
+                        d.predicted,
+                        d.p_value
+                    );
+                }
+            }
+            Received::Lagged(n) => {
+                eprintln!("warning: --monitor fell {n} events behind: it starts over");
+                mon = None;
+            }
+            Received::Event(_) => {}
+        }
+    }
+    drifts
 }

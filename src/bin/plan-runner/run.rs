@@ -15,6 +15,7 @@
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
@@ -47,6 +48,10 @@ pub(crate) struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
+    /// Check every exponential transition's rate while running (gspn::conform::Monitor) and
+    /// report each drift on stderr.
+    #[arg(long)]
+    monitor: bool,
     /// No progress lines on stderr (printed every few seconds when stderr is not a
     /// terminal).
     #[arg(long)]
@@ -93,6 +98,16 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         eprintln!("warning: {w}");
     }
     backends::check(&plan, &args.backends)?;
+    // The summary lists places and transitions in net order (as `analyze` does).
+    let order = NetOrder {
+        places: plan.net.places().iter().map(|p| p.name.clone()).collect(),
+        transitions: plan
+            .net
+            .transitions()
+            .iter()
+            .map(|t| t.name.clone())
+            .collect(),
+    };
     let rt = backends::tokio_runtime(&plan).context("starting tokio")?;
     let (summary, sections, code) = rt.block_on(async {
         // Registered before the backends start: a signal while ROS 2 waits for its robots
@@ -118,7 +133,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             println!("{}", serde_json::to_string_pretty(&v)?);
         }
     } else {
-        print_summary(&summary)?;
+        print_summary(&summary, &order)?;
         for (_, s) in &sections {
             if !s.text.is_empty() {
                 println!("{}", s.text);
@@ -141,7 +156,12 @@ async fn execute(
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
-    let handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    let mut handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    let monitor = args.monitor.then(|| {
+        // Subscribed before the backends start, so it sees the run from its first event.
+        let events = handle.events();
+        tokio::spawn(crate::conform::monitor(Arc::clone(handle.net()), events))
+    });
     let handle = match backends.start(handle).await {
         Ok(h) => h,
         Err(e) => {
@@ -188,6 +208,10 @@ async fn execute(
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
+    if let Some(m) = monitor {
+        let drifts = m.await.unwrap_or(0);
+        eprintln!("monitor: {drifts} drift(s)");
+    }
     eprintln!("seed {}", handle.seed());
     let sections = backends.finish(&summary).await;
     backends.stop();
@@ -198,7 +222,13 @@ async fn execute(
     Ok((summary, sections, code))
 }
 
-fn print_summary(s: &Summary) -> anyhow::Result<()> {
+/// The names of the net's places and transitions, in net order.
+struct NetOrder {
+    places: Vec<String>,
+    transitions: Vec<String>,
+}
+
+fn print_summary(s: &Summary, order: &NetOrder) -> anyhow::Result<()> {
     println!(
         "stopped: {} after {} firings at time {:.4}",
         s.stopped, s.firings, s.time
@@ -208,12 +238,16 @@ fn print_summary(s: &Summary) -> anyhow::Result<()> {
         s.agents_spawned, s.agents_ended
     );
     println!("place                          final    mean tokens");
-    for (p, k) in &s.final_marking {
-        println!("  {p:<28} {k:>6}   {:>12.6}", s.mean_tokens[p]);
+    for p in &order.places {
+        if let (Some(k), Some(m)) = (s.final_marking.get(p), s.mean_tokens.get(p)) {
+            println!("  {p:<28} {k:>6}   {m:>12.6}");
+        }
     }
     println!("transition                     throughput");
-    for (t, x) in &s.throughput {
-        println!("  {t:<28} {x:>12.6}");
+    for t in &order.transitions {
+        if let Some(x) = s.throughput.get(t) {
+            println!("  {t:<28} {x:>12.6}");
+        }
     }
     for e in &s.errors {
         println!("error: {e}");
