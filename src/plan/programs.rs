@@ -163,6 +163,8 @@ pub(super) struct Programs<'a> {
     dir: PathBuf,
     /// The programs the places use, in the order first named.
     pub(super) list: Vec<ProgramAction>,
+    /// Index of each program in `list`, by name.
+    by_name: std::collections::HashMap<String, usize>,
 }
 
 impl<'a> Programs<'a> {
@@ -193,6 +195,7 @@ impl<'a> Programs<'a> {
             workers,
             dir: plan_path.parent().unwrap_or(Path::new("")).to_path_buf(),
             list: Vec::new(),
+            by_name: std::collections::HashMap::new(),
         })
     }
 
@@ -279,14 +282,17 @@ impl<'a> Programs<'a> {
             _ => return Err(bad("expected exactly one of `command` and `worker`".into())),
         };
         let name = action.name.clone();
-        match self.list.iter().find(|p| p.name == name) {
+        match self.by_name.get(&name).map(|&i| &self.list[i]) {
             Some(same) if *same == action => {}
             Some(_) => {
                 return Err(bad(format!(
                     "{name} appears twice with different settings (cwd, env, timeout, kill_grace)"
                 )));
             }
-            None => self.list.push(action),
+            None => {
+                self.by_name.insert(name.clone(), self.list.len());
+                self.list.push(action);
+            }
         }
         Ok(name)
     }

@@ -52,6 +52,8 @@ impl PlanFile {
         let mut roles: Vec<Option<Role>> = vec![None; net.place_count()];
         let mut action_spans = vec![None; net.place_count()];
         let mut programs = Programs::new(&self.workers, path, &at)?;
+        // Positions of many places and rules: one line index, not a scan per position.
+        let lines = crate::io::LineIndex::new(text.as_bytes());
         for (name, role) in &self.places {
             let p = net
                 .place_by_name(name.get_ref())
@@ -65,7 +67,7 @@ impl PlanFile {
                 self.map.is_some(),
             )?);
             if let Some(a) = &role.get_ref().action {
-                action_spans[p.index()] = Some(locate(text, a.span()));
+                action_spans[p.index()] = Some(lines.locate(text.as_bytes(), a.span().start));
             }
             if matches!(roles[p.index()], Some(Role::Action { .. })) && net.consumers(p).is_empty()
             {
@@ -80,7 +82,6 @@ impl PlanFile {
 
         let mut rules = Vec::with_capacity(self.policy.len());
         let mut rule_spans = Vec::with_capacity(self.policy.len());
-        let lines = crate::io::LineIndex::new(text.as_bytes());
         for rule in &self.policy {
             rules.push(resolve_rule(&net, rule.get_ref(), &at)?);
             rule_spans.push(lines.locate(text.as_bytes(), rule.span().start));
