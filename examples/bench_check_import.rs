@@ -77,6 +77,7 @@ fn main() {
         &ImportOptions {
             out: dir.join("out"),
             net: None,
+            project_path: None,
         },
     )
     .expect("import");

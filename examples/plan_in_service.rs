@@ -1,8 +1,7 @@
 //! Running a TOML plan inside your own service. The plan file (`plans/ros_example.toml`) says
-//! what each place does; the service implements one of its actions in Rust
-//! (`action_server_6`, the decision place: it hands the choice back to the plan's policy),
-//! leaves the others net-timed, counts the firings from the run's events beside its own
-//! work, and stops the plan on Ctrl-C. The plan runs on virtual time, so it ends at once.
+//! what each place does (built-in actions); the service puts its own Rust action on the
+//! decision place `p6` (it hands the choice back to the plan's policy), leaves the others to
+//! the plan, counts the firings from the run's events beside its own work, and stops the plan on Ctrl-C. The plan runs on virtual time, so it ends at once.
 //!
 //! ```text
 //! cargo run --example plan_in_service
@@ -25,11 +24,13 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
     let net = plan.net.clone();
 
     // The plan brings the net, the roles, the policy, the seed and the stop condition; the
-    // service brings the code of the actions it implements.
+    // service brings the code of the action it implements (registered under its own name,
+    // put on `p6` in place of the plan's `log` action).
     let decide = action_fn(|_ctx| async { Outcome::Decide });
     let mut handle = plan
         .runtime_builder()
-        .action("action_server_6", decide)
+        .action("service_decide", decide)
+        .bind("p6", "service_decide")
         .spawn()?;
     for w in handle.warnings() {
         println!("note: {w}");

@@ -19,6 +19,10 @@ time in the order requests come, unless declared `@action("name", concurrent=Tru
 run on a thread pool, so slow functions (a sleep, a robot call) overlap. Inside a function,
 print() goes to the run's journal as the agent's output; `ctx.cancelled` turns true when the
 run stops or the action times out.
+
+`@fallback` names a function that supplies actions registered nowhere else: called once
+per unknown action name, it returns a function of ctx (kept for the next requests; it runs on
+the thread pool) or None (the request fails: no such action).
 """
 
 import json
@@ -26,13 +30,14 @@ import sys
 import threading
 from concurrent.futures import ThreadPoolExecutor
 
-__all__ = ["action", "run", "Context"]
+__all__ = ["action", "fallback", "run", "Context"]
 
 _actions = {}
 _out = sys.stdout
 _lock = threading.Lock()
 _local = threading.local()
 _cancelled = set()
+_fallback = []
 
 
 def action(name, concurrent=False):
@@ -43,6 +48,23 @@ def action(name, concurrent=False):
         return f
 
     return register
+
+
+def fallback(f):
+    """Makes f(name) the supplier of actions no @action registered (see the module's doc)."""
+    _fallback[:] = [f]
+    return f
+
+
+def _entry(name):
+    """The (function, concurrent) of action `name`, asking the fallback once for a new name.
+    Raises what the fallback raises."""
+    entry = _actions.get(name)
+    if entry is None and _fallback and isinstance(name, str):
+        f = _fallback[0](name)
+        if f is not None:
+            entry = _actions[name] = (f, True)
+    return entry
 
 
 class Context:
@@ -94,9 +116,8 @@ class _Capture:
 _capture = _Capture()
 
 
-def _handle(req):
+def _handle(req, entry):
     rid = req["id"]
-    entry = _actions.get(req.get("action"))
     _local.rid = rid
     try:
         if entry is None:
@@ -129,12 +150,16 @@ def run(threads=32):
         if "cancel" in req:
             _cancelled.add(req["cancel"])
             continue
-        entry = _actions.get(req.get("action"))
+        try:
+            entry = _entry(req.get("action"))
+        except Exception as e:  # a fallback that cannot supply it: this request fails
+            _send({"id": req["id"], "error": "action %r: %s: %s" % (req.get("action"), type(e).__name__, e)})
+            continue
         if entry is not None and entry[1]:
             if pool is None:
                 pool = ThreadPoolExecutor(max_workers=threads)
-            pool.submit(_handle, req)
+            pool.submit(_handle, req, entry)
         else:
-            _handle(req)
+            _handle(req, entry)
     if pool is not None:
         pool.shutdown(wait=True)

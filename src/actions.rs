@@ -15,10 +15,12 @@ use rustc_hash::FxHashMap;
 use crate::net::PlaceId;
 use crate::runtime::ActionContext;
 
+mod backend;
 pub mod command;
 mod group;
 pub mod worker;
 
+pub use backend::ProgramActions;
 pub use command::{CommandAction, CommandSpec};
 pub use group::terminate_all;
 pub use worker::{Worker, WorkerAction, WorkerSpec};

@@ -11,6 +11,8 @@
 //!   Gauss–Seidel, limiting distribution of non-ergodic chains, transient by uniformization);
 //!   [`measures`] turns a distribution into mean tokens, throughputs, waiting times and
 //!   predicate probabilities ([`Solver`](measures::Solver)).
+//! - [`under_policy`]: a plan's net analysed under its policy, with its reward rates
+//!   (`analyze PLAN`; the bare net when the plan has no policy).
 //! - [`report`]: the typed report of all this — what `plan-runner analyze --json` prints and
 //!   what the viewer's analysis panel shows.
 //!
@@ -46,4 +48,5 @@ pub mod properties;
 pub mod report;
 pub mod scc;
 pub mod state_space;
+pub mod under_policy;
 pub mod vanishing;

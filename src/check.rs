@@ -1,14 +1,17 @@
 //! `plan-runner check`: a summary of a net or a plan, and warnings about parts that can never
 //! do anything.
 //!
-//! The warnings come from structural facts ([`Structure`]: place bounds from P-invariants and
-//! from which transitions can ever produce or consume), never from a state-space search, so
-//! checking is fast on any net and every warning is a proof:
+//! Most warnings come from structural facts ([`Structure`]: place bounds from P-invariants and
+//! from which transitions can ever produce or consume), so every warning is a proof:
 //!
 //! - a **transition that can never fire**: an input place that never gets enough tokens (no
 //!   producer and too few initial tokens, or a structural bound below the arc weight), or an
 //!   inhibitor place that always holds too many tokens;
 //! - an **isolated place** (no arc at all);
+//! - a **place that grows without limit** (coverability, [`endless`]), with the transitions
+//!   that pump it; and for a plan with no stop condition, a **run that never ends**: the
+//!   net reaches a closed loop of markings (a search of at most [`ENDING_BUDGET`] markings,
+//!   silent when it is not enough);
 //! - a **policy rule that can never apply**: its pattern asks for a count outside a place's
 //!   bounds, contradicts a P-invariant, or none of its transitions can be enabled in a marking
 //!   that matches it.
@@ -27,6 +30,7 @@
 //! assert_eq!(report.warnings.len(), 2);
 //! ```
 
+pub mod endless;
 pub mod structure;
 
 use serde::Serialize;
@@ -36,6 +40,9 @@ use crate::io::Format;
 use crate::net::{ArcKind, Net, PlaceId, Timing};
 use crate::plan::Plan;
 use crate::policy::{Pattern, Rule};
+
+/// Markings the search for [`endless::ending`] may visit before it gives up (silently).
+pub const ENDING_BUDGET: usize = 200_000;
 
 /// What `check` reports. Serialised as JSON with exactly these keys.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -66,6 +73,8 @@ impl Report {
         let structure = Structure::of(net);
         let mut warnings = remarks.to_vec();
         warnings.extend(net_warnings(net, &structure));
+        let ending = endless::ending(net, ENDING_BUDGET);
+        warnings.extend(endless::unbounded_warnings(net, &ending));
         Report::new(net, format.name(), warnings)
     }
 
@@ -87,6 +96,15 @@ impl Report {
                     i + 1
                 ));
             }
+        }
+        let ending = endless::ending(net, ENDING_BUDGET);
+        warnings.extend(endless::unbounded_warnings(net, &ending));
+        if plan.stop.is_empty()
+            && let Some(why) = ending.describe(net)
+        {
+            warnings.push(format!(
+                "the plan has no stop condition and {why}: `run` goes on until Ctrl-C (add [stop] max_firings, time_limit or when)"
+            ));
         }
         Report::new(net, Format::Plan.name(), warnings)
     }

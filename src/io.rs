@@ -56,6 +56,34 @@ impl Span {
             + 1;
         Span { line, column }
     }
+
+    /// [`Span::locate`] for many offsets in one pass over `text`: linear in the text's size
+    /// when `offsets` ascend (a reader's elements in file order); an offset smaller than the
+    /// one before it is located from the start.
+    pub fn locate_all(text: &[u8], offsets: impl IntoIterator<Item = usize>) -> Vec<Span> {
+        let (mut at, mut line, mut line_start) = (0usize, 1u32, 0usize);
+        let mut out = Vec::new();
+        for offset in offsets {
+            let offset = offset.min(text.len());
+            if offset < at {
+                out.push(Span::locate(text, offset));
+                continue;
+            }
+            for (i, &b) in text[at..offset].iter().enumerate() {
+                if b == b'\n' {
+                    line += 1;
+                    line_start = at + i + 1;
+                }
+            }
+            at = offset;
+            let column = String::from_utf8_lossy(&text[line_start..offset])
+                .chars()
+                .count() as u32
+                + 1;
+            out.push(Span { line, column });
+        }
+        out
+    }
 }
 
 /// The start of every line of a text, and character counts at fixed steps, found once: then
@@ -404,6 +432,16 @@ pub fn write_net(net: &Net, path: &Path, format: Format) -> Result<(), LoadError
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn locate_all_gives_locate_s_answers_in_one_pass() {
+        let text = "ab\ncdé\n\nxyz\n".as_bytes();
+        let offsets = [0, 1, 3, 7, 8, 9, 12, 14, 99, 4, 2];
+        let expect: Vec<Span> = offsets.iter().map(|&o| Span::locate(text, o)).collect();
+        assert_eq!(Span::locate_all(text, offsets), expect);
+        assert_eq!(expect[3], Span { line: 2, column: 4 });
+        assert_eq!(expect[9], Span { line: 2, column: 2 });
+    }
 
     #[test]
     fn locate_counts_lines_and_characters() {

@@ -48,6 +48,7 @@
 pub mod actions;
 pub mod analysis;
 pub mod check;
+pub mod conform;
 pub mod firing;
 pub mod io;
 pub mod limits;

@@ -81,6 +81,8 @@ pub struct Net {
     /// Per transition: the transitions whose enabling its firing can change (itself included
     /// when it changes one of its own places).
     affects: Vec<Vec<TransitionId>>,
+    /// Per place: the transitions with an input arc from it, in net order.
+    consumers: Vec<Vec<TransitionId>>,
     /// Per place: capacities, dense, `u32::MAX` when unbounded.
     capacity: Vec<u32>,
     has_capacity: bool,
@@ -179,6 +181,12 @@ impl Net {
     #[inline]
     pub fn delta(&self, t: TransitionId) -> &[(PlaceId, i64)] {
         &self.delta[t.index()]
+    }
+
+    /// The output transitions of place `p` (those with an input arc from it), in net order.
+    #[inline]
+    pub fn consumers(&self, p: PlaceId) -> &[TransitionId] {
+        &self.consumers[p.index()]
     }
 
     /// Transitions whose enabling can change when `t` fires.
@@ -458,12 +466,9 @@ pub(crate) fn cyc3(servers: Servers) -> Net {
     let t1 = b.exponential("T1", 1.0, servers);
     let t2 = b.immediate("t2", 1.0, 1);
     let t3 = b.exponential("T3", 2.0, servers);
-    b.input(p1, t1, 1);
-    b.output(t1, p2, 1);
-    b.input(p2, t2, 1);
-    b.output(t2, p3, 1);
-    b.input(p3, t3, 1);
-    b.output(t3, p1, 1);
+    b.moves(p1, t1, p2);
+    b.moves(p2, t2, p3);
+    b.moves(p3, t3, p1);
     b.build().unwrap()
 }
 

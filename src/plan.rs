@@ -32,11 +32,14 @@
 //!
 //! - [`file`]: the TOML as written and its schema; [`resolve`]: names → ids.
 //! - [`map`]: the `[map]` section (the room of simulated robots, `gspn::world::map`).
+//! - [`programs`]: `action = { command | worker }`, `[workers.NAME]`, and the check that
+//!   every action name is known ([`Plan::check_actions`]).
 //! - [`ros2`]: the `[ros2]` table and the `server` keys of `ros2` places.
 //! - [`thesis`]: `plan-runner import-thesis`, the thesis framework's inputs → a plan.
 
 pub mod file;
 pub mod map;
+pub mod programs;
 pub mod resolve;
 pub mod rewards;
 pub mod ros2;
@@ -54,6 +57,7 @@ use crate::world::map::Map;
 use file::locate;
 
 pub use file::{ParamValue, PlaceFile, PlanFile, RuleFile, StopFile, json_schema};
+pub use programs::{ActionFile, ProgramAction, ProgramFile, WorkerFile, WorkerRef};
 pub use rewards::RewardFile;
 pub use ros2::Ros2File;
 
@@ -93,6 +97,12 @@ pub struct Plan {
     pub rewards: Vec<RewardSpec>,
     /// What a policy controls: `controllable` transitions and `wait`.
     pub controls: Controls,
+    /// Actions run as programs (`action = { command = … }` / `{ worker = … }`), registered
+    /// under the names their places' roles carry (`gspn::actions::ProgramActions`).
+    pub programs: Vec<ProgramAction>,
+    /// Where each place's `action` is written in the plan file, indexed by
+    /// [`PlaceId::index`] (for [`Plan::check_actions`]).
+    pub action_spans: Vec<Option<Span>>,
     /// Where each transition is defined in the net file ([`Loaded::transition_at`]).
     pub transition_at: Vec<Span>,
 }
@@ -120,6 +130,8 @@ impl Plan {
             ros2: Ros2Settings::default(),
             rewards: Vec::new(),
             controls,
+            programs: Vec::new(),
+            action_spans: vec![None; n],
             transition_at: loaded.transition_at,
         }
     }

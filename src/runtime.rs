@@ -208,6 +208,19 @@ pub enum RuntimeError {
         /// What is wrong, with the action's text.
         reason: String,
     },
+    /// A place's action is neither registered nor a built-in.
+    #[error(
+        "place `{place}`: action `{action}` is not registered and not a built-in (`wait [S]`, `log MSG`, `fire T [after S]`); registered: {}",
+        if known.is_empty() { "none".to_string() } else { known.join(", ") }
+    )]
+    UnknownAction {
+        /// The place.
+        place: String,
+        /// The action's name.
+        action: String,
+        /// The names registered on the builder, sorted.
+        known: Vec<String>,
+    },
     /// The journal file could not be created.
     #[error("journal {path}: {reason}")]
     Journal {

@@ -52,13 +52,14 @@ mod absorb;
 mod build;
 mod evaluate;
 mod lra;
+mod policy_iteration;
 mod solve;
 mod tree;
 
 use thiserror::Error;
 
 pub use evaluate::{PolicyValue, evaluate_lra};
-pub use solve::{Method, Solution, SolveOptions, solve};
+pub use solve::{Algorithm, Method, Solution, SolveOptions, solve};
 pub use tree::compress;
 
 use crate::analysis::state_space::packing::MarkingStore;
@@ -210,6 +211,20 @@ pub struct RewardSpec {
     pub places: Vec<(PlaceId, f64, PlaceMode)>,
     /// Impulse rewards of transitions.
     pub transitions: Vec<(TransitionId, f64)>,
+}
+
+impl RewardSpec {
+    /// The rate its places earn per unit of time in marking `m` (where time passes).
+    pub fn place_rate(&self, m: &[u32]) -> f64 {
+        self.places
+            .iter()
+            .map(|&(p, r, mode)| match mode {
+                PlaceMode::PerToken => r * m[p.index()] as f64,
+                PlaceMode::Marked if m[p.index()] > 0 => r,
+                PlaceMode::Marked => 0.0,
+            })
+            .sum()
+    }
 }
 
 /// A reward structure evaluated on a model.
@@ -388,14 +403,7 @@ impl DecisionModel {
                     return 0.0;
                 }
                 self.store.get(self.marking[s] as usize, &mut m);
-                spec.places
-                    .iter()
-                    .map(|&(p, r, mode)| match mode {
-                        PlaceMode::PerToken => r * m[p.index()] as f64,
-                        PlaceMode::Marked if m[p.index()] > 0 => r,
-                        PlaceMode::Marked => 0.0,
-                    })
-                    .sum()
+                spec.place_rate(&m)
             })
             .collect();
         let mut per_t = vec![0.0; self.count_t.iter().max().map_or(0, |&t| t as usize + 1)];

@@ -14,6 +14,7 @@ use serde::Serialize;
 use super::invariants::Invariants;
 use super::measures::Measures;
 use super::properties::{DeadMarking, Liveness, Properties};
+use super::under_policy::RewardRate;
 use crate::net::{Net, TransitionId};
 
 /// Values keyed by place or transition name.
@@ -45,6 +46,9 @@ pub fn transition_names(net: &Net, ts: &[TransitionId]) -> Vec<String> {
 /// `plan-runner analyze --json`: the state space, the steady state, transient measures.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Report {
+    /// What was analysed: "bare net" or "net under plan policy"
+    /// ([`Regime::label`](super::under_policy::Regime::label)).
+    pub analysed: String,
     /// Reachability and properties.
     pub state_space: StateSpaceReport,
     /// The steady state (limiting distribution from the initial marking); `null` when not
@@ -186,6 +190,20 @@ pub struct MeasuresReport {
     /// Probabilities of the asked predicates, by their text.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub probability: Option<ByName<f64>>,
+    /// Long-run rates of the plan's reward structures, by name (steady state only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rewards: Option<ByName<RewardReport>>,
+}
+
+/// The long-run rate of one reward structure (per unit of time).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct RewardReport {
+    /// Total rate: `places + transitions`.
+    pub rate: f64,
+    /// Earned by place rates.
+    pub places: f64,
+    /// Earned by transition impulses.
+    pub transitions: f64,
 }
 
 impl MeasuresReport {
@@ -205,9 +223,7 @@ impl MeasuresReport {
     pub fn transient(net: &Net, t: f64, m: &Measures) -> Self {
         MeasuresReport {
             t: Some(t),
-            mean_tokens: by_place(net, &m.mean_tokens),
-            throughput: by_transition(net, &m.throughput),
-            ..MeasuresReport::default()
+            ..MeasuresReport::tokens_and_throughput(net, m)
         }
     }
 
@@ -215,10 +231,36 @@ impl MeasuresReport {
     pub fn panel(net: &Net, ergodic: bool, m: &Measures) -> Self {
         MeasuresReport {
             ergodic: Some(ergodic),
+            ..MeasuresReport::tokens_and_throughput(net, m)
+        }
+    }
+
+    fn tokens_and_throughput(net: &Net, m: &Measures) -> Self {
+        MeasuresReport {
             mean_tokens: by_place(net, &m.mean_tokens),
             throughput: by_transition(net, &m.throughput),
             ..MeasuresReport::default()
         }
+    }
+
+    /// Adds the reward rates (none: nothing is added).
+    pub fn with_rewards(mut self, rewards: &[RewardRate]) -> Self {
+        if !rewards.is_empty() {
+            self.rewards = Some(
+                rewards
+                    .iter()
+                    .map(|r| {
+                        let v = RewardReport {
+                            rate: r.rate,
+                            places: r.places,
+                            transitions: r.transitions,
+                        };
+                        (r.name.clone(), v)
+                    })
+                    .collect(),
+            );
+        }
+        self
     }
 
     /// Adds the probabilities of the predicates `exprs` (none: nothing is added).

@@ -41,6 +41,7 @@ use crate::analysis::coverability::{Coverability, karp_miller};
 use crate::analysis::invariants::structural_bounds;
 use crate::analysis::vanishing::eliminate;
 use crate::net::{MAX_TOKENS, Net, TransitionId};
+use crate::policy::Policy;
 use packing::{Layout, MarkingStore};
 use table::MoveTable;
 
@@ -323,6 +324,41 @@ impl StateSpace {
         monitor: &Monitor,
     ) -> Result<StateSpace, AnalysisError> {
         let raw = search(net, opts, monitor, false)?;
+        Self::from_raw(net, raw)
+    }
+
+    /// Like [`StateSpace::build_monitored`], with `policy` choosing in vanishing markings:
+    /// each one's immediate transitions fire with [`Policy::distribution_or_weights`] (the
+    /// policy's rule when one applies, else the net's weights) instead of the weights. The
+    /// markings are the net's (a transition the policy never picks still has its target
+    /// searched); the tangible chain and its measures are those of the net under the policy.
+    pub fn build_under_policy(
+        net: &Net,
+        policy: &Policy,
+        opts: &Options,
+        monitor: &Monitor,
+    ) -> Result<StateSpace, AnalysisError> {
+        let mut raw = search(net, opts, monitor, false)?;
+        if !policy.is_empty() {
+            let mut m = vec![0u32; net.place_count()];
+            let mut firable = Vec::new();
+            for g in 0..raw.store.len() {
+                if raw.tangible[g] {
+                    continue;
+                }
+                raw.store.get(g, &mut m);
+                let group = raw.moves.group_mut(g);
+                firable.clear();
+                firable.extend(group.iter().map(|mv| mv.transition));
+                let dist = policy.distribution_or_weights(net, &m, &firable);
+                for mv in group.iter_mut() {
+                    mv.prob = dist
+                        .iter()
+                        .find(|&&(t, _)| t == mv.transition)
+                        .map_or(0.0, |&(_, p)| p);
+                }
+            }
+        }
         Self::from_raw(net, raw)
     }
 

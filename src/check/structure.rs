@@ -275,8 +275,7 @@ mod tests {
         let t_starved = b.exponential("starved", 1.0, Servers::Single);
         let t_inhibited = b.immediate("inhibited", 1.0, 1);
         let t_weight = b.exponential("heavy", 1.0, Servers::Single);
-        b.input(a, t_ok, 1);
-        b.output(t_ok, a, 1);
+        b.moves(a, t_ok, a);
         b.input(src, t_starved, 1);
         b.input(a, t_inhibited, 1);
         b.inhibitor(block, t_inhibited, 1);

@@ -347,27 +347,35 @@ mod tests {
 
     #[test]
     fn arithmetic_follows_precedence() {
-        assert_eq!(ev("1 + 2 * 3"), Ok(7.0));
-        assert_eq!(ev("(1 + 2) * 3"), Ok(9.0));
-        assert_eq!(ev("-N + 1"), Ok(-4.0));
-        assert_eq!(ev("10 - 4 - 3"), Ok(3.0));
-        assert_eq!(ev("N / 2"), Ok(2.5));
-        assert_eq!(ev("1.000000e+00"), Ok(1.0));
-        assert_eq!(ev(".5e1"), Ok(5.0));
-        assert_eq!(ev("2*lambda"), Ok(1.0));
+        for (text, value) in [
+            ("1 + 2 * 3", 7.0),
+            ("(1 + 2) * 3", 9.0),
+            ("-N + 1", -4.0),
+            ("10 - 4 - 3", 3.0),
+            ("N / 2", 2.5),
+            ("1.000000e+00", 1.0),
+            (".5e1", 5.0),
+            ("2*lambda", 1.0),
+        ] {
+            assert_eq!(ev(text), Ok(value), "{text}");
+        }
     }
 
     #[test]
     fn functions_take_square_or_round_brackets() {
-        assert_eq!(ev("Min[N, 3]"), Ok(3.0));
-        assert_eq!(ev("Max(N, 7)"), Ok(7.0));
-        assert_eq!(ev("Pow[2, 10]"), Ok(1024.0));
-        assert_eq!(ev("Mod[7, 3]"), Ok(1.0));
-        assert_eq!(ev("Binomial[5, 2]"), Ok(10.0));
-        assert_eq!(ev("Factorial[4]"), Ok(24.0));
-        assert_eq!(ev("Floor[2.7] + Ceil[2.1] + Round[2.5]"), Ok(8.0));
-        assert_eq!(ev("If[N > 3 && N != 4, 1, 2]"), Ok(1.0));
-        assert_eq!(ev("If[!True || False, 1, 2]"), Ok(2.0));
+        for (text, value) in [
+            ("Min[N, 3]", 3.0),
+            ("Max(N, 7)", 7.0),
+            ("Pow[2, 10]", 1024.0),
+            ("Mod[7, 3]", 1.0),
+            ("Binomial[5, 2]", 10.0),
+            ("Factorial[4]", 24.0),
+            ("Floor[2.7] + Ceil[2.1] + Round[2.5]", 8.0),
+            ("If[N > 3 && N != 4, 1, 2]", 1.0),
+            ("If[!True || False, 1, 2]", 2.0),
+        ] {
+            assert_eq!(ev(text), Ok(value), "{text}");
+        }
     }
 
     #[test]

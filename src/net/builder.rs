@@ -178,6 +178,13 @@ impl NetBuilder {
         self.arc(ArcKind::Output, p, t, w, Vec::new());
     }
 
+    /// Adds the arcs `from → t → to`, both of weight 1: `t` moves one token (a robot, a
+    /// job) from `from` to `to`, the most common shape in a plan's net.
+    pub fn moves(&mut self, from: PlaceId, t: TransitionId, to: PlaceId) {
+        self.input(from, t, 1);
+        self.output(t, to, 1);
+    }
+
     /// Adds an inhibitor arc `p —o t` of threshold `w`.
     pub fn inhibitor(&mut self, p: PlaceId, t: TransitionId, w: u32) {
         self.arc(ArcKind::Inhibitor, p, t, w, Vec::new());
@@ -364,6 +371,12 @@ impl NetBuilder {
             a.dedup();
             affects.push(a);
         }
+        let mut consumers: Vec<Vec<TransitionId>> = vec![Vec::new(); np];
+        for (t, inputs) in pre.iter().enumerate() {
+            for &(p, _) in inputs {
+                consumers[p.index()].push(TransitionId(t as u32));
+            }
+        }
         let has_immediate = transitions.iter().any(Transition::is_immediate);
         Ok(Net {
             name,
@@ -375,6 +388,7 @@ impl NetBuilder {
             inhib,
             delta,
             affects,
+            consumers,
             capacity,
             has_capacity,
             has_immediate,

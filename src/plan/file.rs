@@ -11,6 +11,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::map::MapFile;
+use super::programs::{ActionFile, WorkerFile};
 use super::rewards::RewardFile;
 use super::ros2::Ros2File;
 use crate::io::{LoadError, LoadErrorKind, Span};
@@ -68,6 +69,11 @@ pub struct PlanFile {
     /// The immediate transitions a policy controls (default: the net's zero-weight ones).
     #[schemars(with = "Option<Vec<String>>")]
     pub controllable: Option<Vec<Spanned<String>>>,
+    /// Long-lived worker programs, by name, that places use with
+    /// `action = { worker = "NAME", name = "…" }` (see `docs/actions.md`).
+    #[serde(default)]
+    #[schemars(with = "BTreeMap<String, WorkerFile>")]
+    pub workers: BTreeMap<Spanned<String>, Spanned<WorkerFile>>,
     /// Let a policy WAIT in markings where exponential transitions are enabled besides the
     /// controllable ones (the GSPNR toolbox's `toMDP`); default false.
     pub wait: Option<bool>,
@@ -99,8 +105,12 @@ impl std::fmt::Display for ParamValue {
 #[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PlaceFile {
-    /// The action each token entering the place runs (a name registered with the runtime).
-    pub action: Option<String>,
+    /// The action each token entering the place runs: a name (a built-in `wait [S]`,
+    /// `log MSG`, `fire T [after S]`; a robot program with a `[map]`; `ros2`; or an action a
+    /// library user registers), or a program: `{ command = [...] }`,
+    /// `{ worker = [...] | "NAME", name = "…" }` (see `docs/actions.md`).
+    #[schemars(with = "Option<ActionFile>")]
+    pub action: Option<Spanned<ActionFile>>,
     /// `"resource"`: the tokens are counters, not agents. (`"action"` is implied by `action`.)
     #[schemars(with = "Option<String>")]
     pub role: Option<Spanned<String>>,
@@ -145,9 +155,9 @@ pub struct StopFile {
     /// Stop at this model time (seconds).
     #[schemars(with = "Option<f64>", range(min = 0.0))]
     pub time_limit: Option<Spanned<f64>>,
-    /// Stop after this many firings.
-    #[schemars(range(min = 1))]
-    pub max_firings: Option<u64>,
+    /// Stop after this many firings (≥ 1).
+    #[schemars(with = "Option<u64>", range(min = 1))]
+    pub max_firings: Option<Spanned<u64>>,
 }
 
 /// The JSON Schema of plan files, as committed in `docs/plan.schema.json`.

@@ -9,6 +9,7 @@ use toml::Spanned;
 
 use super::Plan;
 use super::file::{PlaceFile, PlanFile, RuleFile, locate};
+use super::programs::{ActionFile, Programs};
 use super::rewards::{resolve_controls, resolve_rewards};
 use super::ros2::resolve_ros2;
 use crate::io::{LoadError, LoadErrorKind};
@@ -49,13 +50,24 @@ impl PlanFile {
         }
 
         let mut roles: Vec<Option<Role>> = vec![None; net.place_count()];
+        let mut action_spans = vec![None; net.place_count()];
+        let mut programs = Programs::new(&self.workers, path, &at)?;
         for (name, role) in &self.places {
             let p = net
                 .place_by_name(name.get_ref())
                 .ok_or_else(|| at(name.span(), unknown("place", name.get_ref())))?;
-            roles[p.index()] = Some(resolve_role(&net, p, role, &at)?);
-            if matches!(roles[p.index()], Some(Role::Action { .. }))
-                && net_outputs(&net, p).is_empty()
+            roles[p.index()] = Some(resolve_role(
+                &net,
+                p,
+                role,
+                &at,
+                &mut programs,
+                self.map.is_some(),
+            )?);
+            if let Some(a) = &role.get_ref().action {
+                action_spans[p.index()] = Some(locate(text, a.span()));
+            }
+            if matches!(roles[p.index()], Some(Role::Action { .. })) && net.consumers(p).is_empty()
             {
                 warnings.push(format!(
                     "place `{}` has an action but no output transition: its agents end Inactive",
@@ -109,10 +121,20 @@ impl PlanFile {
                 }
                 stop.time_limit = Some(v);
             }
-            if s.max_firings == Some(0) {
-                warnings.push("stop.max_firings = 0: the run stops before any firing".into());
+            if let Some(n) = &s.max_firings {
+                if *n.get_ref() == 0 {
+                    return Err(at(
+                        n.span(),
+                        LoadErrorKind::OutOfRange {
+                            what: "max_firings",
+                            name: "stop".into(),
+                            value: "0".into(),
+                            expected: "must be at least 1 (a run that may not fire at all would do nothing)",
+                        },
+                    ));
+                }
+                stop.max_firings = Some(*n.get_ref());
             }
-            stop.max_firings = s.max_firings;
         }
 
         let mut robots: Vec<String> = Vec::with_capacity(self.robots.len());
@@ -142,13 +164,22 @@ impl PlanFile {
         if let Some(m) = &map {
             // Built-in robot actions (`goto L2; measure`) name locations: check them now.
             for (name, role) in &self.places {
-                if let Some(a) = &role.get_ref().action {
-                    m.program(a).map_err(|e| {
-                        at(
-                            role.span(),
-                            LoadErrorKind::Invalid(format!("place `{}`: {e}", name.get_ref())),
-                        )
-                    })?;
+                let Some(a) = &role.get_ref().action else {
+                    continue;
+                };
+                let Some(text) = a.get_ref().name() else {
+                    continue;
+                };
+                let program = m.program(text).map_err(|e| {
+                    at(
+                        a.span(),
+                        LoadErrorKind::Invalid(format!("place `{}`: {e}", name.get_ref())),
+                    )
+                })?;
+                if program.is_none()
+                    && let Some(p) = net.place_by_name(name.get_ref())
+                {
+                    check_builtin(&net, p, text, a.span(), &at)?;
                 }
             }
         }
@@ -173,6 +204,8 @@ impl PlanFile {
             ros2,
             rewards,
             controls,
+            programs: programs.list,
+            action_spans,
             transition_at: Vec::new(),
         })
     }
@@ -224,17 +257,13 @@ fn show(v: f64) -> String {
     }
 }
 
-fn net_outputs(net: &Net, p: PlaceId) -> Vec<TransitionId> {
-    net.transition_ids()
-        .filter(|&t| net.inputs(t).iter().any(|&(q, _)| q == p))
-        .collect()
-}
-
 fn resolve_role(
     net: &Net,
     p: PlaceId,
     role: &Spanned<PlaceFile>,
     at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+    programs: &mut Programs,
+    has_map: bool,
 ) -> Result<Role, LoadError> {
     let place = &net.place(p).name;
     let f = role.get_ref();
@@ -255,9 +284,9 @@ fn resolve_role(
     if resource {
         if let Some(a) = &f.action {
             return Err(at(
-                role.span(),
+                a.span(),
                 LoadErrorKind::Invalid(format!(
-                    "place `{place}` is a resource and also has action `{a}`: choose one"
+                    "place `{place}` is a resource and also has an action: choose one"
                 )),
             ));
         }
@@ -284,7 +313,7 @@ fn resolve_role(
         }
         return Ok(Role::Resource);
     }
-    let Some(name) = f.action.clone() else {
+    let Some(action) = &f.action else {
         return Err(at(
             role.span(),
             LoadErrorKind::Missing {
@@ -293,12 +322,26 @@ fn resolve_role(
             },
         ));
     };
-    if name.trim().is_empty() {
-        return Err(at(
-            role.span(),
-            LoadErrorKind::Invalid(format!("place `{place}`: the action name is empty")),
-        ));
-    }
+    let name = match action.get_ref() {
+        ActionFile::Program(prog) => programs
+            .add(place, prog)
+            .map_err(|k| at(action.span(), k))?,
+        ActionFile::Name(n) if n.trim().is_empty() => {
+            return Err(at(
+                action.span(),
+                LoadErrorKind::Invalid(format!("place `{place}`: the action name is empty")),
+            ));
+        }
+        ActionFile::Name(n) => {
+            // A built-in written wrongly (`wait x`, `fire T` with T not an output) is refused
+            // here, with its line.
+            // (With a `[map]`, `wait 2; decide` is a robot program: checked with the map.)
+            if !has_map && let Err(e) = check_builtin(net, p, n, action.span(), at) {
+                return Err(e);
+            }
+            n.clone()
+        }
+    };
     let timeout = match &f.timeout {
         None => None,
         Some(t) => {
@@ -322,6 +365,23 @@ fn resolve_role(
         on_failure,
         robot: f.robot.clone(),
     })
+}
+
+/// Refuses a built-in action (`wait S`, `log MSG`, `fire T [after S]`) written wrongly.
+fn check_builtin(
+    net: &Net,
+    p: PlaceId,
+    text: &str,
+    span: Range<usize>,
+    at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+) -> Result<(), LoadError> {
+    match crate::runtime::Builtin::parse(text, net, p) {
+        Some(Err(reason)) => Err(at(
+            span,
+            LoadErrorKind::Invalid(format!("place `{}`: {reason}", net.place(p).name)),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Parses `stop`, `retry N` or `fire T` for place `p`.

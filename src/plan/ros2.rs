@@ -90,7 +90,7 @@ pub(super) fn resolve_ros2(
     }
     for (name, role) in places {
         let f = role.get_ref();
-        let is_ros2 = f.action.as_deref() == Some(ROS2_ACTION);
+        let is_ros2 = f.action.as_ref().and_then(|a| a.get_ref().name()) == Some(ROS2_ACTION);
         let server = match &f.server {
             Some(srv) if !is_ros2 => {
                 return Err(at(

@@ -18,9 +18,13 @@
 //!   marking (looked up through the hash index); any other key is a partial pattern, in the
 //!   order written. `'1'` (a string, which the thesis code never matched against the integer
 //!   1) is read as 1, with a warning.
-//! - `place_to_function_mapping` (`'p1': 'functions.work_p1'`) and `place_to_client_mapping`
-//!   (`'p1': ['ExecGSPN', 'action_server_1']`) give each place its action: the function or the
-//!   action server's name.
+//! - `place_to_function_mapping` (`'p1': 'functions.work_p1'`): each place's action goes to
+//!   one Python worker, `thesis_functions.py` (written beside the plan with
+//!   `gspn_worker.py`), which imports `functions` from the input's `project_path` and calls
+//!   `work_p1(agent_id)`: a returned transition name fires it, `None` lets the policy decide.
+//!   So the thesis's functions run unchanged, from the command line.
+//! - `place_to_client_mapping` (`'p1': ['ExecGSPN', 'action_server_1']`): the place's action
+//!   is `ros2`, the ExecPlace server named after the thesis's action server.
 //! - `resources_list` places get `role = "resource"`.
 //!
 //! A name that is not in the net (a place, or a transition such as the standalone example's
@@ -97,6 +101,9 @@ pub struct ThesisInput {
     pub resources: Vec<Named>,
     /// `full_synchronization`, when given.
     pub full_synchronization: Option<bool>,
+    /// `project_path`: the directory the `place_to_function_mapping` modules are imported
+    /// from, when given.
+    pub project_path: Option<Named>,
     /// Remarks: ignored keys, values read leniently.
     pub warnings: Vec<String>,
 }
@@ -108,6 +115,9 @@ pub struct ImportOptions {
     pub out: PathBuf,
     /// The net file, when the input's `gspn` path does not lead to it.
     pub net: Option<PathBuf>,
+    /// The directory of the `place_to_function_mapping` modules, when the input's
+    /// `project_path` does not lead to it.
+    pub project_path: Option<PathBuf>,
 }
 
 /// The result of [`import`].
@@ -165,9 +175,25 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, LoadError> 
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "net.xml".into());
-    let (text, mut warnings) = plan_text(&input, &loaded.net, &file_name)?;
     let io_err = |p: &Path, e: std::io::Error| LoadError::file(p, LoadErrorKind::Io(e.to_string()));
     std::fs::create_dir_all(&opts.out).map_err(|e| io_err(&opts.out, e))?;
+    let functions = input.actions.iter().any(|a| a.action_type.is_none());
+    let mut project_warning = None;
+    let project = if functions {
+        let (dir, warning) = locate_project(&input, opts.project_path.as_deref())?;
+        project_warning = warning;
+        for (name, text) in [
+            ("gspn_worker.py", GSPN_WORKER_PY),
+            ("thesis_functions.py", THESIS_FUNCTIONS_PY),
+        ] {
+            let p = opts.out.join(name);
+            std::fs::write(&p, text).map_err(|e| io_err(&p, e))?;
+        }
+        relative_to(&dir, &opts.out)
+    } else {
+        ".".into()
+    };
+    let (text, mut warnings) = plan_text(&input, &loaded.net, &file_name, &project)?;
     let net_path = opts.out.join(&file_name);
     let same = match (source.canonicalize(), net_path.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
@@ -181,12 +207,93 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, LoadError> 
     let plan = read_plan(&plan_path, &ReadOptions::default())?;
     let mut all = input.warnings;
     all.append(&mut warnings);
+    all.extend(project_warning);
     Ok(Imported {
         plan_path,
         net_path,
         plan,
         warnings: all,
     })
+}
+
+/// `python/gspn_worker.py`, written beside an imported plan that calls the thesis's functions.
+const GSPN_WORKER_PY: &str = include_str!("../../python/gspn_worker.py");
+/// `python/thesis_functions.py`: the worker that imports and calls the thesis's functions.
+const THESIS_FUNCTIONS_PY: &str = include_str!("../../python/thesis_functions.py");
+
+/// The directory the input's functions are imported from: `explicit` (`--project-path`),
+/// else the input's `project_path` relative to the JSON file when the module of the first
+/// function is there, else the JSON file's directory (the thesis inputs hold absolute paths
+/// from the author's machine) — with a warning when the module is not there either.
+pub fn locate_project(
+    input: &ThesisInput,
+    explicit: Option<&Path>,
+) -> Result<(PathBuf, Option<String>), LoadError> {
+    let dir = input.path.parent().unwrap_or(Path::new(""));
+    if let Some(p) = explicit {
+        if p.is_dir() {
+            return Ok((p.to_path_buf(), None));
+        }
+        return Err(LoadError::file(
+            p,
+            LoadErrorKind::Invalid("--project-path: not a directory".into()),
+        ));
+    }
+    let module = input
+        .actions
+        .iter()
+        .find(|a| a.action_type.is_none())
+        .and_then(|a| a.action.rsplit_once('.'))
+        .map(|(m, _)| m.replace('.', "/"));
+    let has_module = |d: &Path| match &module {
+        Some(m) => d.join(format!("{m}.py")).is_file() || d.join(m).join("__init__.py").is_file(),
+        None => d.is_dir(),
+    };
+    let mut tried = Vec::new();
+    if let Some(pp) = &input.project_path {
+        tried.push(dir.join(&pp.name));
+    }
+    tried.push(dir.to_path_buf());
+    if let Some(found) = tried.iter().find(|d| has_module(d)) {
+        return Ok((found.clone(), None));
+    }
+    let looked: Vec<String> = tried.iter().map(|p| p.display().to_string()).collect();
+    let what = module.map_or_else(String::new, |m| format!("`{m}.py` "));
+    Ok((
+        dir.to_path_buf(),
+        Some(format!(
+            "the functions' module {what}is not in {}: the worker will import it from {} (put it there, or import again with --project-path DIR)",
+            looked.join(" nor in "),
+            dir.display()
+        )),
+    ))
+}
+
+/// `target` as a path relative to directory `base` (both made absolute first); `target`
+/// itself when they share no prefix.
+fn relative_to(target: &Path, base: &Path) -> String {
+    let abs = |p: &Path| p.canonicalize().unwrap_or_else(|_| p.to_path_buf());
+    let (t, b) = (abs(target), abs(base));
+    let common = t
+        .components()
+        .zip(b.components())
+        .take_while(|(x, y)| x == y)
+        .count();
+    if common == 0 {
+        return t.display().to_string();
+    }
+    let mut rel = PathBuf::new();
+    for _ in b.components().skip(common) {
+        rel.push("..");
+    }
+    for c in t.components().skip(common) {
+        rel.push(c);
+    }
+    if rel.as_os_str().is_empty() {
+        ".".into()
+    } else {
+        rel.display().to_string()
+    }
 }
 
 /// Where the input's net is: its `gspn` path (relative to the JSON file), else a file of the
@@ -216,11 +323,14 @@ pub fn locate_net(input: &ThesisInput) -> Result<PathBuf, LoadError> {
 }
 
 /// The plan (TOML text) for `input` over `net`, whose file will be `net_file` beside the
-/// plan; and the warnings of the translation.
+/// plan; and the warnings of the translation. `project` is the directory of the functions'
+/// modules as `thesis_functions.py` (beside the plan) is given it: relative to the plan's
+/// directory, or absolute.
 pub fn plan_text(
     input: &ThesisInput,
     net: &Net,
     net_file: &str,
+    project: &str,
 ) -> Result<(String, Vec<String>), LoadError> {
     let err = |span: Span, kind| LoadError::at(&input.path, span, kind);
     let unknown = |what: &'static str, n: &Named| {
@@ -297,20 +407,31 @@ pub fn plan_text(
             ));
             continue;
         }
-        let _ = write!(
-            out,
-            "\n[places.{}]\naction = {}",
-            toml_key(&a.place.name),
-            toml_str(&a.action)
-        );
+        let _ = write!(out, "\n[places.{}]\n", toml_key(&a.place.name));
         match &a.action_type {
             Some(t) => {
-                let _ = writeln!(out, "   # {t} action server (place_to_client_mapping)");
+                let _ = writeln!(
+                    out,
+                    "action = \"ros2\"   # the thesis's {t} action server `{}` (place_to_client_mapping)\nserver = {}",
+                    a.action,
+                    toml_str(&a.action)
+                );
             }
             None => {
-                let _ = writeln!(out, "   # place_to_function_mapping");
+                let _ = writeln!(
+                    out,
+                    "action = {{ worker = \"functions\", name = {} }}   # place_to_function_mapping",
+                    toml_str(&a.action)
+                );
             }
         }
+    }
+    if input.actions.iter().any(|a| a.action_type.is_none()) {
+        let _ = writeln!(
+            out,
+            "\n# The thesis's functions (`module.function`, called as function(agent_id)), imported\n# from the input's project_path by thesis_functions.py, a gspn worker (docs/actions.md).\n[workers.functions]\ncommand = [\"python3\", \"thesis_functions.py\", {}]",
+            toml_str(project)
+        );
     }
     for r in &resources {
         let _ = writeln!(out, "\n[places.{}]\nrole = \"resource\"", toml_key(&r.name));

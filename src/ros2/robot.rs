@@ -80,12 +80,9 @@ pub struct Decision {
 /// The net-timed decision for place `p`: the race of its exponential outputs, or at once
 /// with no transition when it has an immediate output (or none at all).
 pub fn decide(net: &Net, p: PlaceId, time_scale: f64, rng: &mut Rng) -> Decision {
-    let outputs: Vec<_> = net
-        .transition_ids()
-        .filter(|&t| net.inputs(t).iter().any(|&(q, _)| q == p))
-        .collect();
+    let outputs = net.consumers(p);
     let mut rates = Vec::new();
-    for &t in &outputs {
+    for &t in outputs {
         match net.transition(t).timing {
             Timing::Immediate { .. } => {
                 return Decision {

@@ -285,10 +285,15 @@ impl RuntimeBuilder {
                         on_failure: *on_failure,
                         robot: robot.as_deref().map(Arc::from),
                     }),
-                    None => warnings.push(format!(
-                        "place `{}`: action `{name}` is not registered; the place is net-timed",
-                        net.place(p).name
-                    )),
+                    None => {
+                        let mut known: Vec<String> = self.actions.keys().cloned().collect();
+                        known.sort();
+                        return Err(RuntimeError::UnknownAction {
+                            place: net.place(p).name.clone(),
+                            action: name.clone(),
+                            known,
+                        });
+                    }
                 }
             }
         }

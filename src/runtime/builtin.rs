@@ -63,10 +63,7 @@ impl Builtin {
                     _ => Err(format!("`{text}`: expected `fire T` or `fire T after S`")),
                 };
                 after.and_then(|after| {
-                    let outputs: Vec<TransitionId> = net
-                        .transition_ids()
-                        .filter(|&t| net.inputs(t).iter().any(|&(p, _)| p == place))
-                        .collect();
+                    let outputs = net.consumers(place);
                     match net.transition_by_name(name) {
                         Some(t) if outputs.contains(&t) => Ok(Builtin::Fire {
                             transition: t,

@@ -159,10 +159,7 @@ impl Engine {
         let mut aps = Vec::new();
         for &p in action_places {
             action_of[p.index()] = Some(aps.len() as u32);
-            let consumers: Vec<_> = net
-                .transition_ids()
-                .filter(|&t| net.inputs(t).iter().any(|&(q, _)| q == p))
-                .collect();
+            let consumers = net.consumers(p).to_vec();
             aps.push(ActionPlace {
                 fire_q: vec![VecDeque::new(); consumers.len()],
                 consumers,

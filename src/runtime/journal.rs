@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
+use super::action::Outcome;
 use super::event::{Event, EventKind};
 use crate::net::{Net, Timing};
 
@@ -110,6 +111,56 @@ pub(crate) struct Journal {
     tx: Option<mpsc::Sender<Msg>>,
     writer: Option<JoinHandle<Option<String>>>,
     failed: Option<String>,
+    names: Names,
+}
+
+/// Place and transition names as JSON strings, added to each event line beside the ids
+/// (`place_name`, `transition_name`), so a journal reads without its header.
+#[derive(Debug)]
+struct Names {
+    places: Vec<Box<str>>,
+    transitions: Vec<Box<str>>,
+}
+
+impl Names {
+    /// Adds the names of the place and the transition `e` carries to its serialised object
+    /// in `line` (which ends with `}`).
+    fn append(&self, e: &Event, line: &mut Vec<u8>) {
+        let (place, transition) = match &e.kind {
+            EventKind::Fired { transition, .. } => (None, Some(*transition)),
+            EventKind::AgentSpawned { place, .. }
+            | EventKind::ActionStarted { place, .. }
+            | EventKind::ActionOutput { place, .. } => (Some(*place), None),
+            EventKind::ActionEnded { place, outcome, .. } => (
+                Some(*place),
+                match outcome {
+                    Outcome::Fire(t) => Some(*t),
+                    _ => None,
+                },
+            ),
+            _ => (None, None),
+        };
+        if place.is_none() && transition.is_none() || line.last() != Some(&b'}') {
+            return;
+        }
+        line.pop();
+        for (key, names, id) in [
+            ("place_name", &self.places, place.map(|p| p.index())),
+            (
+                "transition_name",
+                &self.transitions,
+                transition.map(|t| t.index()),
+            ),
+        ] {
+            if let Some(name) = id.and_then(|i| names.get(i)) {
+                line.extend_from_slice(b",\"");
+                line.extend_from_slice(key.as_bytes());
+                line.extend_from_slice(b"\":");
+                line.extend_from_slice(name.as_bytes());
+            }
+        }
+        line.push(b'}');
+    }
 }
 
 impl Journal {
@@ -138,6 +189,16 @@ impl Journal {
                 .map(|t| t.name.as_str().into())
                 .collect(),
         };
+        let quoted = |names: &[std::borrow::Cow<'_, str>]| -> Vec<Box<str>> {
+            names
+                .iter()
+                .map(|n| serde_json::to_string(n).unwrap_or_default().into())
+                .collect()
+        };
+        let names = Names {
+            places: quoted(&header.places),
+            transitions: quoted(&header.transitions),
+        };
         serde_json::to_writer(&mut out, &header)?;
         out.write_all(b"\n")?;
         out.flush()?;
@@ -149,6 +210,7 @@ impl Journal {
             tx: Some(tx),
             writer: Some(writer),
             failed: None,
+            names,
         })
     }
 
@@ -162,6 +224,7 @@ impl Journal {
             self.failed.get_or_insert(err.to_string());
             return;
         }
+        self.names.append(e, &mut line);
         line.push(b'\n');
         if tx.send(Msg::Line(line)).is_err() {
             // The writer ended early: it failed, and says why when joined.

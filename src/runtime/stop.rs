@@ -13,3 +13,11 @@ pub struct StopConditions {
     /// Stop after this many firings.
     pub max_firings: Option<u64>,
 }
+
+impl StopConditions {
+    /// True when there is none: the run ends only when nothing can fire any more (or on a
+    /// failure, or when it is stopped).
+    pub fn is_empty(&self) -> bool {
+        self.when.is_none() && self.time_limit.is_none() && self.max_firings.is_none()
+    }
+}

@@ -7,6 +7,9 @@ use gspn::analysis::decision::{
     Action, Controls, DecisionModel, Kind, Objective, PlaceMode, RewardSpec, SolveOptions,
     compress, evaluate_lra, solve,
 };
+use gspn::analysis::measures::SolverOptions;
+use gspn::analysis::state_space::{Monitor, Options};
+use gspn::analysis::under_policy::{Regime, analyse};
 use gspn::net::{Net, TransitionId};
 use gspn::policy::{Pattern, Policy, Rule};
 use gspn::sim::Simulator;
@@ -107,6 +110,60 @@ fn the_written_policy_is_worth_the_optimum_exactly() {
     );
 }
 
+/// `analyze PLAN`'s library function: the net under the written policy (state space with the
+/// policy in vanishing markings, steady state, throughputs) earns the optimum, where the bare
+/// net (its weights: a uniform choice among zero-weight transitions) earns less.
+#[test]
+fn the_net_under_the_written_policy_earns_the_optimum() {
+    let (net, controls, spec) = home("home_n03");
+    let model = DecisionModel::build(&net, &controls, &Default::default()).unwrap();
+    let rewards = model.rewards(&spec);
+    let sol = solve(
+        &model,
+        &rewards,
+        &Objective::Lra { max: true },
+        &SolveOptions::default(),
+    )
+    .unwrap();
+    let policy = Policy::new(&net, exact_rules(&table(&model, &sol.policy))).unwrap();
+    let run = |policy: &Policy| {
+        analyse(
+            &net,
+            policy,
+            std::slice::from_ref(&spec),
+            &Options::default(),
+            &SolverOptions::default(),
+            &Monitor::new(),
+        )
+        .unwrap()
+    };
+    let under = run(&policy);
+    assert_eq!(under.regime, Regime::UnderPolicy);
+    assert_eq!(under.regime.label(), "net under plan policy");
+    assert_eq!(under.rewards.len(), 1);
+    let r = &under.rewards[0];
+    assert_eq!(r.name, "cleaning");
+    assert!(
+        (r.rate - sol.value).abs() <= 1e-9 * sol.value.abs(),
+        "analysis {} vs optimum {}",
+        r.rate,
+        sol.value
+    );
+    assert!((r.places + r.transitions - r.rate).abs() < 1e-15);
+    // The impulse part is 2 × the throughput of FinishedMop_L2.
+    let fin = net.transition_by_name("FinishedMop_L2").unwrap();
+    assert!((r.transitions - 2.0 * under.measures.throughput[fin.index()]).abs() < 1e-15);
+    let bare = run(&Policy::empty());
+    assert_eq!(bare.regime, Regime::BareNet);
+    assert_eq!(bare.regime.label(), "bare net");
+    assert!(
+        bare.rewards[0].rate < sol.lower - 1e-3,
+        "bare {} vs optimum {}",
+        bare.rewards[0].rate,
+        sol.lower
+    );
+}
+
 #[test]
 fn compressed_rules_choose_like_the_exact_table_everywhere() {
     for name in ["home_n03", "home_n05"] {
@@ -203,4 +260,69 @@ fn a_long_token_game_under_the_policy_earns_the_optimal_rate() {
         "measured {measured} (± {half}) vs optimum {}",
         sol.value
     );
+}
+
+/// Policy iteration (exact evaluation by sparse LU, then one bounding step) and value
+/// iteration agree to 1e-9 on the fixtures Storm checks (`storm_cross_check.rs`) and on the
+/// home model with the cleaning rewards, max and min (relative to the value, absolute below
+/// 1: some minima are 0); each says which method ran, and the policy iteration's policy is
+/// worth its value exactly.
+#[test]
+fn policy_iteration_agrees_with_value_iteration() {
+    use super::decision_model::fixture_rewards;
+    use gspn::analysis::decision::{Algorithm, Method};
+    let mut cases: Vec<(String, Net, Controls, RewardSpec)> = Vec::new();
+    for name in [
+        "tiny_cycle",
+        "home_n03",
+        "home_meeting_place_rewards",
+        "solarfarm_notimeouts",
+    ] {
+        let (net, controls, table) = gspnr(name);
+        let spec = fixture_rewards(&net, &table);
+        cases.push((name.to_string(), net, controls, spec));
+    }
+    let (net, controls, spec) = home("home_n04");
+    cases.push(("home_n04 cleaning".into(), net, controls, spec));
+    for (name, net, controls, spec) in &cases {
+        let model = DecisionModel::build(net, controls, &Default::default()).unwrap();
+        let rewards = model.rewards(spec);
+        for max in [true, false] {
+            let run = |algorithm| {
+                solve(
+                    &model,
+                    &rewards,
+                    &Objective::Lra { max },
+                    &SolveOptions {
+                        algorithm,
+                        ..SolveOptions::default()
+                    },
+                )
+                .unwrap_or_else(|e| panic!("{name} max={max} {algorithm:?}: {e}"))
+            };
+            let vi = run(Algorithm::ValueIteration);
+            let pi = run(Algorithm::PolicyIteration);
+            assert_eq!(vi.method, Method::RelativeValueIteration);
+            assert_eq!(pi.method, Method::PolicyIteration);
+            assert!(
+                (vi.value - pi.value).abs() <= 1e-9 * vi.value.abs().max(1.0),
+                "{name} max={max}: value iteration {} [{}, {}], policy iteration {} [{}, {}]",
+                vi.value,
+                vi.lower,
+                vi.upper,
+                pi.value,
+                pi.lower,
+                pi.upper
+            );
+            assert!(pi.lower <= pi.upper && pi.upper - pi.lower <= 1e-9 * pi.value.abs().max(1.0));
+            let exact =
+                evaluate_lra(&model, &rewards, |s| vec![(pi.policy[s] as usize, 1.0)]).unwrap();
+            assert!(
+                (exact.lra - pi.value).abs() <= 1e-9 * pi.value.abs().max(1.0),
+                "{name} max={max}: the policy is worth {}, policy iteration said {}",
+                exact.lra,
+                pi.value
+            );
+        }
+    }
 }

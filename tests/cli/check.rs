@@ -184,6 +184,7 @@ choose = { t_go_B = 1.0 }
             "policy rule 2 (line 8) can never apply: it asks for 2 token(s) in `Charger`, which always holds between 0 and 1",
             "policy rule 3 (line 13) can never apply: none of `t_go_A`, `t_go_B` can be enabled in a marking that matches it",
             "policy rule 4 (line 18) can never apply: its marking has Patrol_A + Patrol_B + Decide + Charging = 3, but every reachable marking has 2",
+            "the plan has no stop condition and no dead marking is reachable: the net never stops firing: `run` goes on until Ctrl-C (add [stop] max_firings, time_limit or when)",
         ])
     );
 }

@@ -1,16 +1,166 @@
-//! `plan-runner run`: the quickstart spawns agents running built-in actions.
+//! `plan-runner run` with program actions from the plan file: `action = { command = … }`
+//! runs a process per action and records its output; Ctrl-C (SIGINT) leaves no child
+//! process alive; an unknown action name is refused at load (exit 2, line and column); the
+//! quickstart spawns agents running built-in actions.
 
 use std::path::Path;
-use std::process::Command;
+use std::process::{Command, Stdio};
+use std::time::Duration;
 
 use serde_json::Value;
 
-fn bin() -> Command {
+pub(crate) fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_plan-runner"))
 }
 
-fn repo(p: &str) -> std::path::PathBuf {
+pub(crate) fn repo(p: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
+}
+
+/// The quickstart's two-robot patrol with `Patrol_A` and `Patrol_B` running `command`.
+fn patrol_plan(dir: &Path, command: &str, extra: &str) -> std::path::PathBuf {
+    let net = repo("plans/nets/two_robot_patrol.xml");
+    let plan = dir.join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "net = {net:?}\nseed = 4\n\n[places.Patrol_A]\naction = {{ command = [\"sh\", \"-c\", {command:?}]{extra} }}\n\
+             [places.Patrol_B]\naction = {{ command = [\"sh\", \"-c\", {command:?}]{extra} }}\n\
+             [places.Decide]\naction = \"wait\"\n[places.Charging]\naction = \"wait\"\n\
+             [places.Charger]\nrole = \"resource\"\n\n[stop]\nmax_firings = 12\n",
+            net = net.display().to_string()
+        ),
+    )
+    .unwrap();
+    plan
+}
+
+/// The journal at `path`, one JSON value per line.
+pub(crate) fn journal(path: &Path) -> Vec<Value> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn command_actions_from_a_plan_run_per_agent_and_their_output_is_journalled() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = patrol_plan(
+        dir.path(),
+        "echo \"robot $GSPN_AGENT patrols $GSPN_PLACE\"; echo $GSPN_OUTPUTS",
+        "",
+    );
+    let j = dir.path().join("run.jsonl");
+    let out = bin()
+        .args(["run", plan.to_str().unwrap(), "--json", "--journal"])
+        .arg(&j)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["stopped"], "max_firings");
+    assert_eq!(summary["agents_spawned"], 2);
+    let lines = journal(&j);
+    let places = lines[0]["places"].as_array().unwrap().clone();
+    let said: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["event"] == "action_output")
+        .collect();
+    assert!(said.len() >= 6, "{said:?}");
+    // Each action printed two lines, in order: who it is, then the transition to fire.
+    for agent in [0, 1] {
+        let mine: Vec<&&Value> = said.iter().filter(|l| l["agent"] == agent).collect();
+        assert!(mine.len() >= 2 && mine.len().is_multiple_of(2), "{mine:?}");
+        for pair in mine.chunks(2) {
+            let place = places[pair[0]["place"].as_u64().unwrap() as usize]
+                .as_str()
+                .unwrap();
+            assert_eq!(pair[0]["line"], format!("robot {agent} patrols {place}"));
+            let done = if place == "Patrol_A" {
+                "T_A_done"
+            } else {
+                "T_B_done"
+            };
+            assert_eq!(pair[1]["line"], done, "{}", pair[1]);
+        }
+    }
+    // Each patrol ended by firing the transition the program printed.
+    let fires = lines
+        .iter()
+        .filter(|l| l["event"] == "action_ended" && l["outcome"]["kind"] == "fire")
+        .count();
+    assert!(fires >= 4, "{fires}");
+}
+
+fn alive(pid: i32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Ok(s) => !s
+            .rsplit(')')
+            .next()
+            .unwrap_or("")
+            .trim_start()
+            .starts_with('Z'),
+        Err(_) => false,
+    }
+}
+
+#[test]
+fn ctrl_c_leaves_no_action_process_alive() {
+    let dir = tempfile::tempdir().unwrap();
+    let pids = dir.path().join("pids");
+    // Each action: a shell whose child ignores SIGTERM, both hanging.
+    let command = format!(
+        "sh -c 'trap \"\" TERM; sleep 60' & echo $! >> {p}; echo $$ >> {p}; wait",
+        p = pids.display()
+    );
+    let plan = patrol_plan(dir.path(), &command, ", kill_grace = 0.3");
+    let child = bin()
+        .args(["run", plan.to_str().unwrap(), "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut n = 0;
+    for _ in 0..400 {
+        std::thread::sleep(Duration::from_millis(25));
+        n = std::fs::read_to_string(&pids).map_or(0, |s| s.lines().count());
+        if n >= 4 {
+            break;
+        }
+    }
+    assert_eq!(n, 4, "both robots' actions started");
+    let all: Vec<i32> = std::fs::read_to_string(&pids)
+        .unwrap()
+        .lines()
+        .map(|l| l.trim().parse().unwrap())
+        .collect();
+    assert!(all.iter().all(|&p| alive(p)));
+    let out = interrupt(child);
+    assert_eq!(
+        out.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["stopped"], "interrupted");
+    // Every process of the actions' groups is gone, the TERM-ignoring one included.
+    let mut left = all.clone();
+    for _ in 0..100 {
+        left.retain(|&p| alive(p));
+        if left.is_empty() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(left.is_empty(), "still alive: {left:?} of {all:?}");
 }
 
 #[test]
@@ -37,4 +187,77 @@ fn the_quickstart_spawns_agents_running_built_in_actions() {
             .sum::<u64>(),
         3
     );
+}
+
+#[test]
+fn an_unknown_action_name_is_bad_input_at_its_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let net = repo("plans/nets/two_robot_patrol.xml");
+    let plan = dir.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "net = {:?}\n\n[places.Patrol_A]\naction = \"patrl\"\n",
+            net.display().to_string()
+        ),
+    )
+    .unwrap();
+    for cmd in ["run", "check", "simulate"] {
+        let out = bin().args([cmd, plan.to_str().unwrap()]).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{cmd}: {err}");
+        assert!(
+            err.contains(&format!(
+                "{}:4:10: place `Patrol_A`: unknown action `patrl`",
+                plan.display()
+            )),
+            "{cmd}: {err}"
+        );
+        assert!(err.contains("known actions: `wait [S]`"), "{cmd}: {err}");
+    }
+}
+
+/// Sends SIGINT (Ctrl-C) to `child` and waits for it.
+pub(crate) fn interrupt(child: std::process::Child) -> std::process::Output {
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn the_text_summary_lists_places_and_transitions_in_net_order() {
+    let path = repo("plans/quickstart.toml");
+    let out = bin()
+        .args(["run", path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let net = gspn::io::read_net(
+        &repo("plans/nets/two_robot_patrol.xml"),
+        &gspn::io::ReadOptions::default(),
+    )
+    .unwrap()
+    .net;
+    let first_words = |header: &str, stop: &str| -> Vec<String> {
+        text.lines()
+            .skip_while(|l| !l.starts_with(header))
+            .skip(1)
+            .take_while(|l| l.starts_with("  ") && !l.starts_with(stop))
+            .map(|l| l.split_whitespace().next().unwrap().to_string())
+            .collect()
+    };
+    let places: Vec<String> = net.places().iter().map(|p| p.name.clone()).collect();
+    let transitions: Vec<String> = net.transitions().iter().map(|t| t.name.clone()).collect();
+    assert_eq!(first_words("place ", "transition"), places, "{text}");
+    assert_eq!(first_words("transition ", "error"), transitions, "{text}");
+    // Net order is not name order here (the test would prove nothing otherwise).
+    let mut sorted = places.clone();
+    sorted.sort();
+    assert_ne!(sorted, places);
 }

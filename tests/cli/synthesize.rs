@@ -169,3 +169,83 @@ fn a_plan_naming_an_unknown_place_in_rewards_is_refused_at_its_line_and_column()
     assert!(err.contains(":2:23"), "{err}");
     assert!(err.contains("exponential"), "{err}");
 }
+
+/// `analyze PLAN` analyses the net under the plan's policy: the written optimal policy earns
+/// the synthesised value (to 1e-9), the plan without a policy is the bare net and earns
+/// less; the output says which. Policy iteration (`--method policy`) finds the same value.
+#[test]
+fn analyze_of_the_written_policy_gives_the_synthesised_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("policy.toml");
+    let (code, stdout, err) = synthesize(&[
+        &home_plan(),
+        "--json",
+        "--method",
+        "policy",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(j["method"], "PolicyIteration");
+    let optimum = j["value"].as_f64().unwrap();
+    let analyze = |plan: &str, json: bool| {
+        let mut cmd = Command::cargo_bin("plan-runner").unwrap();
+        cmd.arg("analyze").arg(plan);
+        if json {
+            cmd.arg("--json");
+        }
+        let o = cmd.output().unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let under: Value = serde_json::from_str(&analyze(out.to_str().unwrap(), true)).unwrap();
+    assert_eq!(under["analysed"], "net under plan policy");
+    let rate = under["steady_state"]["rewards"]["cleaning"]["rate"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (rate - optimum).abs() <= 1e-9 * optimum,
+        "analyze {rate} vs synthesize {optimum}"
+    );
+    let bare: Value = serde_json::from_str(&analyze(&home_plan(), true)).unwrap();
+    assert_eq!(bare["analysed"], "bare net");
+    let bare_rate = bare["steady_state"]["rewards"]["cleaning"]["rate"]
+        .as_f64()
+        .unwrap();
+    assert!(bare_rate < optimum - 1e-3, "{bare_rate} vs {optimum}");
+    let text = analyze(out.to_str().unwrap(), false);
+    assert!(text.contains("analysed: net under plan policy ("), "{text}");
+    assert!(text.contains("rewards (long-run rate per unit of time, net under plan policy):"));
+    // Value iteration agrees with policy iteration.
+    let (code, stdout, err) = synthesize(&[&home_plan(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["method"], "RelativeValueIteration");
+    assert!((v["value"].as_f64().unwrap() - optimum).abs() <= 1e-9 * optimum);
+}
+
+#[test]
+fn policy_iteration_for_another_objective_is_refused() {
+    let (code, _, err) = synthesize(&[
+        &home_plan(),
+        "--objective",
+        "discounted-max",
+        "--discount",
+        "0.1",
+        "--method",
+        "policy",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains(
+            "--method policy: policy iteration is implemented for lra-max and lra-min only"
+        ),
+        "{err}"
+    );
+}

@@ -30,6 +30,7 @@ fn import_to(
         &ImportOptions {
             out: dir.path().join("out"),
             net,
+            project_path: None,
         },
     )
     .map(|i| i.plan);
@@ -116,9 +117,20 @@ fn translation_to_toml_on_a_built_net() {
     b.output(t2, p1, 1);
     let net = b.build().unwrap();
     let input = read_input(&json).unwrap();
-    let (text, warnings) = plan_text(&input, &net, "net.xml").unwrap();
+    let (text, warnings) = plan_text(&input, &net, "net.xml", ".").unwrap();
     assert!(text.contains("net = \"net.xml\""), "{text}");
-    assert!(text.contains("[places.p1]\naction = \"f.work\""), "{text}");
+    assert!(
+        text.contains(
+            "[places.p1]\naction = { worker = \"functions\", name = \"f.work\" }   # place_to_function_mapping"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains(
+            "[workers.functions]\ncommand = [\"python3\", \"thesis_functions.py\", \".\"]"
+        ),
+        "{text}"
+    );
     assert!(text.contains("[places.p2]\nrole = \"resource\""), "{text}");
     assert!(
         warnings.iter().any(|w| w.contains("resource")),
@@ -136,7 +148,7 @@ fn translation_to_toml_on_a_built_net() {
     assert_eq!(
         plan.roles[0],
         Some(Role::Action {
-            name: "f.work".into(),
+            name: "worker `functions` action `f.work`".into(),
             timeout: None,
             on_failure: Default::default(),
             robot: None,
@@ -362,7 +374,7 @@ fn the_generated_ring_input_imports_with_an_explicit_net() {
     let p3 = plan.net.place_by_name("p3").unwrap();
     assert!(matches!(
         plan.role(p3),
-        Some(Role::Action { name, .. }) if name == "ring_functions.work_p3"
+        Some(Role::Action { name, .. }) if name == "worker `functions` action `ring_functions.work_p3`"
     ));
     assert_eq!(plan.roles.iter().flatten().count(), 4);
     assert_eq!(plan.net.initial_tokens(), 10);

@@ -5,3 +5,4 @@ mod support;
 
 mod import_thesis;
 mod plan_file;
+mod program_actions;

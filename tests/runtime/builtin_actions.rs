@@ -137,3 +137,37 @@ async fn a_malformed_builtin_is_refused_naming_the_place_and_the_text() {
         assert_eq!(err.to_string(), why);
     }
 }
+
+#[tokio::test(start_paused = true)]
+async fn an_action_neither_registered_nor_built_in_is_refused_at_spawn() {
+    let net = loop_net();
+    let look = net.place_by_name("look").unwrap();
+    let e = Runtime::builder(net)
+        .role(look, role("inspect"))
+        .action(
+            "scan",
+            gspn::runtime::action_fn(|_| async { Outcome::Decide }),
+        )
+        .action(
+            "dock",
+            gspn::runtime::action_fn(|_| async { Outcome::Decide }),
+        )
+        .spawn()
+        .unwrap_err();
+    match &e {
+        RuntimeError::UnknownAction {
+            place,
+            action,
+            known,
+        } => {
+            assert_eq!(place, "look");
+            assert_eq!(action, "inspect");
+            assert_eq!(known, &["dock", "scan"]);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(
+        e.to_string(),
+        "place `look`: action `inspect` is not registered and not a built-in (`wait [S]`, `log MSG`, `fire T [after S]`); registered: dock, scan"
+    );
+}

@@ -3,6 +3,7 @@
 #[path = "../support/mod.rs"]
 mod support;
 
+mod conformance;
 mod firing;
 mod reference_nets;
 mod token_counts_never_wrap;

@@ -95,8 +95,8 @@ fn map_mistakes_are_refused_with_line_and_column() {
     assert!(m.contains("colour"), "{m}");
     let goto =
         format!("[places.\"p1:Check_Temperature_L1\"]\naction = \"goto L7; measure\"\n{TWO}");
-    let (l, _, m) = error_at(&goto);
-    assert_eq!(l, 2);
+    let (l, c, m) = error_at(&goto);
+    assert_eq!((l, c), (3, 10), "at the action's value");
     assert_eq!(
         m,
         "place `p1:Check_Temperature_L1`: `goto L7`: location `L7` does not exist"

@@ -11,7 +11,8 @@
 //! iteration with a stop option per MEC state; a MEC whose best is to leave steers each of
 //! its states to the leaving state (an attractor), so the policy never cycles inside.
 
-use super::solve::{Equations, Method, Solution, SolveOptions};
+use super::policy_iteration::{mec_policy_iteration, steer};
+use super::solve::{Algorithm, Equations, Method, Solution, SolveOptions};
 use super::{DecisionError, DecisionModel, Kind, Rewards};
 use crate::analysis::scc::tarjan;
 
@@ -109,6 +110,7 @@ fn mec_value(
     opts: &SolveOptions,
     policy: &mut [u32],
     iterations_so_far: usize,
+    start: Option<&[f64]>,
 ) -> Result<MecValue, DecisionError> {
     let markov: Vec<u32> = states
         .iter()
@@ -151,9 +153,23 @@ fn mec_value(
     });
     let order = sccs.members();
     let better = |a: f64, b: f64| if max { a > b } else { a < b };
-    let mut x = vec![0.0f64; model.state_count()];
+    let mut x = match start {
+        Some(v) => v.to_vec(),
+        None => vec![0.0f64; model.state_count()],
+    };
     let mut next = vec![0.0f64; markov.len()];
     let eps = opts.precision;
+    // A gain near 0 (a minimum that avoids every reward) is bounded absolutely, relative to
+    // the largest reward rate a state of the MEC can earn.
+    let floor = markov
+        .iter()
+        .map(|&s| {
+            let s = s as usize;
+            let c = model.choices(s).start;
+            rewards.rate[s].abs() + model.exit_rate(s) * rewards.impulse[c].abs()
+        })
+        .fold(0.0f64, f64::max)
+        * 1e-3;
     let mut iterations = 0;
     loop {
         if opts.cancelled() {
@@ -228,7 +244,7 @@ fn mec_value(
         for (i, &s) in markov.iter().enumerate() {
             x[s as usize] = next[i] - reference;
         }
-        if ghi - glo <= eps * glo.abs().max(ghi.abs()) || ghi - glo <= 1e-300 {
+        if ghi - glo <= eps * glo.abs().max(ghi.abs()).max(floor) || ghi - glo <= 1e-300 {
             return Ok(MecValue {
                 lower: glo,
                 upper: ghi,
@@ -256,7 +272,18 @@ pub(super) fn solve(
     let mut policy = vec![u32::MAX; n];
     let mut iterations = 0;
     let mut g: Vec<(f64, f64)> = Vec::with_capacity(mecs.count);
+    let pi = opts.algorithm == Algorithm::PolicyIteration;
     for states in &members {
+        // Policy iteration finds the MEC's optimal policy and its bias; value iteration then
+        // starts from that bias, so its first step already bounds the gain.
+        let start = if pi {
+            let (h, rounds) =
+                mec_policy_iteration(model, rewards, &mecs, states, max, opts, &mut policy)?;
+            iterations += rounds;
+            Some(h)
+        } else {
+            None
+        };
         let v = mec_value(
             model,
             rewards,
@@ -266,6 +293,7 @@ pub(super) fn solve(
             opts,
             &mut policy,
             iterations,
+            start.as_deref(),
         )?;
         iterations += v.iterations;
         g.push((v.lower, v.upper));
@@ -380,13 +408,16 @@ pub(super) fn solve(
         values,
         policy,
         iterations,
-        method: Method::RelativeValueIteration,
+        method: if pi {
+            Method::PolicyIteration
+        } else {
+            Method::RelativeValueIteration
+        },
     })
 }
 
-/// Steers every state of a MEC to the state owning `exit` (a choice leaving the MEC): a
-/// backward search over the inside choices, each state taking a choice that reaches states
-/// already steered.
+/// Steers every state of a MEC to the state owning `exit` (a choice leaving the MEC), through
+/// its inside choices ([`steer`]).
 fn attract(model: &DecisionModel, mecs: &Mecs, states: &[u32], exit: usize, policy: &mut [u32]) {
     let owner = states
         .iter()
@@ -396,24 +427,5 @@ fn attract(model: &DecisionModel, mecs: &Mecs, states: &[u32], exit: usize, poli
     let mut done = vec![false; model.state_count()];
     done[owner] = true;
     policy[owner] = exit as u32;
-    loop {
-        let mut changed = false;
-        for &s in states {
-            let s = s as usize;
-            if done[s] {
-                continue;
-            }
-            for c in model.choices(s) {
-                if mecs.inside[c] && model.branches(c).any(|(t, _)| done[t as usize]) {
-                    policy[s] = c as u32;
-                    done[s] = true;
-                    changed = true;
-                    break;
-                }
-            }
-        }
-        if !changed {
-            return;
-        }
-    }
+    steer(model, &mecs.inside, states, &mut done, policy);
 }

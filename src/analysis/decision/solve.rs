@@ -32,6 +32,21 @@ pub struct SolveOptions {
     pub max_iterations: usize,
     /// Set from another thread to stop ([`DecisionError::Cancelled`]).
     pub cancel: Option<Arc<AtomicBool>>,
+    /// Which algorithm to run.
+    pub algorithm: Algorithm,
+}
+
+/// The algorithm [`solve`] runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Algorithm {
+    /// Value iteration with sound bounds ([`Method::OptimisticValueIteration`],
+    /// [`Method::RelativeValueIteration`]).
+    #[default]
+    ValueIteration,
+    /// Policy iteration with exact policy evaluation (sparse LU), then one bounding step of
+    /// value iteration from its values ([`Method::PolicyIteration`]). For the long-run
+    /// average only; the other objectives refuse it ([`DecisionError::Unsupported`]).
+    PolicyIteration,
 }
 
 impl Default for SolveOptions {
@@ -40,6 +55,7 @@ impl Default for SolveOptions {
             precision: 1e-9,
             max_iterations: 1_000_000,
             cancel: None,
+            algorithm: Algorithm::default(),
         }
     }
 }
@@ -62,6 +78,10 @@ pub enum Method {
     /// span bounds `min(Tv − v) ≤ g ≤ max(Tv − v)`, then optimistic value iteration to reach
     /// the best component.
     RelativeValueIteration,
+    /// Policy iteration (long-run average): each policy evaluated exactly (gain and bias by
+    /// sparse LU), improved until stable; the interval from one Bellman step on its bias, as
+    /// value iteration checks its own.
+    PolicyIteration,
 }
 
 /// An optimal value with its bound, and a policy that attains it.
@@ -91,6 +111,11 @@ pub fn solve(
     opts: &SolveOptions,
 ) -> Result<Solution, DecisionError> {
     let max = objective.maximises();
+    if opts.algorithm == Algorithm::PolicyIteration && !matches!(objective, Objective::Lra { .. }) {
+        return Err(DecisionError::Unsupported(
+            "policy iteration is implemented for the long-run average only".into(),
+        ));
+    }
     match objective {
         Objective::Lra { .. } => lra::solve(model, rewards, max, opts),
         Objective::Reach { goal, .. } => {

@@ -49,6 +49,12 @@ impl MoveTable {
         &self.chunks[sp.chunk as usize][sp.offset as usize..(sp.offset + sp.len) as usize]
     }
 
+    /// The group of state `s`, to rewrite in place.
+    pub(crate) fn group_mut(&mut self, s: usize) -> &mut [Move] {
+        let sp = self.spans[s];
+        &mut self.chunks[sp.chunk as usize][sp.offset as usize..(sp.offset + sp.len) as usize]
+    }
+
     /// Total moves over all groups.
     #[inline]
     pub(crate) fn total(&self) -> usize {

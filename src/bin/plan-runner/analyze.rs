@@ -1,6 +1,8 @@
 //! `plan-runner analyze FILE [--steady] [--transient T1,T2,..] [--json] [--export-prism PREFIX]
 //! [--max-states N] [--prob EXPR]`: state space and properties, steady state (limiting
-//! distribution for non-ergodic nets), transient measures, PRISM export.
+//! distribution for non-ergodic nets), transient measures, PRISM export. FILE is a net (the
+//! bare net) or a plan (its net under its policy, with its reward rates:
+//! `gspn::analysis::under_policy`); the output says which.
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -11,17 +13,20 @@ use gspn::analysis::invariants::{Invariants, p_invariants, t_invariants};
 use gspn::analysis::measures::{Measures, Solver, SolverOptions};
 use gspn::analysis::properties::Properties;
 use gspn::analysis::report::{MeasuresReport, Report, StateSpaceReport, transition_names};
-use gspn::analysis::state_space::{AnalysisError, Options, StateSpace};
+use gspn::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
+use gspn::analysis::under_policy::{PolicyAnalysisError, Regime, analyse};
 use gspn::io::prism::Explicit;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
+use gspn::plan::{Plan, open};
 
-use crate::common::{BadInput, NetArgs, load_net};
+use crate::common::{BadInput, NetArgs};
 
 /// Arguments of `analyze`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct Args {
-    /// A net (.xml, .pnml, .PNPRO).
+    /// A net (.xml, .pnml, .PNPRO), or a plan (.toml): its net under its `[[policy]]`
+    /// rules, with its `[rewards.NAME]` rates.
     file: PathBuf,
     /// Compute the steady state (the limiting distribution from the initial marking). The
     /// default when neither --steady nor --transient is given.
@@ -45,13 +50,26 @@ pub(crate) struct Args {
     /// Probability of a marking predicate, e.g. `P1>0 && P3==0` (repeatable).
     #[arg(long = "prob", value_name = "EXPR")]
     prob: Vec<String>,
+    /// Start from the marking of a recorded run (`plan-runner run --journal`): after the last
+    /// firing with sequence number ≤ SEQ (the end of the run without one); transient times
+    /// count from that point.
+    #[arg(long, value_name = "JOURNAL[:SEQ]")]
+    from: Option<String>,
     #[command(flatten)]
     net: NetArgs,
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let loaded = load_net(&args.file, &args.net)?;
-    let net = &loaded.net;
+    let mut plan = open(&args.file, &args.net.read_options())?.into_plan();
+    if let Some(spec) = &args.from {
+        plan.net = crate::conform::start_from(spec, &plan.net)?;
+    }
+    let net = &plan.net;
+    let regime = if plan.policy.is_empty() {
+        Regime::BareNet
+    } else {
+        Regime::UnderPolicy
+    };
     if let Some(t) = args
         .transient
         .iter()
@@ -73,13 +91,44 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         threads: 0,
         max_memory: args.max_memory.saturating_mul(1 << 20),
     };
-    let ss = match StateSpace::build(net, &opts) {
-        Ok(ss) => ss,
-        Err(AnalysisError::Unbounded { places }) => {
-            report_unbounded(&args, &places);
-            return Ok(ExitCode::SUCCESS);
+    let want_steady = args.steady || !args.prob.is_empty() || args.transient.is_empty();
+    let monitor = Monitor::new();
+    let unbounded = |e: &AnalysisError| match e {
+        AnalysisError::Unbounded { places } => Some(places.clone()),
+        _ => None,
+    };
+    // The steady state and the rewards through the library's analysis under the policy
+    // (the viewer and `conform` call the same function); the state space alone otherwise.
+    let (ss, analysed) = if want_steady {
+        match analyse(
+            net,
+            &plan.policy,
+            &plan.rewards,
+            &opts,
+            &SolverOptions::default(),
+            &monitor,
+        ) {
+            Ok(a) => (a.space, Some((a.limiting, a.measures, a.rewards))),
+            Err(PolicyAnalysisError::StateSpace(e)) => match unbounded(&e) {
+                Some(places) => {
+                    report_unbounded(&args, regime, &places);
+                    return Ok(ExitCode::SUCCESS);
+                }
+                None => return Err(e).context(format!("{}", args.file.display())),
+            },
+            Err(e) => return Err(e).context("steady state"),
         }
-        Err(e) => return Err(e).context(format!("{}", args.file.display())),
+    } else {
+        match StateSpace::build_under_policy(net, &plan.policy, &opts, &monitor) {
+            Ok(ss) => (ss, None),
+            Err(e) => match unbounded(&e) {
+                Some(places) => {
+                    report_unbounded(&args, regime, &places);
+                    return Ok(ExitCode::SUCCESS);
+                }
+                None => return Err(e).context(format!("{}", args.file.display())),
+            },
+        }
     };
     let props = Properties::compute(net, &ss);
     let pinv = p_invariants(net, 10_000);
@@ -93,20 +142,13 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             .write(prefix)
             .with_context(|| format!("writing {}.tra/.sta/.lab", prefix.display()))?;
     }
-    let want_steady = args.steady || !args.prob.is_empty() || args.transient.is_empty();
-    let steady = if want_steady {
-        let l = solver
-            .steady_state(&SolverOptions::default())
-            .context("steady state")?;
-        let m = solver.measures(&l.pi);
+    let steady = analysed.map(|(l, m, rewards)| {
         let probs: Vec<f64> = predicates
             .iter()
             .map(|p| solver.probability(&l.pi, p))
             .collect();
-        Some((l.ergodic, m, probs))
-    } else {
-        None
-    };
+        (l.ergodic, m, probs, rewards)
+    });
     let transient: Vec<(f64, Measures, Vec<f64>)> = solver
         .transient(&args.transient, 1e-12)
         .into_iter()
@@ -121,9 +163,12 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         .collect();
     if args.json {
         let report = Report {
+            analysed: regime.label().to_string(),
             state_space: StateSpaceReport::new(net, &props, &pinv, &tinv),
-            steady_state: steady.as_ref().map(|(ergodic, m, probs)| {
-                MeasuresReport::steady(net, *ergodic, m).with_probabilities(&args.prob, probs)
+            steady_state: steady.as_ref().map(|(ergodic, m, probs, rewards)| {
+                MeasuresReport::steady(net, *ergodic, m)
+                    .with_probabilities(&args.prob, probs)
+                    .with_rewards(rewards)
             }),
             transient: transient
                 .iter()
@@ -135,8 +180,8 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         print_json(&report)?;
         return Ok(ExitCode::SUCCESS);
     }
-    print_state_space(&args, net, &props, &pinv, &tinv);
-    if let Some((ergodic, m, probs)) = &steady {
+    print_state_space(&args, regime, &plan, &props, &pinv, &tinv);
+    if let Some((ergodic, m, probs, rewards)) = &steady {
         println!(
             "\nsteady state ({}):",
             if *ergodic {
@@ -148,6 +193,15 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         print_measures(net, m, true);
         for (e, p) in args.prob.iter().zip(probs) {
             println!("  P({e}) = {p:.9}");
+        }
+        if !rewards.is_empty() {
+            println!("\nrewards (long-run rate per unit of time, {regime}):");
+            for r in rewards {
+                println!(
+                    "  {:<24} {:>14.9}   (places {:.9}, transitions {:.9})",
+                    r.name, r.rate, r.places, r.transitions
+                );
+            }
         }
     }
     for (t, m, probs) in &transient {
@@ -170,9 +224,10 @@ fn print_json(report: &Report) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn report_unbounded(args: &Args, places: &[String]) {
+fn report_unbounded(args: &Args, regime: Regime, places: &[String]) {
     if args.json {
         let report = Report {
+            analysed: regime.label().to_string(),
             state_space: StateSpaceReport::unbounded(places),
             steady_state: None,
             transient: Vec::new(),
@@ -188,13 +243,28 @@ fn report_unbounded(args: &Args, places: &[String]) {
     }
 }
 
-fn print_state_space(args: &Args, net: &Net, p: &Properties, pinv: &Invariants, tinv: &Invariants) {
+fn print_state_space(
+    args: &Args,
+    regime: Regime,
+    plan: &Plan,
+    p: &Properties,
+    pinv: &Invariants,
+    tinv: &Invariants,
+) {
+    let net = &plan.net;
     println!(
         "{}: {} places, {} transitions",
         args.file.display(),
         net.place_count(),
         net.transition_count()
     );
+    match regime {
+        Regime::BareNet => println!("analysed: {regime} (the net's own weights)"),
+        Regime::UnderPolicy => println!(
+            "analysed: {regime} ({} rules choose in vanishing markings; the net's weights where none applies)",
+            plan.policy.rules().len()
+        ),
+    }
     println!(
         "state space: {} reachable markings ({} tangible, {} vanishing), {} edges",
         p.reachable, p.tangible, p.vanishing, p.edges

@@ -1,5 +1,6 @@
-//! The backends of `plan-runner run`, built in one place: the simulated world (feature
-//! `sim`, a plan with a `[map]`), ROS 2 (feature `ros2`, a plan with `ros2` places) and the
+//! The backends of `plan-runner run`, built in one place: program actions (a plan with
+//! `action = { command | worker }`), the simulated world (feature `sim`, a plan with a
+//! `[map]`), ROS 2 (feature `ros2`, a plan with `ros2` places) and the
 //! live viewer (feature `web`, `--web`). Every feature switch of `run` is in this file;
 //! `run.rs` attaches, starts and finishes the list it gets.
 
@@ -49,6 +50,14 @@ pub(crate) fn check(plan: &Plan, args: &BackendArgs) -> anyhow::Result<()> {
     }
     #[cfg(feature = "ros2")]
     crate::ros2::check_plan(plan, &args.ros2)?;
+    #[cfg(not(feature = "ros2"))]
+    if !plan.ros2.servers.is_empty() {
+        return Err(crate::common::BadInput(format!(
+            "{}: places with action = \"ros2\" need a plan-runner built with the `ros2` feature (cargo build --features ros2)",
+            plan.path.display()
+        ))
+        .into());
+    }
     let _ = (plan, args);
     Ok(())
 }
@@ -75,10 +84,24 @@ pub(crate) fn tokio_runtime(plan: &Plan) -> std::io::Result<tokio::runtime::Runt
 /// or ROS 2 (a plan with `ros2` places), then the viewer. Call inside the run's tokio
 /// runtime.
 pub(crate) async fn setup(
-    plan: Plan,
+    mut plan: Plan,
     args: &BackendArgs,
 ) -> anyhow::Result<(RuntimeBuilder, Backends)> {
     let mut backends = Backends::default();
+    // Program actions (`action = { command | worker }`) first: the names they register are
+    // the plan's own.
+    let programs = std::mem::take(&mut plan.programs);
+    #[cfg(unix)]
+    if !programs.is_empty() {
+        backends.push(gspn::actions::ProgramActions::new(programs));
+    }
+    #[cfg(not(unix))]
+    if !programs.is_empty() {
+        return Err(crate::common::BadInput(
+            "program actions (`command`, `worker`) need a unix system".into(),
+        )
+        .into());
+    }
     #[cfg(feature = "sim")]
     if plan.map.is_some() {
         let fleet =

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use gspn::check::Report;
-use gspn::plan::{Opened, open};
+use gspn::plan::Opened;
 
 use crate::common::NetArgs;
 
@@ -29,7 +29,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let (report, extra) = match open(&args.file, &args.net.read_options())? {
+    let (report, extra) = match crate::common::open_checked(&args.file, &args.net)? {
         Opened::Plan(plan) => {
             let roles = plan.roles.iter().flatten().count();
             let extra = format!(

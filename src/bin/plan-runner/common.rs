@@ -114,3 +114,13 @@ impl StopSignals {
         }
     }
 }
+
+/// Opens a plan or a net ([`gspn::plan::open`]) and refuses a plan naming an action that is
+/// not known (`plan-runner` registers no action of its own): bad input at its line and column.
+pub(crate) fn open_checked(path: &Path, args: &NetArgs) -> anyhow::Result<gspn::plan::Opened> {
+    let opened = gspn::plan::open(path, &args.read_options())?;
+    if let gspn::plan::Opened::Plan(plan) = &opened {
+        plan.check_actions(&[])?;
+    }
+    Ok(opened)
+}

@@ -13,6 +13,11 @@ use gspn::plan::thesis::{ImportOptions, import};
                   place_to_function_mapping or place_to_client_mapping, resources_list) into \
                   DIR/plan.toml next to a copy of its net. The net is the input's `gspn` path, \
                   relative to the JSON file, or a file of that name beside it, or --net. \
+                  place_to_function_mapping entries (`module.function`) go to a Python worker \
+                  written beside the plan (thesis_functions.py, with gspn_worker.py) that \
+                  imports the module from the input's project_path (relative to the JSON \
+                  file, else the JSON's directory; --project-path overrides) and calls \
+                  function(agent_id); place_to_client_mapping entries become `ros2` places. \
                   A place or transition that is not in the net is bad input (exit 2) with the \
                   JSON file's line and column. See docs/plans.md."
 )]
@@ -25,6 +30,10 @@ pub(crate) struct Args {
     /// The net file, when the input's `gspn` path does not lead to it.
     #[arg(long, value_name = "FILE")]
     net: Option<PathBuf>,
+    /// The directory of the `place_to_function_mapping` modules, when the input's
+    /// `project_path` (relative to the JSON file) does not lead to it.
+    #[arg(long, value_name = "DIR")]
+    project_path: Option<PathBuf>,
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
@@ -35,7 +44,14 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
                 .map_or_else(|| "imported".into(), |s| s.to_string_lossy().into_owned()),
         )
     });
-    let imported = import(&args.input, &ImportOptions { out, net: args.net })?;
+    let imported = import(
+        &args.input,
+        &ImportOptions {
+            out,
+            net: args.net,
+            project_path: args.project_path,
+        },
+    )?;
     for w in &imported.warnings {
         eprintln!("warning: {}: {w}", args.input.display());
     }

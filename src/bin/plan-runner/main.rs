@@ -7,8 +7,10 @@ mod analyze;
 mod backends;
 mod check;
 mod common;
+mod conform;
 mod convert;
 mod import_thesis;
+mod progress;
 mod replay;
 #[cfg(feature = "ros2")]
 mod ros2;
@@ -34,6 +36,8 @@ struct Cli {
 enum Command {
     /// Load a net or a plan, print a summary and warnings.
     Check(check::Args),
+    /// Compare a run's journal with its model's predictions; --fit learns the net back.
+    Conform(conform::Args),
     /// Analyse the state space, steady state and transient behaviour of a net.
     Analyze(analyze::Args),
     /// Play the token game: one seeded trace, or Monte-Carlo estimates over many runs.
@@ -64,6 +68,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check(a) => check::main(a),
         Command::Analyze(a) => analyze::main(a),
+        Command::Conform(a) => conform::main(a),
         Command::Simulate(a) => simulate::main(a),
         Command::Run(a) => run::main(a),
         Command::Synthesize(a) => synthesize::main(a),

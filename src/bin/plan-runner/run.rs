@@ -1,9 +1,11 @@
 //! `plan-runner run PLAN|NET`: execute a plan (or a bare net, every place net-timed) on agents.
 //!
-//! Places whose action is not registered in this binary run net-timed (the CLI has no user
-//! code); a live one-line progress display on a terminal; a summary at the end (`--json`:
-//! `stopped, firings, time, agents_spawned, agents_ended, final_marking, mean_tokens,
-//! throughput, errors`). Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the run cleanly (actions
+//! Action places run built-in actions or programs (`command`, `worker`); a name that is
+//! neither is refused at load. A live one-line progress display on a terminal, else a
+//! progress line on stderr every few seconds (`--quiet`: none); a warning before a run in
+//! virtual time that has no stop condition and cannot end on its own; a summary at the end
+//! (`--json`: `stopped, firings, time, agents_spawned, agents_ended, final_marking,
+//! mean_tokens, throughput, errors`). Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the run cleanly (actions
 //! cancelled, a final `stopped` event, journal flushed) with exit code 130, 143 and 129.
 //!
 //! The backends (simulated robots for a plan with a `[map]`, ROS 2 for `ros2` places, the
@@ -13,10 +15,11 @@
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use gspn::plan::open;
+
 use gspn::runtime::{Backends, RuntimeBuilder, Section, StopReason, Summary};
 
 use crate::backends::{self, BackendArgs};
@@ -45,6 +48,14 @@ pub(crate) struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
+    /// Check every exponential transition's rate while running (gspn::conform::Monitor) and
+    /// report each drift on stderr.
+    #[arg(long)]
+    monitor: bool,
+    /// No progress lines on stderr (printed every few seconds when stderr is not a
+    /// terminal).
+    #[arg(long)]
+    quiet: bool,
     #[command(flatten)]
     backends: BackendArgs,
     #[command(flatten)]
@@ -52,7 +63,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
-    let mut plan = open(&args.file, &args.net.read_options())?.into_plan();
+    let mut plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && (0.0..=gspn::limits::MAX_SECONDS).contains(&x)) {
             let shown = if x.abs() >= 1e15 {
@@ -72,16 +83,31 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(s) = args.seed {
         plan.seed = Some(s);
     }
+    crate::progress::check_stop_flags(args.until, args.max_firings)?;
     if let Some(t) = args.until {
         plan.stop.time_limit = Some(t);
     }
     if let Some(n) = args.max_firings {
         plan.stop.max_firings = Some(n);
     }
-    for w in &plan.warnings {
+    for w in plan
+        .warnings
+        .iter()
+        .chain(&crate::progress::endless_warning(&plan))
+    {
         eprintln!("warning: {w}");
     }
     backends::check(&plan, &args.backends)?;
+    // The summary lists places and transitions in net order (as `analyze` does).
+    let order = NetOrder {
+        places: plan.net.places().iter().map(|p| p.name.clone()).collect(),
+        transitions: plan
+            .net
+            .transitions()
+            .iter()
+            .map(|t| t.name.clone())
+            .collect(),
+    };
     let rt = backends::tokio_runtime(&plan).context("starting tokio")?;
     let (summary, sections, code) = rt.block_on(async {
         // Registered before the backends start: a signal while ROS 2 waits for its robots
@@ -107,7 +133,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             println!("{}", serde_json::to_string_pretty(&v)?);
         }
     } else {
-        print_summary(&summary)?;
+        print_summary(&summary, &order)?;
         for (_, s) in &sections {
             if !s.text.is_empty() {
                 println!("{}", s.text);
@@ -130,7 +156,12 @@ async fn execute(
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
-    let handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    let mut handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
+    let monitor = args.monitor.then(|| {
+        // Subscribed before the backends start, so it sees the run from its first event.
+        let events = handle.events();
+        tokio::spawn(crate::conform::monitor(Arc::clone(handle.net()), events))
+    });
     let handle = match backends.start(handle).await {
         Ok(h) => h,
         Err(e) => {
@@ -151,6 +182,7 @@ async fn execute(
     let wait = handle.wait();
     tokio::pin!(wait);
     let mut ticker = tokio::time::interval(Duration::from_millis(200));
+    let mut lines = (!live && !args.quiet).then(crate::progress::Lines::new);
     let mut interrupted: Option<u8> = None;
     let summary = loop {
         tokio::select! {
@@ -167,11 +199,18 @@ async fn execute(
                         progress.time()
                     ));
                 }
+                if let Some(lines) = &mut lines {
+                    lines.tick(&progress);
+                }
             }
         }
     };
     if let Some(bar) = bar {
         bar.finish_and_clear();
+    }
+    if let Some(m) = monitor {
+        let drifts = m.await.unwrap_or(0);
+        eprintln!("monitor: {drifts} drift(s)");
     }
     eprintln!("seed {}", handle.seed());
     let sections = backends.finish(&summary).await;
@@ -183,7 +222,13 @@ async fn execute(
     Ok((summary, sections, code))
 }
 
-fn print_summary(s: &Summary) -> anyhow::Result<()> {
+/// The names of the net's places and transitions, in net order.
+struct NetOrder {
+    places: Vec<String>,
+    transitions: Vec<String>,
+}
+
+fn print_summary(s: &Summary, order: &NetOrder) -> anyhow::Result<()> {
     println!(
         "stopped: {} after {} firings at time {:.4}",
         s.stopped, s.firings, s.time
@@ -193,12 +238,16 @@ fn print_summary(s: &Summary) -> anyhow::Result<()> {
         s.agents_spawned, s.agents_ended
     );
     println!("place                          final    mean tokens");
-    for (p, k) in &s.final_marking {
-        println!("  {p:<28} {k:>6}   {:>12.6}", s.mean_tokens[p]);
+    for p in &order.places {
+        if let (Some(k), Some(m)) = (s.final_marking.get(p), s.mean_tokens.get(p)) {
+            println!("  {p:<28} {k:>6}   {m:>12.6}");
+        }
     }
     println!("transition                     throughput");
-    for (t, x) in &s.throughput {
-        println!("  {t:<28} {x:>12.6}");
+    for t in &order.transitions {
+        if let Some(x) = s.throughput.get(t) {
+            println!("  {t:<28} {x:>12.6}");
+        }
     }
     for e in &s.errors {
         println!("error: {e}");

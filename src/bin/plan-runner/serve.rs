@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::Context as _;
-use gspn::plan::open;
+
 use gspn::runtime::{
     Backend, BackendError, BackendFuture, Events, RuntimeHandle, Section, Summary,
 };
@@ -40,7 +40,7 @@ pub(crate) struct Args {
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     check_bind(args.addr, args.allow_remote)?;
-    let plan = open(&args.file, &args.net.read_options())?.into_plan();
+    let plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     for w in &plan.warnings {
         eprintln!("warning: {w}");
     }

@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
-use gspn::plan::open;
+
 use gspn::policy::Policy;
 use gspn::sim::{Estimate, Horizon, MonteCarlo, SimError, Simulator};
 use serde_json::{Map, Value, json};
@@ -39,6 +39,10 @@ pub(crate) struct Args {
     /// Print JSON: `runs, firings, mean_tokens, throughput, ci95` (a single run adds `trace`).
     #[arg(long)]
     json: bool,
+    /// Start from the marking of a recorded run: after the last firing with sequence number
+    /// ≤ SEQ (the end of the run without one); times count from that point.
+    #[arg(long, value_name = "JOURNAL[:SEQ]")]
+    from: Option<String>,
     #[command(flatten)]
     net: NetArgs,
 }
@@ -54,7 +58,7 @@ struct Input {
 }
 
 fn load(args: &Args) -> anyhow::Result<Input> {
-    let plan = open(&args.file, &args.net.read_options())?.into_plan();
+    let plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     for w in &plan.warnings {
         eprintln!("warning: {w}");
     }
@@ -77,7 +81,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     if args.runs == Some(0) {
         return Err(BadInput("--runs 0: at least one run is needed".into()).into());
     }
-    let input = load(&args)?;
+    let mut input = load(&args)?;
+    if let Some(spec) = &args.from {
+        input.net = crate::conform::start_from(spec, &input.net)?;
+    }
     let seed = args.seed.or(input.seed).unwrap_or(0);
     let horizon = match (args.until, args.steps) {
         (Some(t), _) => Horizon::Until(t),
@@ -205,6 +212,20 @@ fn trace(
     Ok(())
 }
 
+/// One table of estimates: a header, then a row per name with the mean and its interval.
+fn section<'a>(
+    out: &mut impl Write,
+    width: usize,
+    (what, measure): (&str, &str),
+    rows: impl Iterator<Item = (&'a str, &'a Estimate)>,
+) -> std::io::Result<()> {
+    writeln!(out, "{what:<width$}  {measure:>12}  95% interval")?;
+    for (name, e) in rows {
+        writeln!(out, "{name:<width$}  {:>12.6}  {}", e.mean, interval(e))?;
+    }
+    Ok(())
+}
+
 fn monte_carlo(
     args: &Args,
     input: &Input,
@@ -255,22 +276,20 @@ fn monte_carlo(
         .max()
         .unwrap_or(0)
         .max(10);
-    writeln!(
+    let places = net.places().iter().map(|p| p.name.as_str());
+    let transitions = net.transitions().iter().map(|t| t.name.as_str());
+    section(
         out,
-        "{:<width$}  {:>12}  95% interval",
-        "place", "mean tokens"
+        width,
+        ("place", "mean tokens"),
+        places.zip(&est.mean_tokens),
     )?;
-    for (p, e) in net.places().iter().zip(&est.mean_tokens) {
-        writeln!(out, "{:<width$}  {:>12.6}  {}", p.name, e.mean, interval(e))?;
-    }
-    writeln!(
+    section(
         out,
-        "{:<width$}  {:>12}  95% interval",
-        "transition", "throughput"
+        width,
+        ("transition", "throughput"),
+        transitions.zip(&est.throughput),
     )?;
-    for (t, e) in net.transitions().iter().zip(&est.throughput) {
-        writeln!(out, "{:<width$}  {:>12.6}  {}", t.name, e.mean, interval(e))?;
-    }
     Ok(())
 }
 

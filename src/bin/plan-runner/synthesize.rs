@@ -11,8 +11,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use gspn::analysis::decision::{
-    Action, BuildOptions, Controls, DecisionModel, Objective, PlaceMode, RewardSpec, Rewards,
-    Solution, SolveOptions, compress, solve,
+    Action, Algorithm, BuildOptions, Controls, DecisionModel, Objective, PlaceMode, RewardSpec,
+    Rewards, Solution, SolveOptions, compress, solve,
 };
 use gspn::io::drn;
 use gspn::net::Net;
@@ -62,6 +62,10 @@ pub(crate) struct Args {
     /// Relative width of the value's interval.
     #[arg(long, default_value_t = 1e-9)]
     precision: f64,
+    /// `value` (value iteration with sound bounds) or `policy` (policy iteration with exact
+    /// evaluation by sparse LU; long-run average only), then the same bounding step.
+    #[arg(long, value_name = "METHOD", default_value = "value")]
+    method: String,
     /// Most reachable markings before giving up.
     #[arg(long, value_name = "N", default_value_t = 10_000_000)]
     max_states: usize,
@@ -210,6 +214,20 @@ fn read_rewards(path: &Path, net: &Net) -> anyhow::Result<(RewardSpec, Option<Co
     Ok((spec, controls))
 }
 
+/// The algorithm `--method` names (policy iteration for the long-run average only).
+fn algorithm(args: &Args, goal: &Goal) -> anyhow::Result<Algorithm> {
+    match args.method.as_str() {
+        "value" => Ok(Algorithm::ValueIteration),
+        "policy" if matches!(goal, Goal::Lra) => Ok(Algorithm::PolicyIteration),
+        "policy" => Err(BadInput(format!(
+            "--method policy: policy iteration is implemented for lra-max and lra-min only, not --objective {}",
+            args.objective
+        ))
+        .into()),
+        other => Err(BadInput(format!("--method `{other}`: expected value or policy")).into()),
+    }
+}
+
 /// One solved model with its timings.
 struct Solved {
     model: DecisionModel,
@@ -280,6 +298,7 @@ fn synthesize(
         &objective,
         &SolveOptions {
             precision: args.precision,
+            algorithm: algorithm(args, goal)?,
             ..SolveOptions::default()
         },
     )

@@ -357,6 +357,10 @@ pub(super) fn build(
     };
     let mut b = NetBuilder::new(net_name);
     let mut place_ids: FxHashMap<&str, PlaceId> = FxHashMap::default();
+    let duplicate = |at: usize, what: &'static str, name: &str| {
+        let name = name.to_string();
+        env.error(at, LoadErrorKind::Duplicate { what, name })
+    };
     for r in of(Kind::Place) {
         let name = name_of(&env, r, "place")?;
         let initial = match r.get("marking") {
@@ -365,13 +369,7 @@ pub(super) fn build(
         };
         let position = env.position(r, name)?;
         if place_ids.contains_key(name) {
-            return Err(env.error(
-                r.at,
-                LoadErrorKind::Duplicate {
-                    what: "place",
-                    name: name.to_string(),
-                },
-            ));
+            return Err(duplicate(r.at, "place", name));
         }
         let id = b.add_place(Place {
             name: name.to_string(),
@@ -397,13 +395,7 @@ pub(super) fn build(
         }
         let timing = timing(&env, r, name)?;
         if trans_ids.contains_key(name) {
-            return Err(env.error(
-                r.at,
-                LoadErrorKind::Duplicate {
-                    what: "transition",
-                    name: name.to_string(),
-                },
-            ));
+            return Err(duplicate(r.at, "transition", name));
         }
         let position = env.position(r, name)?;
         let id = b.add_transition(Transition {
@@ -412,7 +404,7 @@ pub(super) fn build(
             position,
         });
         trans_ids.insert(name, id);
-        transition_at.push(env.span(r.at));
+        transition_at.push(r.at);
     }
     for r in of(Kind::Arc) {
         let get = |key: &str| {
@@ -503,7 +495,7 @@ pub(super) fn build(
         net,
         format: Format::Pnpro,
         warnings,
-        transition_at,
+        transition_at: Span::locate_all(text.as_bytes(), transition_at),
     })
 }
 

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use rustc_hash::{FxHashMap, FxHashSet};
 
-use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions};
+use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span};
 use crate::net::{
     ArcKind, NetBuilder, Place, PlaceId, Position, Servers, Timing, Transition, TransitionId,
 };
@@ -156,7 +156,7 @@ pub(crate) fn read(
     for ((pending, mut t), name) in transitions.into_iter().zip(transition_names) {
         t.name = name;
         b.add_transition(t);
-        transition_at.push(x.span(pending.at));
+        transition_at.push(pending.at);
     }
     for a in deferred {
         arcs.push(resolve_arc(&x, &ids, &a, true)?.expect("final resolution errs or resolves"));
@@ -175,7 +175,7 @@ pub(crate) fn read(
         net,
         format,
         warnings,
-        transition_at,
+        transition_at: Span::locate_all(&text, transition_at),
     })
 }
 

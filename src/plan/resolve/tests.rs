@@ -14,14 +14,10 @@ fn net() -> Net {
     let t2 = b.immediate("t2", 1.0, 1);
     let t3 = b.immediate("t3", 1.0, 1);
     let t4 = b.exponential("T4", 2.0, Servers::Single);
-    b.input(p1, t1, 1);
-    b.output(t1, p2, 1);
-    b.input(p2, t2, 1);
-    b.output(t2, p3, 1);
-    b.input(p2, t3, 1);
-    b.output(t3, p1, 1);
-    b.input(p3, t4, 1);
-    b.output(t4, p1, 1);
+    b.moves(p1, t1, p2);
+    b.moves(p2, t2, p3);
+    b.moves(p2, t3, p1);
+    b.moves(p3, t4, p1);
     b.build().unwrap()
 }
 

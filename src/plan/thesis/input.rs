@@ -47,6 +47,7 @@ impl Reader<'_> {
             actions: Vec::new(),
             resources: Vec::new(),
             full_synchronization: None,
+            project_path: None,
             warnings: Vec::new(),
         };
         let (mut has_net, mut has_places, mut has_policy) = (false, false, false);
@@ -94,10 +95,12 @@ impl Reader<'_> {
                         ));
                     }
                 },
-                "project_path" => warnings.push(format!(
-                    "project_path `{}` ignored: actions are registered by name",
-                    s.text
-                )),
+                "project_path" => {
+                    input.project_path = Some(Named {
+                        name: s.text.clone(),
+                        span: self.span(s.start),
+                    });
+                }
                 other => warnings.push(format!("key `{other}` ignored")),
             }
         }

@@ -1,0 +1,338 @@
+//! `plan-runner conform JOURNAL (--plan PLAN | --net NET) [--json] [--fit OUT]`: a recorded
+//! run beside its model's predictions, row by row with a verdict (see `gspn::conform` and
+//! docs/conformance.md); `--fit` writes the net with the rates and weights the run shows.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use gspn::conform::{
+    Fitted, Monitor, Options, Predictions, Report, Trace, Verdict, compare, fit, marking_before,
+    observe, steady_predictions,
+};
+use gspn::io::{Format, write_net};
+use gspn::net::Net;
+use gspn::plan::open;
+use gspn::policy::Policy;
+use gspn::runtime::journal::{JournalError, read_events, split_torn};
+use gspn::runtime::{Event, EventKind, Events, Received};
+
+use crate::common::{BadInput, NetArgs};
+
+/// Arguments of `conform`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct Args {
+    /// The journal (`plan-runner run --journal FILE`).
+    journal: PathBuf,
+    /// The plan the run was made from (its net and policy).
+    #[arg(
+        long,
+        value_name = "PLAN",
+        conflicts_with = "net",
+        required_unless_present = "net"
+    )]
+    plan: Option<PathBuf>,
+    /// The net the run was made from (no policy).
+    #[arg(long, value_name = "NET")]
+    net: Option<PathBuf>,
+    /// Print JSON: `net, predictions, time, firings, batches, rows` (and `fitted`).
+    #[arg(long)]
+    json: bool,
+    /// Write the net with the fitted rates and weights (.PNPRO, .pnml or .xml).
+    #[arg(long, value_name = "OUT")]
+    fit: Option<PathBuf>,
+    /// Batches of batch means.
+    #[arg(long, value_name = "N", default_value_t = 20)]
+    batches: usize,
+    /// Most reachable markings for the steady-state prediction.
+    #[arg(long, value_name = "N", default_value_t = 1_000_000)]
+    max_states: usize,
+    #[command(flatten)]
+    net_args: NetArgs,
+}
+
+/// The net and policy of `--plan` or `--net`.
+pub(crate) fn model(
+    plan: Option<&Path>,
+    net: Option<&Path>,
+    args: &NetArgs,
+) -> anyhow::Result<(Net, Policy)> {
+    let path = plan.or(net).expect("clap requires --plan or --net");
+    let plan = open(path, &args.read_options())?.into_plan();
+    for w in &plan.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok((plan.net, plan.policy))
+}
+
+/// A journal of a run of `net`, read into a trace (a last line cut short by a kill is
+/// skipped with a warning, as `replay` does).
+pub(crate) fn journal_trace(path: &Path, net: &Net) -> anyhow::Result<Trace> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| BadInput(format!("cannot read {}: {e}", path.display())))?;
+    let (text, torn) = split_torn(&text);
+    let events = match read_events(text, net) {
+        Err(JournalError::OtherNet { .. }) if let Some(scaled) = scaled_net(text, net) => {
+            read_events(text, &scaled)
+        }
+        r => r,
+    }
+    .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+    if let Some(torn) = &torn {
+        eprintln!(
+            "warning: {}: {torn}: skipped (the run was killed while writing it)",
+            path.display()
+        );
+    }
+    Ok(Trace::from_events(net, &events))
+}
+
+/// `net` with the initial marking a run started from when it was not the net's (a plan run
+/// with `--robots N` scales it, and the journal's hash is of the scaled net): the marking
+/// before the journal's first firing.
+fn scaled_net(text: &str, net: &Net) -> Option<Net> {
+    let (t, marking) = text.lines().skip(1).find_map(|l| {
+        let e: Event = serde_json::from_str(l).ok()?;
+        match e.kind {
+            EventKind::Fired {
+                transition,
+                marking,
+                ..
+            } if transition.index() < net.transition_count()
+                && marking.len() == net.place_count() =>
+            {
+                Some((transition, marking))
+            }
+            _ => None,
+        }
+    })?;
+    net.with_initial_marking(&marking_before(net, t, &marking)?)
+        .ok()
+}
+
+/// The output format of `--fit`, by extension.
+pub(crate) fn fit_format(path: &Path) -> anyhow::Result<Format> {
+    match Format::from_extension(path) {
+        Some(f @ (Format::Pnpro | Format::Pnml | Format::Pipe)) => Ok(f),
+        _ => Err(BadInput(format!(
+            "--fit {}: the extension must be .PNPRO, .pnml or .xml",
+            path.display()
+        ))
+        .into()),
+    }
+}
+
+pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    if args.batches < 2 {
+        return Err(BadInput(format!("--batches {}: at least 2 are needed", args.batches)).into());
+    }
+    let format = args.fit.as_deref().map(fit_format).transpose()?;
+    let (net, policy) = model(args.plan.as_deref(), args.net.as_deref(), &args.net_args)?;
+    let trace = journal_trace(&args.journal, &net)?;
+    let opts = Options {
+        batches: args.batches,
+        ..Options::default()
+    };
+    let policy = (!policy.is_empty()).then_some(policy);
+    let obs = observe(&net, policy.as_ref(), &trace, &opts)
+        .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
+    let pred = if policy.is_some() {
+        Predictions::none("none: the steady state under the plan's policy is not analysed yet")
+    } else {
+        steady_predictions(&net, args.max_states)
+            .unwrap_or_else(|e| Predictions::none(&format!("none: {e}")))
+    };
+    let report = compare(&net, &obs, &pred, &opts);
+    let fitted = match (&args.fit, format) {
+        (Some(out), Some(format)) => {
+            let (fitted_net, params) = fit(&net, &obs, &opts);
+            write_net(&fitted_net, out, format)?;
+            Some((out, params))
+        }
+        _ => None,
+    };
+    if args.json {
+        let mut v = serde_json::to_value(&report)?;
+        if let Some((out, params)) = &fitted {
+            v["fitted"] = serde_json::json!({"file": out, "parameters": params});
+        }
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        print_report(&report);
+        if let Some((out, params)) = &fitted {
+            print_fitted(out, params);
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn num(x: f64) -> String {
+    if x != 0.0 && (x.abs() >= 1e6 || x.abs() < 1e-3) {
+        format!("{x:.3e}")
+    } else {
+        format!("{x:.4}")
+    }
+}
+
+fn print_report(r: &Report) {
+    println!(
+        "# {}: {} firings over {} time units, {} batches; predictions: {}",
+        r.net,
+        r.firings,
+        num(r.time),
+        r.batches,
+        r.predictions
+    );
+    let width = r
+        .rows
+        .iter()
+        .map(|x| x.item.chars().count())
+        .max()
+        .unwrap_or(4)
+        .max(4);
+    println!(
+        "{:<11} {:<width$} {:>10} {:>23} {:>10} {:>7} {:>9}  verdict",
+        "row", "item", "observed", "95% interval", "predicted", "n", "p"
+    );
+    for x in &r.rows {
+        let kind = serde_json::to_value(x.kind)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
+        let interval = x
+            .interval
+            .map_or("-".into(), |[lo, hi]| format!("[{}, {}]", num(lo), num(hi)));
+        let verdict = match x.verdict {
+            Verdict::Consistent => "consistent",
+            Verdict::Diverges if x.kind == gspn::conform::RowKind::Shape => {
+                "diverges: not exponential"
+            }
+            Verdict::Diverges => "diverges",
+            Verdict::TooLittleData => "too little data",
+            Verdict::NoPrediction => "no prediction",
+        };
+        println!(
+            "{:<11} {:<width$} {:>10} {:>23} {:>10} {:>7} {:>9}  {verdict}{}",
+            kind,
+            x.item,
+            num(x.observed),
+            interval,
+            x.predicted.map_or("-".into(), num),
+            x.n,
+            x.p_value.map_or("-".into(), |p| format!("{p:.4}")),
+            x.detail
+                .as_ref()
+                .map_or(String::new(), |d| format!(" ({d})")),
+        );
+    }
+    let tested = r.tested().count();
+    let diverging = r.diverging().count();
+    println!("# {diverging} of {tested} tested rows diverge at the 5% level");
+}
+
+fn print_fitted(out: &Path, params: &[Fitted]) {
+    println!("\n# fitted net written to {}", out.display());
+    println!(
+        "{:<24} {:<7} {:>10} {:>10} {:>23} {:>7}",
+        "transition", "param", "old", "fitted", "95% interval", "n"
+    );
+    for f in params {
+        println!(
+            "{:<24} {:<7} {:>10} {:>10} {:>23} {:>7}{}",
+            f.transition,
+            f.parameter,
+            num(f.old),
+            num(f.new),
+            f.interval
+                .map_or("-".into(), |[lo, hi]| format!("[{}, {}]", num(lo), num(hi))),
+            f.n,
+            if f.kept {
+                "  kept: too little data"
+            } else {
+                ""
+            }
+        );
+    }
+    let kept: Vec<&str> = params
+        .iter()
+        .filter(|f| f.kept)
+        .map(|f| f.transition.as_str())
+        .collect();
+    if !kept.is_empty() {
+        println!("# kept (too little data): {}", kept.join(", "));
+    }
+}
+
+/// `--from JOURNAL[:SEQ]` of `simulate` and `analyze`: `net` started from the marking after
+/// the last firing with sequence number ≤ SEQ (the end of the run without one); the point
+/// (its model time and marking) is reported on stderr.
+pub(crate) fn start_from(spec: &str, net: &Net) -> anyhow::Result<Net> {
+    let (path, seq) = match spec.rsplit_once(':') {
+        Some((p, s)) if !p.is_empty() && !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()) => {
+            let seq = s
+                .parse::<u64>()
+                .map_err(|e| BadInput(format!("--from {spec}: sequence number `{s}`: {e}")))?;
+            (p, Some(seq))
+        }
+        _ => (spec, None),
+    };
+    let trace = journal_trace(Path::new(path), net)?;
+    let (marking, time) = trace.at(seq);
+    let started = net
+        .with_initial_marking(&marking)
+        .map_err(|e| BadInput(format!("--from {spec}: {e}")))?;
+    eprintln!(
+        "starting from {spec}: time {time}, {}",
+        started.format_marking(&marking)
+    );
+    Ok(started)
+}
+
+/// `run --monitor`: feeds the run's firings to a [`gspn::conform::Monitor`] and prints each
+/// drift on stderr; the number of drifts. When the monitor falls behind the event bus it
+/// starts over from the next firing (a warning says so).
+pub(crate) async fn monitor(net: std::sync::Arc<Net>, mut events: Events) -> u64 {
+    let mut mon: Option<Monitor> = Some(Monitor::new(
+        &net,
+        net.initial_marking().into_vec(),
+        Default::default(),
+    ));
+    let mut drifts = 0;
+    while let Some(r) = events.recv().await {
+        match r {
+            Received::Event(Event {
+                time,
+                kind:
+                    EventKind::Fired {
+                        transition,
+                        marking,
+                        ..
+                    },
+                ..
+            }) => {
+                let m = mon.get_or_insert_with(|| {
+                    Monitor::new(&net, marking.to_vec(), Default::default()).at(time)
+                });
+                if let Some(d) = m.fired(time, transition, &marking) {
+                    drifts += 1;
+                    eprintln!(
+                        "drift: {} at time {:.3}: {:.4} firings per unit of enabled time over the last {}, 95% [{:.4}, {:.4}]; the net says {} (p {:.1e})",
+                        d.transition,
+                        d.time,
+                        d.observed,
+                        d.n,
+                        d.interval[0],
+                        d.interval[1],
+                        d.predicted,
+                        d.p_value
+                    );
+                }
+            }
+            Received::Lagged(n) => {
+                eprintln!("warning: --monitor fell {n} events behind: it starts over");
+                mon = None;
+            }
+            Received::Event(_) => {}
+        }
+    }
+    drifts
+}

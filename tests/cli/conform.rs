@@ -1,0 +1,294 @@
+//! `plan-runner conform`: a net-timed run of cyc3 is consistent with its net and `--fit`
+//! learns its rates back; a run of the patrol on simulated robots diverges on the transitions
+//! out of the places that drive (`goto`), not exponential; bad arguments exit with 2;
+//! `simulate`/`analyze --from JOURNAL:SEQ` start from the journal's marking.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_plan-runner"))
+}
+
+fn repo(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+fn ok_json(out: &Output) -> Value {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn row<'a>(report: &'a Value, kind: &str, item: &str) -> &'a Value {
+    report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["kind"] == kind && r["item"] == item)
+        .unwrap_or_else(|| panic!("no {kind} row for {item}"))
+}
+
+/// A journal of `plan` run with `extra` arguments, in `dir`.
+fn journal(dir: &Path, plan: &str, extra: &[&str]) -> PathBuf {
+    let j = dir.join("run.jsonl");
+    let plan = repo(plan);
+    let mut args = vec![
+        "run",
+        plan.to_str().unwrap(),
+        "--journal",
+        j.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let out = run(&args);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    j
+}
+
+#[test]
+fn a_net_timed_run_of_cyc3_is_consistent_and_fit_learns_its_rates() {
+    let dir = tempfile::tempdir().unwrap();
+    let j = journal(dir.path(), "plans/cyc3.toml", &["--until", "3000"]);
+    let plan = repo("plans/cyc3.toml");
+    let fitted = dir.path().join("fitted.PNPRO");
+    let report = ok_json(&run(&[
+        "conform",
+        j.to_str().unwrap(),
+        "--plan",
+        plan.to_str().unwrap(),
+        "--json",
+        "--fit",
+        fitted.to_str().unwrap(),
+    ]));
+    assert_eq!(report["net"], "cyc3");
+    assert_eq!(report["predictions"], "steady state of the net");
+    // 3 places, 3 throughputs, 2 rates, 2 shapes (t2 alone decides nothing).
+    assert_eq!(report["rows"].as_array().unwrap().len(), 10);
+    for (kind, item, truth) in [("rate", "T1", 1.0), ("rate", "T3", 2.0)] {
+        let r = row(&report, kind, item);
+        let [lo, hi] = [
+            r["interval"][0].as_f64().unwrap(),
+            r["interval"][1].as_f64().unwrap(),
+        ];
+        assert!(lo <= truth && truth <= hi, "{item}: [{lo}, {hi}]");
+        assert!(r["n"].as_u64().unwrap() > 2000, "{r}");
+    }
+    let p1 = row(&report, "mean_tokens", "P1");
+    assert!((p1["predicted"].as_f64().unwrap() - 10.0 / 7.0).abs() < 1e-12);
+    assert!((p1["observed"].as_f64().unwrap() - 10.0 / 7.0).abs() < 0.05);
+    // The fitted net: T3's rate is the observed one, within its interval of 2.
+    let params = &report["fitted"]["parameters"];
+    let t3 = params
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["transition"] == "T3")
+        .unwrap();
+    assert_eq!(t3["kept"], false);
+    let text = std::fs::read_to_string(&fitted).unwrap();
+    let net = gspn::io::read_net(&fitted, &gspn::io::ReadOptions::default())
+        .unwrap()
+        .net;
+    let id = net.transition_by_name("T3").unwrap();
+    let gspn::net::Timing::Exponential { rate, .. } = net.transition(id).timing else {
+        panic!("T3 is exponential: {text}");
+    };
+    assert!((rate - t3["new"].as_f64().unwrap()).abs() < 1e-9 * rate);
+    assert!((rate - 2.0).abs() < 0.15, "fitted T3 rate {rate}");
+
+    // The text table names every row and ends with the count of diverging rows.
+    let out = run(&[
+        "conform",
+        j.to_str().unwrap(),
+        "--plan",
+        plan.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("rate        T3"), "{text}");
+    assert!(
+        text.contains("tested rows diverge at the 5% level"),
+        "{text}"
+    );
+}
+
+#[cfg(feature = "sim")]
+#[test]
+fn a_run_on_simulated_robots_diverges_on_the_goto_transitions() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = "plans/temperature-patrol/plan.toml";
+    let j = journal(dir.path(), plan, &["--robots", "2", "--until", "1200"]);
+    let report = ok_json(&run(&[
+        "conform",
+        j.to_str().unwrap(),
+        "--plan",
+        repo(plan).to_str().unwrap(),
+        "--json",
+    ]));
+    // The transitions out of Check_Temperature (drive there, then measure) at every location.
+    for t in [
+        "t1:Temperature_High_L1",
+        "t3:Temperature_Low_L1",
+        "t9:Temperature_Low_L2",
+        "t15:Temperature_Low_L3",
+        "t21:Temperature_Low_L4",
+    ] {
+        let shape = row(&report, "shape", t);
+        assert_eq!(shape["verdict"], "diverges", "{t}: {shape}");
+    }
+    let diverging_rates = report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["kind"] == "rate" && r["verdict"] == "diverges")
+        .count();
+    assert!(diverging_rates >= 4, "{diverging_rates} rate rows diverge");
+}
+
+#[test]
+fn bad_arguments_exit_with_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let j = journal(dir.path(), "plans/cyc3.toml", &["--until", "50"]);
+    let plan = repo("plans/cyc3.toml");
+    let out = run(&[
+        "conform",
+        j.to_str().unwrap(),
+        "--plan",
+        plan.to_str().unwrap(),
+        "--fit",
+        "out.txt",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--fit out.txt"));
+    // A journal of another net.
+    let other = repo("plans/temperature-patrol/temperature_patrol.xml");
+    let out = run(&[
+        "conform",
+        j.to_str().unwrap(),
+        "--net",
+        other.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("not of this net"), "{stderr}");
+    // Neither --plan nor --net.
+    assert_eq!(
+        run(&["conform", j.to_str().unwrap()]).status.code(),
+        Some(2)
+    );
+}
+
+#[test]
+fn simulate_and_analyze_start_from_a_journal_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let j = journal(dir.path(), "plans/cyc3.toml", &["--until", "50"]);
+    let plan = repo("plans/cyc3.toml");
+    let text = std::fs::read_to_string(&j).unwrap();
+    // The first firing of t2 (transition 1): a tangible marking, its seq and tokens.
+    let first: Value = text
+        .lines()
+        .skip(1)
+        .map(|l| serde_json::from_str::<Value>(l).unwrap())
+        .find(|e| e["event"] == "fired" && e["transition"] == 1)
+        .unwrap();
+    let seq = first["seq"].as_u64().unwrap();
+    let marking: Vec<u64> = first["marking"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect();
+    let from = format!("{}:{seq}", j.display());
+    let out = run(&[
+        "analyze",
+        repo("plans/nets/cyc3_ss.PNPRO").to_str().unwrap(),
+        "--page",
+        "cyc3",
+        "--from",
+        &from,
+        "--transient",
+        "0",
+        "--json",
+    ]);
+    let v = ok_json(&out);
+    let at0 = &v["transient"][0]["mean_tokens"];
+    for (p, k) in ["P1", "P2", "P3"].iter().zip(&marking) {
+        assert_eq!(at0[p].as_f64().unwrap(), *k as f64, "{v}");
+    }
+    let out = run(&[
+        "simulate",
+        plan.to_str().unwrap(),
+        "--from",
+        &from,
+        "--steps",
+        "0",
+        "--json",
+    ]);
+    let v = ok_json(&out);
+    assert_eq!(v["trace"].as_array().unwrap().len(), 0);
+    let out = run(&[
+        "simulate",
+        plan.to_str().unwrap(),
+        "--from",
+        "no-such.jsonl:3",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn run_monitor_reports_no_drift_on_a_net_timed_run() {
+    let out = run(&[
+        "run",
+        repo("plans/cyc3.toml").to_str().unwrap(),
+        "--until",
+        "1500",
+        "--monitor",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("monitor: 0 drift(s)"), "{stderr}");
+    assert!(!stderr.contains("drift:"), "{stderr}");
+}
+
+#[cfg(feature = "sim")]
+#[test]
+fn run_monitor_reports_drift_on_the_goto_transitions_of_robots() {
+    let out = run(&[
+        "run",
+        repo("plans/temperature-patrol/plan.toml").to_str().unwrap(),
+        "--robots",
+        "3",
+        "--until",
+        "1200",
+        "--monitor",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let drifts: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("drift: "))
+        .collect();
+    assert!(drifts.len() >= 4, "{stderr}");
+    assert!(
+        drifts.iter().all(|l| l.contains(":Temperature_")),
+        "{stderr}"
+    );
+    // Once per transition.
+    let mut names: Vec<&str> = drifts
+        .iter()
+        .map(|l| l.split(' ').nth(1).unwrap())
+        .collect();
+    names.sort();
+    names.dedup();
+    assert_eq!(names.len(), drifts.len(), "{stderr}");
+}
