@@ -38,8 +38,8 @@ use std::sync::Arc;
 
 use serde::Serialize;
 
-use crate::analysis::measures::{Solver, SolverOptions};
-use crate::analysis::state_space::{Options as SpaceOptions, StateSpace};
+use crate::analysis::measures::SolverOptions;
+use crate::analysis::state_space::Options as SpaceOptions;
 use crate::net::{Net, NetBuilder, PlaceId, Timing, TransitionId};
 use crate::policy::Policy;
 use crate::runtime::event::{Event, EventKind};
@@ -458,25 +458,37 @@ impl Predictions {
 }
 
 /// The steady state (limiting distribution from the initial marking) of the bare net.
-pub fn steady_predictions(net: &Net, max_states: usize) -> Result<Predictions, ConformError> {
+pub fn steady_predictions(
+    net: &Net,
+    policy: Option<&Policy>,
+    max_states: usize,
+) -> Result<Predictions, ConformError> {
     let opts = SpaceOptions {
         max_states,
         ..SpaceOptions::default()
     };
-    let ss = StateSpace::build(net, &opts).map_err(|e| ConformError::Analysis(e.to_string()))?;
-    let solver = Solver::new(net, &ss);
-    let l = solver
-        .steady_state(&SolverOptions::default())
-        .map_err(|e| ConformError::Analysis(e.to_string()))?;
-    let m = solver.measures(&l.pi);
+    let analysis = crate::analysis::under_policy::analyse(
+        net,
+        policy.unwrap_or(&Policy::empty()),
+        &[],
+        &opts,
+        &SolverOptions::default(),
+        &crate::analysis::state_space::Monitor::new(),
+    )
+    .map_err(|e| ConformError::Analysis(e.to_string()))?;
+    let what = if policy.is_some() {
+        "the net under the plan's policy"
+    } else {
+        "the net"
+    };
     Ok(Predictions {
-        source: if l.ergodic {
-            "steady state of the net".into()
+        source: if analysis.limiting.ergodic {
+            format!("steady state of {what}")
         } else {
-            "limiting distribution of the net (not ergodic)".into()
+            format!("limiting distribution of {what} (not ergodic)")
         },
-        mean_tokens: Some(m.mean_tokens),
-        throughput: Some(m.throughput),
+        mean_tokens: Some(analysis.measures.mean_tokens),
+        throughput: Some(analysis.measures.throughput),
     })
 }
 

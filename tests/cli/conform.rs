@@ -153,6 +153,18 @@ fn a_run_on_simulated_robots_diverges_on_the_goto_transitions() {
         .filter(|r| r["kind"] == "rate" && r["verdict"] == "diverges")
         .count();
     assert!(diverging_rates >= 4, "{diverging_rates} rate rows diverge");
+    // The plan has a policy: the steady-state rows are predicted under it.
+    // (Not ergodic: the policy leaves some markings transient; the limiting distribution from
+    // the initial marking is the prediction.)
+    assert_eq!(
+        report["predictions"],
+        "limiting distribution of the net under the plan's policy (not ergodic)"
+    );
+    let throughput = row(&report, "throughput", "t1:Temperature_High_L1");
+    assert!(
+        throughput["predicted"].as_f64().unwrap() > 0.0,
+        "{throughput}"
+    );
 }
 
 #[test]

@@ -11,7 +11,6 @@ mod ros2_support;
 mod ros2_rtps;
 
 mod ctrl_c_while_waiting_for_robots;
-mod fleet;
 mod interop;
 mod lifecycle;
 mod multiprocess;

@@ -24,7 +24,7 @@ fn temperature_patrol() -> Net {
 /// transition and run, whether the fitted rate's interval holds `model`'s rate.
 fn reports(net: &Net, model: &Net, runs: u64, until: f64) -> (Vec<Report>, Vec<bool>) {
     let arc = Arc::new(net.clone());
-    let pred: Predictions = steady_predictions(model, 1_000_000).unwrap();
+    let pred: Predictions = steady_predictions(model, None, 1_000_000).unwrap();
     let opts = Options::default();
     let mut out = Vec::new();
     let mut covered = Vec::new();

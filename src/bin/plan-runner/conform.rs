@@ -135,12 +135,8 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let policy = (!policy.is_empty()).then_some(policy);
     let obs = observe(&net, policy.as_ref(), &trace, &opts)
         .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
-    let pred = if policy.is_some() {
-        Predictions::none("none: the steady state under the plan's policy is not analysed yet")
-    } else {
-        steady_predictions(&net, args.max_states)
-            .unwrap_or_else(|e| Predictions::none(&format!("none: {e}")))
-    };
+    let pred = steady_predictions(&net, policy.as_ref(), args.max_states)
+        .unwrap_or_else(|e| Predictions::none(&format!("none: {e}")));
     let report = compare(&net, &obs, &pred, &opts);
     let fitted = match (&args.fit, format) {
         (Some(out), Some(format)) => {
