@@ -8,4 +8,5 @@ mod api;
 mod browser;
 mod layout;
 mod live;
+mod look;
 mod security;

@@ -91,6 +91,36 @@ function fmt(x) {
   return Number(x.toPrecision(4)).toString();
 }
 
+// A time as the server sent it: every digit (the shortest text that reads back the same).
+function fmtTime(x) {
+  return String(x);
+}
+
+// A list entry `N  text` with its number in its own cell (no digit is cut however long the
+// run), shown or hidden by the list's filter box.
+function listItem(seq, text) {
+  const li = document.createElement('li');
+  const n = document.createElement('span');
+  n.className = 'seq';
+  n.textContent = String(seq);
+  li.appendChild(n);
+  li.appendChild(document.createTextNode(text));
+  li.dataset.seq = seq;
+  return li;
+}
+
+// Whether a scrolled list shows its last line (then new lines keep it at the bottom; a user
+// reading further up is left where they are).
+function atBottom(box) {
+  return box.scrollTop + box.clientHeight >= box.scrollHeight - 4;
+}
+
+// Hides the entries of `ol` that do not contain the text of its filter box `input`.
+function applyFilter(ol, input) {
+  const q = input.value.trim().toLowerCase();
+  for (const li of ol.children) li.classList.toggle('hidden', q !== '' && !li.textContent.toLowerCase().includes(q));
+}
+
 function transitionWidth(t) {
   return t.kind === 'immediate' ? 6 : 20;
 }
@@ -226,14 +256,18 @@ function drawNet() {
     transEls.push(g);
     move(g, t);
   });
+  // Inhibitor arcs over the others, so that an arc never hides their circle head.
+  const under = el('g', { class: 'arcs-normal' }, arcs);
+  const over = el('g', { class: 'arcs-inhibitor' }, arcs);
   net.arcs.forEach((a, i) => {
+    const layer = a.kind === 'inhibitor' ? over : under;
     const path = el('path', {
       class: 'arc ' + a.kind,
       'marker-end': a.kind === 'inhibitor' ? 'url(#inhibitor)' : 'url(#arrow)',
-    }, arcs);
+    }, layer);
     let weight = null;
     if (a.weight > 1) {
-      weight = el('text', { class: 'arc-weight' }, arcs);
+      weight = el('text', { class: 'arc-weight' }, layer);
       weight.textContent = String(a.weight);
     }
     arcEls.push({ path, weight });
@@ -389,15 +423,17 @@ function applyState(s) {
     (s.dead ? ' — dead marking' : s.vanishing ? ' — vanishing' : '');
   $('marking-text').textContent = shorten(s.text, 2000);
   const ol = $('trace');
+  const follow = atBottom(ol);
   ol.textContent = '';
   for (const e of s.trace) {
-    const li = document.createElement('li');
-    li.value = e.step;
-    li.textContent = fmt(e.time) + '  ' + e.transition + '  → ' + shorten(e.marking, 160);
-    if (e.manual) li.className = 'manual';
+    const li = listItem(e.step, fmtTime(e.time) + '  ' + e.transition + '  → ' + shorten(e.marking, 160));
+    if (e.manual) li.classList.add('manual');
     ol.appendChild(li);
   }
-  ol.scrollTop = ol.scrollHeight;
+  applyFilter(ol, $('trace-filter'));
+  $('trace-count').textContent = s.firings > s.trace.length
+    ? 'last ' + s.trace.length + ' of ' + s.firings : s.firings + ' firings';
+  if (follow) ol.scrollTop = ol.scrollHeight;
   if (s.dead) stopRun();
 }
 
@@ -408,7 +444,12 @@ function applyView() {
   canvasDirty();
 }
 
+// Whether the view is the fitted one (a resize then fits again); panning or zooming by hand
+// keeps the user's view.
+let fitted = false;
+
 function fit() {
+  fitted = true;
   const box = $('canvas');
   const all = net.places.concat(net.transitions);
   if (!all.length) return;
@@ -455,6 +496,7 @@ function setupInteraction() {
     view.x = mx - (mx - view.x) * f;
     view.y = my - (my - view.y) * f;
     view.k *= f;
+    fitted = false;
     applyView();
   }, { passive: false });
   box.addEventListener('mousedown', (ev) => {
@@ -473,6 +515,7 @@ function setupInteraction() {
     if (!drag.node) {
       view.x += dx;
       view.y += dy;
+      fitted = false;
       applyView();
       return;
     }
@@ -571,11 +614,78 @@ function setupControls() {
     api('POST', '/api/analysis/cancel').then(showProgress).catch((e) => status(e.message)));
 }
 
+// ---- keys, theme, resize -----------------------------------------------------------------
+
+// Keyboard shortcuts (not while typing in a field); `?` lists them.
+const KEYS = [
+  ['s', 'step', () => $('step').click()],
+  ['n', 'step n', () => $('step-n').click()],
+  ['r', 'run / pause', () => $('run').click()],
+  ['0', 'reset', () => $('reset').click()],
+  ['f', 'fit the net in the view', () => fit()],
+  ['a', 'analyse', () => $('analyze').click()],
+  ['/', 'filter the trace / events', () => {
+    const box = $('log-panel').classList.contains('hidden') ? $('trace-filter') : $('log-filter');
+    box.focus();
+  }],
+  ['?', 'show / hide this list', () => $('help').classList.toggle('hidden')],
+  ['Escape', 'close this list', () => $('help').classList.add('hidden')],
+];
+
+function setupKeys() {
+  const list = $('help-keys');
+  for (const [key, what] of KEYS) {
+    const dt = document.createElement('dt');
+    dt.textContent = key === 'Escape' ? 'Esc' : key;
+    const dd = document.createElement('dd');
+    dd.textContent = what;
+    list.append(dt, dd);
+  }
+  document.addEventListener('keydown', (ev) => {
+    const t = ev.target;
+    if (ev.ctrlKey || ev.metaKey || ev.altKey) return;
+    if (t && (t.tagName === 'INPUT' || t.tagName === 'TEXTAREA' || t.isContentEditable)) {
+      if (ev.key === 'Escape') t.blur();
+      return;
+    }
+    const k = KEYS.find(([key]) => key === ev.key);
+    if (!k) return;
+    ev.preventDefault();
+    k[2]();
+  });
+  $('help-close').addEventListener('click', () => $('help').classList.add('hidden'));
+  $('help-open').addEventListener('click', () => $('help').classList.toggle('hidden'));
+}
+
+// `?theme=dark` or `?theme=light` forces a theme; otherwise the system's (prefers-color-scheme).
+function setupTheme() {
+  const forced = new URLSearchParams(location.search).get('theme');
+  if (forced === 'dark' || forced === 'light') document.documentElement.dataset.theme = forced;
+}
+
+function setupResize() {
+  let pending = false;
+  window.addEventListener('resize', () => {
+    if (!fitted || !net || pending) return;
+    pending = true;
+    requestAnimationFrame(() => {
+      pending = false;
+      fit();
+    });
+  });
+}
+
 // ---- start -----------------------------------------------------------------------------
 
 async function main() {
+  setupTheme();
   setupControls();
   setupInteraction();
+  setupKeys();
+  setupResize();
+  for (const [list, box] of [['trace', 'trace-filter'], ['log', 'log-filter']]) {
+    $(box).addEventListener('input', () => applyFilter($(list), $(box)));
+  }
   try {
     const mode = await api('GET', '/api/mode');
     if (mode.live) {

@@ -4,6 +4,10 @@
 
 // ---- live run --------------------------------------------------------------------------
 
+// Events the log keeps on the page.
+const LOG_KEPT = 500;
+const live = { logTotal: 0 };
+
 // Follows a running plan: the server sends the net, then snapshots; on a lost connection
 // the page reconnects and the server starts again with the net and the current snapshot.
 function startLive() {
@@ -33,6 +37,7 @@ function connectLive() {
       drawNet();
       if (first) fit();
       $('log').textContent = '';
+      live.logTotal = 0;
     } else if (msg.type === 'state') {
       const t0 = performance.now();
       applyLive(msg);
@@ -61,14 +66,18 @@ function applyLive(s) {
     (s.lagged ? ' (' + s.lagged + ' events skipped)' : '');
   $('marking-text').textContent = shorten(s.text, 2000);
   const ol = $('log');
+  const follow = atBottom(ol);
+  const filter = $('log-filter').value.trim().toLowerCase();
   for (const e of s.log) {
-    const li = document.createElement('li');
-    li.value = e.seq;
-    li.textContent = fmt(e.time) + '  ' + e.text;
+    const li = listItem(e.seq, fmtTime(e.time) + '  ' + e.text);
+    if (filter && !li.textContent.toLowerCase().includes(filter)) li.classList.add('hidden');
     ol.appendChild(li);
+    live.logTotal = Math.max(live.logTotal, e.seq);
   }
-  while (ol.childElementCount > 500) ol.firstElementChild.remove();
-  ol.scrollTop = ol.scrollHeight;
+  while (ol.childElementCount > LOG_KEPT) ol.firstElementChild.remove();
+  $('log-count').textContent = live.logTotal > ol.childElementCount
+    ? 'last ' + ol.childElementCount + ' of ' + live.logTotal : live.logTotal + ' events';
+  if (follow) ol.scrollTop = ol.scrollHeight;
   if (s.stopped) $('stop').disabled = true;
 }
 
