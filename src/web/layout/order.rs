@@ -1,0 +1,195 @@
+//! The layered layout's graph steps: breaking cycles, assigning layers, ordering each layer
+//! to keep crossings few.
+
+/// Which edges to turn round so that the graph has no cycle: the edges that close a cycle in
+/// a depth-first walk from the marked places (then from every node not reached yet), so the
+/// drawing follows the tokens' direction.
+pub(super) fn back_edges(n: usize, edges: &[(usize, usize)], marked: &[usize]) -> Vec<bool> {
+    let mut out: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (e, &(u, _)) in edges.iter().enumerate() {
+        out[u].push(e);
+    }
+    // 0: not seen, 1: on the walk's stack, 2: done.
+    let mut state = vec![0u8; n];
+    let mut reversed = vec![false; edges.len()];
+    let mut stack: Vec<(usize, usize)> = Vec::new();
+    for root in marked.iter().copied().chain(0..n) {
+        if state[root] != 0 {
+            continue;
+        }
+        state[root] = 1;
+        stack.push((root, 0));
+        while let Some(top) = stack.last_mut() {
+            let (v, next) = *top;
+            if next == out[v].len() {
+                state[v] = 2;
+                stack.pop();
+                continue;
+            }
+            top.1 += 1;
+            let e = out[v][next];
+            let w = edges[e].1;
+            match state[w] {
+                0 => {
+                    state[w] = 1;
+                    stack.push((w, 0));
+                }
+                1 => reversed[e] = true,
+                _ => {}
+            }
+        }
+    }
+    reversed
+}
+
+/// The layer of each node in an acyclic graph: one past its furthest predecessor; a node
+/// without predecessors sits just before its nearest successor (not at the far left).
+pub(super) fn layers(n: usize, dag: &[(usize, usize)]) -> Vec<usize> {
+    let mut succ: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut indeg = vec![0usize; n];
+    for &(u, v) in dag {
+        succ[u].push(v);
+        indeg[v] += 1;
+    }
+    let mut layer = vec![0usize; n];
+    let mut left = indeg.clone();
+    let mut order: Vec<usize> = (0..n).filter(|&v| indeg[v] == 0).collect();
+    let mut i = 0;
+    while i < order.len() {
+        let v = order[i];
+        i += 1;
+        for &w in &succ[v] {
+            layer[w] = layer[w].max(layer[v] + 1);
+            left[w] -= 1;
+            if left[w] == 0 {
+                order.push(w);
+            }
+        }
+    }
+    for &v in order.iter().rev() {
+        if indeg[v] == 0
+            && let Some(l) = succ[v].iter().map(|&w| layer[w]).min()
+        {
+            layer[v] = l - 1;
+        }
+    }
+    layer
+}
+
+/// Slots in the order a depth-first walk along the edges meets them (from the marked places
+/// first): the starting order within each layer, which keeps neighbours together.
+pub(super) fn first_seen_order(slots: usize, down: &[Vec<usize>], marked: &[usize]) -> Vec<usize> {
+    let mut seen = vec![false; slots];
+    let mut order = Vec::with_capacity(slots);
+    let mut stack = Vec::new();
+    for root in marked.iter().copied().chain(0..slots) {
+        if seen[root] {
+            continue;
+        }
+        stack.push(root);
+        while let Some(v) = stack.pop() {
+            if seen[v] {
+                continue;
+            }
+            seen[v] = true;
+            order.push(v);
+            stack.extend(down[v].iter().rev().filter(|&&w| !seen[w]));
+        }
+    }
+    order
+}
+
+/// Reorders each layer by the mean position of its neighbours, sweeping down and up, and
+/// keeps the order with the fewest crossings.
+pub(super) fn order_layers(
+    layers: &mut [Vec<usize>],
+    up: &[Vec<usize>],
+    down: &[Vec<usize>],
+    slots: usize,
+) {
+    let mut index = vec![0usize; slots];
+    let reindex = |layers: &[Vec<usize>], index: &mut [usize]| {
+        for nodes in layers {
+            for (i, &s) in nodes.iter().enumerate() {
+                index[s] = i;
+            }
+        }
+    };
+    reindex(layers, &mut index);
+    let mut best = layers.to_vec();
+    let mut best_crossings = crossings(layers, down, &index);
+    let sweeps = if slots > 20_000 { 4 } else { 24 };
+    for sweep in 0..sweeps {
+        let downwards = sweep % 2 == 0;
+        let order: Vec<usize> = if downwards {
+            (1..layers.len()).collect()
+        } else {
+            (0..layers.len().saturating_sub(1)).rev().collect()
+        };
+        for l in order {
+            let nb = if downwards { up } else { down };
+            let mut keyed: Vec<(f64, usize)> = layers[l]
+                .iter()
+                .map(|&s| {
+                    let key = if nb[s].is_empty() {
+                        index[s] as f64
+                    } else {
+                        nb[s].iter().map(|&o| index[o] as f64).sum::<f64>() / nb[s].len() as f64
+                    };
+                    (key, s)
+                })
+                .collect();
+            keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
+            layers[l] = keyed.into_iter().map(|(_, s)| s).collect();
+            for (i, &s) in layers[l].iter().enumerate() {
+                index[s] = i;
+            }
+        }
+        let c = crossings(layers, down, &index);
+        if c < best_crossings {
+            best_crossings = c;
+            best = layers.to_vec();
+        }
+    }
+    layers.clone_from_slice(&best);
+}
+
+/// Pairs of edges that cross between neighbouring layers (`index`: position in the layer).
+fn crossings(layers: &[Vec<usize>], down: &[Vec<usize>], index: &[usize]) -> u64 {
+    let mut total = 0;
+    for nodes in layers {
+        let mut ends: Vec<(usize, usize)> = nodes
+            .iter()
+            .flat_map(|&u| down[u].iter().map(move |&v| (index[u], index[v])))
+            .collect();
+        ends.sort_unstable();
+        let mut b: Vec<usize> = ends.into_iter().map(|(_, b)| b).collect();
+        total += inversions(&mut b);
+    }
+    total
+}
+
+/// Pairs `i < j` with `v[i] > v[j]` (merge sort; `v` ends sorted).
+pub(super) fn inversions(v: &mut [usize]) -> u64 {
+    if v.len() < 2 {
+        return 0;
+    }
+    let mid = v.len() / 2;
+    let mut count = inversions(&mut v[..mid]) + inversions(&mut v[mid..]);
+    let mut merged = Vec::with_capacity(v.len());
+    let (mut i, mut j) = (0, mid);
+    while i < mid && j < v.len() {
+        if v[j] < v[i] {
+            count += (mid - i) as u64;
+            merged.push(v[j]);
+            j += 1;
+        } else {
+            merged.push(v[i]);
+            i += 1;
+        }
+    }
+    merged.extend_from_slice(&v[i..mid]);
+    merged.extend_from_slice(&v[j..]);
+    v.copy_from_slice(&merged);
+    count
+}
