@@ -189,10 +189,19 @@ async fn a_place_timeout_fails_the_action_and_every_running_goal_is_cancelled_on
         );
     let plan = dir.path().join("short_timeout.toml");
     std::fs::write(&plan, text).unwrap();
-    // Robots 10,000 s per model unit: their goals outlast the timeout by far.
+    // Robots 10,000 s per model unit: their goals outlast the timeout by far. `--stay`: a
+    // robot that heard "the run is over" before the cancel would leave without counting it.
     let robots: Vec<_> = ROBOTS
         .iter()
-        .map(|r| robot_with(dir.path(), r, &plan, d, &["--time-scale", "10000"]))
+        .map(|r| {
+            robot_with(
+                dir.path(),
+                r,
+                &plan,
+                d,
+                &["--time-scale", "10000", "--stay"],
+            )
+        })
         .collect();
     let sup = supervisor_with(dir.path(), &plan, d, &[]);
     let (code, out) = finish(sup, Duration::from_secs(60)).await;
