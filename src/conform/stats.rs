@@ -6,6 +6,7 @@
 //! [`t_quantile_975`]); here the observations are the batches of one run instead of
 //! independent runs.
 
+use crate::sample::ln;
 use crate::sim::{Estimate, t_quantile_975};
 
 /// The standard normal 0.975 quantile.
@@ -184,7 +185,7 @@ fn lilliefors_p(x: f64) -> f64 {
             .unwrap_or(t.len() - 2)
     };
     let ((x0, p0), (x1, p1)) = (t[seg], t[seg + 1]);
-    let lp = p0.ln() + (x - x0) * (p1.ln() - p0.ln()) / (x1 - x0);
+    let lp = ln(p0) + (x - x0) * (ln(p1) - ln(p0)) / (x1 - x0);
     lp.exp().min(1.0)
 }
 
@@ -253,7 +254,7 @@ fn ln_gamma(x: f64) -> f64 {
         1.505_632_735_149_311_6e-7,
     ];
     if x < 0.5 {
-        return (std::f64::consts::PI / (std::f64::consts::PI * x).sin()).ln() - ln_gamma(1.0 - x);
+        return ln(std::f64::consts::PI / (std::f64::consts::PI * x).sin()) - ln_gamma(1.0 - x);
     }
     let x = x - 1.0;
     let mut a = C[0];
@@ -261,7 +262,7 @@ fn ln_gamma(x: f64) -> f64 {
     for (i, &c) in C.iter().enumerate().skip(1) {
         a += c / (x + i as f64);
     }
-    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+    0.5 * ln(2.0 * std::f64::consts::PI) + (x + 0.5) * ln(t) - t + ln(a)
 }
 
 /// The regularised upper incomplete gamma function Q(a, x).
@@ -282,7 +283,7 @@ pub fn gamma_q(a: f64, x: f64) -> f64 {
                 break;
             }
         }
-        1.0 - sum * (-x + a * x.ln() - gln).exp()
+        1.0 - sum * (-x + a * ln(x) - gln).exp()
     } else {
         // Continued fraction for Q (Lentz).
         let tiny = 1e-300;
@@ -308,7 +309,7 @@ pub fn gamma_q(a: f64, x: f64) -> f64 {
                 break;
             }
         }
-        (-x + a * x.ln() - gln).exp() * h
+        (-x + a * ln(x) - gln).exp() * h
     }
 }
 
@@ -320,8 +321,7 @@ fn beta_i(a: f64, b: f64, x: f64) -> f64 {
     if x >= 1.0 {
         return 1.0;
     }
-    let front =
-        (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * x.ln() + b * (1.0 - x).ln()).exp();
+    let front = (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * ln(x) + b * ln(1.0 - x)).exp();
     if x < (a + 1.0) / (a + b + 2.0) {
         front * beta_cf(a, b, x) / a
     } else {
