@@ -15,4 +15,5 @@ mod ctrl_c_while_waiting_for_robots;
 mod interop;
 mod lifecycle;
 mod multiprocess;
+mod python_robot;
 mod security;
