@@ -44,7 +44,7 @@ async fn cyclone_dds_in_python_receives_every_firing_with_its_fields() {
     const N: usize = 40;
     let py = python();
     let dir = tempfile::tempdir().unwrap();
-    let d = domain(5);
+    let d = domain(10);
     let mut listener = tokio::process::Command::new(&py)
         .arg(repo("tests/ros2/firings_listener.py"))
         .args([d.to_string(), N.to_string(), "90".into()])
