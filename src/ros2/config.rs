@@ -121,6 +121,10 @@ impl DdsConfig {
         if let Some(s) = plan.startup {
             c.startup = crate::limits::duration(s);
         }
+        c.service_mapping = match plan.service_mapping {
+            super::settings::ServiceMapping::Enhanced => ServiceMapping::Enhanced,
+            super::settings::ServiceMapping::Cyclone => ServiceMapping::Cyclone,
+        };
         c.bind_address()?;
         Ok(c)
     }

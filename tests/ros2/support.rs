@@ -282,3 +282,28 @@ pub async fn wait_for_log(p: &Proc, what: &str, limit: Duration) -> bool {
     }
     false
 }
+
+/// Cyclone on loopback only, unicast discovery of the local participants (the Python peers'
+/// `CYCLONEDDS_URI`).
+pub const CYCLONE_CONFIG: &str = "<CycloneDDS><Domain id=\"any\"><General><Interfaces>\
+<NetworkInterface address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast>\
+</General><Discovery><ParticipantIndex>auto</ParticipantIndex>\
+<MaxAutoParticipantIndex>60</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/>\
+</Peers></Discovery></Domain></CycloneDDS>";
+
+/// The Python of the venv `.ci/run` makes (`target/venv-ros2`, or `$GSPN_ROS2_VENV`), with
+/// `cyclonedds`; fails, saying how to make it, when it is missing.
+pub fn python() -> PathBuf {
+    let venv = std::env::var_os("GSPN_ROS2_VENV")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| repo("target/venv-ros2"));
+    let py = venv.join("bin/python");
+    assert!(
+        py.is_file(),
+        "the ROS 2 tests with Python peers need a Python venv with cyclonedds at {} \
+         (create it: python3 -m venv {0} && {0}/bin/pip install cyclonedds==11.0.1; \
+         .ci/run does this; or point GSPN_ROS2_VENV at one)",
+        venv.display()
+    );
+    py
+}
