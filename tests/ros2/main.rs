@@ -15,5 +15,6 @@ mod ctrl_c_while_waiting_for_robots;
 mod interop;
 mod lifecycle;
 mod multiprocess;
+mod netns;
 mod python_robot;
 mod security;
