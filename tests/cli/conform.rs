@@ -115,7 +115,7 @@ fn a_net_timed_run_of_cyc3_is_consistent_and_fit_learns_its_rates() {
         plan.to_str().unwrap(),
     ]);
     let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.contains("rate        T3"), "{text}");
+    assert!(text.contains("rate          T3"), "{text}");
     assert!(
         text.contains("tested rows diverge at the 5% level"),
         "{text}"
