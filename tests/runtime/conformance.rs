@@ -95,7 +95,13 @@ async fn the_agents_own_stays_are_tested_per_place_and_exit_and_a_fixed_delay_is
     );
     // One cycle takes 3 + 1/3 s: about 900 in 3000 s, every one through B (the run may end
     // between the two stays of a cycle).
-    assert!((ta.n + tc.n).abs_diff(b.n) <= 1, "{} + {} vs {}", ta.n, tc.n, b.n);
+    assert!(
+        (ta.n + tc.n).abs_diff(b.n) <= 1,
+        "{} + {} vs {}",
+        ta.n,
+        tc.n,
+        b.n
+    );
     assert!((850..=950).contains(&(ta.n + tc.n)), "{} + {}", ta.n, tc.n);
     let share = ta.n as f64 / (ta.n + tc.n) as f64;
     assert!((share - 2.0 / 3.0).abs() < 0.05, "share of Ta {share}");
@@ -214,7 +220,10 @@ async fn an_action_that_slows_down_half_way_raises_drift_events_and_an_unchanged
     for ((s1, t1, d1), (s2, t2, d2)) in back.iter().zip(&all) {
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
         assert_eq!((s1, d1.of, d1.n), (s2, d2.of, d2.n));
-        assert!(close(*t1, *t2) && close(d1.observed, d2.observed), "{d1:?} {d2:?}");
+        assert!(
+            close(*t1, *t2) && close(d1.observed, d2.observed),
+            "{d1:?} {d2:?}"
+        );
         assert!(close(d1.predicted, d2.predicted) && close(d1.p_value, d2.p_value));
     }
     let of_t3: Vec<_> = all

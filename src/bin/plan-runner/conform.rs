@@ -316,7 +316,7 @@ pub(crate) async fn print_drifts(net: std::sync::Arc<Net>, mut events: Events) -
                 ..
             }) => {
                 drifts += 1;
-                eprintln!("drift at time {time:.3}: {}", d.describe(&net));
+                eprintln!("drift: {} (at time {time:.3})", d.describe(&net));
             }
             Received::Lagged(n) => {
                 eprintln!(
