@@ -151,15 +151,15 @@ pub fn race_rate(net: &Net, p: PlaceId) -> Option<f64> {
         .sum()
 }
 
+/// The stays of one place, by exit transition (in net order).
+pub(crate) type PlaceStays<'a> = (PlaceId, Vec<(TransitionId, Vec<&'a Holding>)>);
+
 /// Stays grouped by place, then by exit transition, in net order.
-pub(crate) fn by_place<'a>(
-    net: &Net,
-    holdings: &'a [Holding],
-) -> Vec<(PlaceId, Vec<(TransitionId, Vec<&'a Holding>)>)> {
-    let mut v: Vec<Vec<Vec<&Holding>>> = vec![vec![Vec::new(); 0]; net.place_count()];
-    for (p, outs) in v.iter_mut().enumerate() {
-        outs.resize(net.consumers(PlaceId(p as u32)).len(), Vec::new());
-    }
+pub(crate) fn by_place<'a>(net: &Net, holdings: &'a [Holding]) -> Vec<PlaceStays<'a>> {
+    let mut v: Vec<Vec<Vec<&Holding>>> = net
+        .place_ids()
+        .map(|p| vec![Vec::new(); net.consumers(p).len()])
+        .collect();
     for h in holdings {
         if let Some(k) = net
             .consumers(h.place)
