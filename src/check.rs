@@ -10,8 +10,8 @@
 //! - an **isolated place** (no arc at all);
 //! - a **place that grows without limit** (coverability, [`endless`]), with the transitions
 //!   that pump it; and for a plan with no stop condition, a **run that never ends**: the
-//!   net reaches a closed loop of markings (a search of at most [`ENDING_BUDGET`] markings,
-//!   silent when it is not enough);
+//!   net reaches a closed loop of markings (a search of at most [`ENDING_BUDGET_CELLS`] marking ×
+//!   place cells, silent when it is not enough);
 //! - a **policy rule that can never apply**: its pattern asks for a count outside a place's
 //!   bounds, contradicts a P-invariant, or none of its transitions can be enabled in a marking
 //!   that matches it.
@@ -41,8 +41,17 @@ use crate::net::{ArcKind, Net, PlaceId, Timing};
 use crate::plan::Plan;
 use crate::policy::{Pattern, Rule};
 
-/// Markings the search for [`endless::ending`] may visit before it gives up (silently).
-pub const ENDING_BUDGET: usize = 200_000;
+/// Marking × place cells the search for [`endless::ending`] may visit before it gives up
+/// (silently): 200,000 markings of a 100-place net. Counted in cells, not markings, so the
+/// search costs the same at most on any net — a budget of markings alone made `check` of a
+/// 100,000-place chain quadratic (24 s; the chain's markings are each 100,000 places wide).
+pub const ENDING_BUDGET_CELLS: usize = 20_000_000;
+
+/// Markings [`endless::ending`] may visit on `net`: [`ENDING_BUDGET_CELLS`] over its places,
+/// at most 200,000.
+pub fn ending_budget(net: &Net) -> usize {
+    (ENDING_BUDGET_CELLS / net.place_count().max(1)).min(200_000)
+}
 
 /// What `check` reports. Serialised as JSON with exactly these keys.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -73,7 +82,7 @@ impl Report {
         let structure = Structure::of(net);
         let mut warnings = remarks.to_vec();
         warnings.extend(net_warnings(net, &structure));
-        let ending = endless::ending(net, ENDING_BUDGET);
+        let ending = endless::ending(net, ending_budget(net));
         warnings.extend(endless::unbounded_warnings(net, &ending));
         Report::new(net, format.name(), warnings)
     }
@@ -97,7 +106,7 @@ impl Report {
                 ));
             }
         }
-        let ending = endless::ending(net, ENDING_BUDGET);
+        let ending = endless::ending(net, ending_budget(net));
         warnings.extend(endless::unbounded_warnings(net, &ending));
         if plan.stop.is_empty()
             && let Some(why) = ending.describe(net)

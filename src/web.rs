@@ -72,6 +72,7 @@ use axum::routing::{get, post};
 use serde_json::{Value, json};
 use tokio::net::TcpListener;
 
+use crate::analysis::decision::RewardSpec;
 use crate::net::Net;
 use crate::policy::Policy;
 use crate::runtime::journal::Frame;
@@ -160,16 +161,38 @@ impl WebState {
         WebState::with_max_states(net, policy, seed, DEFAULT_MAX_STATES)
     }
 
-    /// Like [`WebState::new`], exploring at most `max_states` markings for the analysis.
+    /// Like [`WebState::new`], exploring at most `max_states` markings for the analysis
+    /// unless the page asks for another limit.
     pub fn with_max_states(
         net: Net,
         policy: Option<Policy>,
         seed: u64,
         max_states: usize,
     ) -> WebState {
+        WebState::for_plan(net, policy, Vec::new(), seed, max_states)
+    }
+
+    /// The viewer of a plan: its token game chooses with `policy` (if any), and its
+    /// analysis panel analyses the net under that policy ("net under plan policy"; the
+    /// "bare net" without one, as `plan-runner analyze` does) with the long-run rates of
+    /// `rewards`, exploring at most `max_states` markings unless the page asks for another
+    /// limit.
+    pub fn for_plan(
+        net: Net,
+        policy: Option<Policy>,
+        rewards: Vec<RewardSpec>,
+        seed: u64,
+        max_states: usize,
+    ) -> WebState {
         let net = Arc::new(net);
-        let session = Session::new(net.clone(), policy.map(Arc::new), seed);
-        let analysis = Arc::new(analysis_job::AnalysisJob::new(net.clone(), max_states));
+        let policy = policy.filter(|p| !p.is_empty()).map(Arc::new);
+        let session = Session::new(net.clone(), policy.clone(), seed);
+        let analysis = Arc::new(analysis_job::AnalysisJob::new(
+            net.clone(),
+            policy.unwrap_or_else(|| Arc::new(Policy::empty())),
+            rewards,
+            max_states,
+        ));
         WebState {
             inner: Arc::new(Inner {
                 net,
@@ -238,12 +261,30 @@ impl WebState {
             .filter(|&t| net.is_enabled(m, t))
             .map(|t| net.transition(t).name.as_str())
             .collect();
-        let firable: Vec<&str> = net
-            .firable(m)
-            .into_iter()
-            .map(|t| net.transition(t).name.as_str())
+        let firable_ids = net.firable(m);
+        let firable: Vec<&str> = firable_ids
+            .iter()
+            .map(|&t| net.transition(t).name.as_str())
             .collect();
+        // The plan's policy in a vanishing marking: its rule's choice among the firable
+        // immediate transitions (`null` when no rule applies: the net's weights choose).
+        let choice = s
+            .policy()
+            .filter(|_| net.is_vanishing(m))
+            .and_then(|p| {
+                p.rule_for(m, &firable_ids)
+                    .map(|(i, _)| i)
+                    .zip(p.distribution(m, &firable_ids))
+            })
+            .map(|(rule, dist)| {
+                let by_name: serde_json::Map<String, Value> = dist
+                    .iter()
+                    .map(|&(t, p)| (net.transition(t).name.clone(), json!(p)))
+                    .collect();
+                json!({ "rule": rule, "probabilities": by_name })
+            });
         json!({
+            "choice": choice,
             "seed": s.seed(),
             "time": s.time(),
             "firings": s.firings(),

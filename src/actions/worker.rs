@@ -39,6 +39,8 @@ const BACKOFF_MAX: Duration = Duration::from_secs(5);
 const HEALTHY: Duration = Duration::from_secs(10);
 /// Lines of stderr quoted when a worker dies.
 const STDERR_TAIL: usize = 5;
+/// How long the end of a dead worker's stderr is awaited.
+const STDERR_DRAIN: Duration = Duration::from_secs(1);
 
 /// The program of a worker.
 #[derive(Clone, Debug, PartialEq)]
@@ -271,18 +273,14 @@ async fn supervise(spec: WorkerSpec, mut rx: mpsc::UnboundedReceiver<Msg>) {
                     Ok(None) | Err(_) => break proc.wait().await,
                 },
                 line = proc.stderr.next_line(), if !proc.stderr_done => match line {
-                    Ok(Some(line)) => {
-                        tracing::debug!(worker = %name, "{line}");
-                        proc.tail.push_back(line);
-                        if proc.tail.len() > STDERR_TAIL {
-                            proc.tail.pop_front();
-                        }
-                    }
+                    Ok(Some(line)) => proc.keep_stderr(&name, line),
                     Ok(None) | Err(_) => proc.stderr_done = true,
                 },
             }
         };
-        // Crashed (or closed its stdout): every request in flight fails, with the reason.
+        // Crashed (or closed its stdout): every request in flight fails, with the reason —
+        // whose last stderr lines may still be in the pipe when stdout's end is seen first.
+        proc.drain_stderr(&name).await;
         let tail: Vec<String> = proc.tail.drain(..).collect();
         let mut reason = format!("worker `{name}` {status} while running this action");
         if !tail.is_empty() {
@@ -351,6 +349,31 @@ struct Proc {
 }
 
 impl Proc {
+    /// Keeps a stderr line for the crash reason (the last `STDERR_TAIL` lines).
+    fn keep_stderr(&mut self, name: &str, line: String) {
+        tracing::debug!(worker = %name, "{line}");
+        self.tail.push_back(line);
+        if self.tail.len() > STDERR_TAIL {
+            self.tail.pop_front();
+        }
+    }
+
+    /// Reads what is left on stderr after the program ended, until its end — or for at most
+    /// `STDERR_DRAIN`, in case a child of the worker still holds the pipe open.
+    async fn drain_stderr(&mut self, name: &str) {
+        let deadline = tokio::time::sleep(STDERR_DRAIN);
+        tokio::pin!(deadline);
+        while !self.stderr_done {
+            tokio::select! {
+                line = self.stderr.next_line() => match line {
+                    Ok(Some(line)) => self.keep_stderr(name, line),
+                    Ok(None) | Err(_) => self.stderr_done = true,
+                },
+                () = &mut deadline => return,
+            }
+        }
+    }
+
     fn spawn(spec: &WorkerSpec) -> std::io::Result<Proc> {
         let Some(program) = spec.argv.first() else {
             return Err(std::io::Error::other("empty command"));

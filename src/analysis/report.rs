@@ -14,7 +14,7 @@ use serde::Serialize;
 use super::invariants::Invariants;
 use super::measures::Measures;
 use super::properties::{DeadMarking, Liveness, Properties};
-use super::under_policy::RewardRate;
+use super::under_policy::{Regime, RewardRate};
 use crate::net::{Net, TransitionId};
 
 /// Values keyed by place or transition name.
@@ -98,6 +98,17 @@ pub struct StateSpaceReport {
     pub t_invariants: Option<Vec<ByName<u64>>>,
 }
 
+/// The P- and T-invariants of `net` with place and transition names.
+fn named_invariants(
+    net: &Net,
+    pinv: &Invariants,
+    tinv: &Invariants,
+) -> (Vec<ByName<u64>>, Vec<ByName<u64>>) {
+    let places: Vec<&str> = net.places().iter().map(|p| p.name.as_str()).collect();
+    let transitions: Vec<&str> = net.transitions().iter().map(|t| t.name.as_str()).collect();
+    (invariants(pinv, &places), invariants(tinv, &transitions))
+}
+
 fn invariants(inv: &Invariants, names: &[&str]) -> Vec<ByName<u64>> {
     inv.vectors
         .iter()
@@ -113,8 +124,7 @@ fn invariants(inv: &Invariants, names: &[&str]) -> Vec<ByName<u64>> {
 impl StateSpaceReport {
     /// The report of a bounded net.
     pub fn new(net: &Net, p: &Properties, pinv: &Invariants, tinv: &Invariants) -> Self {
-        let places: Vec<&str> = net.places().iter().map(|p| p.name.as_str()).collect();
-        let transitions: Vec<&str> = net.transitions().iter().map(|t| t.name.as_str()).collect();
+        let (p_invariants, t_invariants) = named_invariants(net, pinv, tinv);
         StateSpaceReport {
             reachable: Some(p.reachable),
             tangible: Some(p.tangible),
@@ -136,8 +146,8 @@ impl StateSpaceReport {
             deadlock_free: Some(p.deadlock_free),
             live_transitions: Some(transition_names(net, &p.live_transitions())),
             dead_transitions: Some(transition_names(net, &p.dead_transitions())),
-            p_invariants: Some(invariants(pinv, &places)),
-            t_invariants: Some(invariants(tinv, &transitions)),
+            p_invariants: Some(p_invariants),
+            t_invariants: Some(t_invariants),
         }
     }
 
@@ -301,6 +311,9 @@ impl DeadMarkingReport {
 pub struct Panel {
     /// The net's name.
     pub name: String,
+    /// What was analysed: "bare net" or "net under plan policy"
+    /// ([`Regime::label`](super::under_policy::Regime::label)).
+    pub analysed: String,
     /// Reachable markings.
     pub reachable: usize,
     /// Tangible ones.
@@ -321,6 +334,11 @@ pub struct Panel {
     pub liveness: ByName<Liveness>,
     /// Dead markings with the way to them.
     pub dead_markings: Vec<DeadMarkingReport>,
+    /// P-invariants: weights by place name (non-zero only); empty when none was found or
+    /// the computation hit its cap.
+    pub p_invariants: Vec<ByName<u64>>,
+    /// T-invariants: weights by transition name (non-zero only).
+    pub t_invariants: Vec<ByName<u64>>,
     /// The steady state, when computed.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub steady: Option<MeasuresReport>,
@@ -330,10 +348,18 @@ pub struct Panel {
 }
 
 impl Panel {
-    /// The panel's properties part (no steady state yet).
-    pub fn new(net: &Net, p: &Properties) -> Self {
+    /// The panel's properties part (no steady state yet) of `net` analysed as `regime`.
+    pub fn new(
+        net: &Net,
+        regime: Regime,
+        p: &Properties,
+        pinv: &Invariants,
+        tinv: &Invariants,
+    ) -> Self {
+        let (p_invariants, t_invariants) = named_invariants(net, pinv, tinv);
         Panel {
             name: net.name().to_string(),
+            analysed: regime.label().to_string(),
             reachable: p.reachable,
             tangible: p.tangible,
             vanishing: p.vanishing,
@@ -348,6 +374,8 @@ impl Panel {
                 .iter()
                 .map(|d| DeadMarkingReport::new(net, d))
                 .collect(),
+            p_invariants,
+            t_invariants,
             steady: None,
             steady_error: None,
         }

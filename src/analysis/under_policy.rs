@@ -138,6 +138,19 @@ pub fn analyse(
     monitor: &Monitor,
 ) -> Result<PolicyAnalysis, PolicyAnalysisError> {
     let space = StateSpace::build_under_policy(net, policy, opts, monitor)?;
+    Ok(solve(net, policy, space, rewards, solver_opts)?)
+}
+
+/// The second half of [`analyse`]: the long-run measures and reward rates on `space`, the
+/// state space [`StateSpace::build_under_policy`] built for `net` under `policy` (a caller
+/// that reports its phases, like the viewer, builds it first).
+pub fn solve(
+    net: &Net,
+    policy: &Policy,
+    space: StateSpace,
+    rewards: &[RewardSpec],
+    solver_opts: &SolverOptions,
+) -> Result<PolicyAnalysis, SolveError> {
     let solver = Solver::new(net, &space);
     let limiting = solver.steady_state(solver_opts)?;
     let measures = solver.measures(&limiting.pi);

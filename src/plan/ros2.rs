@@ -13,7 +13,7 @@ use super::file::PlaceFile;
 use super::resolve::out_of_range;
 use crate::io::{LoadError, LoadErrorKind};
 use crate::net::Net;
-use crate::ros2::settings::{DEFAULT_SERVER, ROS2_ACTION, Ros2Settings};
+use crate::ros2::settings::{DEFAULT_SERVER, ROS2_ACTION, Ros2Settings, ServiceMapping};
 
 /// The `[ros2]` table: how the ROS 2 backend joins DDS and watches robots.
 #[derive(Debug, Deserialize, JsonSchema)]
@@ -34,6 +34,11 @@ pub struct Ros2File {
     /// Seconds the supervisor waits for every robot before it gives up (default 30).
     #[schemars(with = "Option<f64>", range(min = 0.0))]
     pub startup: Option<Spanned<f64>>,
+    /// How ExecPlace's services pair responses with requests: `"enhanced"` (default; RPC
+    /// over DDS, inline QoS) or `"cyclone"` (a header in the payload, as ROS 2's
+    /// rmw_cyclonedds_cpp does; for robots on Cyclone DDS).
+    #[schemars(with = "Option<String>")]
+    pub service_mapping: Option<Spanned<String>>,
 }
 
 /// The `[ros2]` table and the `server` keys of the places.
@@ -70,6 +75,17 @@ pub(super) fn resolve_ros2(
                 )
             })?;
             s.networks.push(ip);
+        }
+        if let Some(m) = &f.service_mapping {
+            s.service_mapping = ServiceMapping::parse(m.get_ref()).ok_or_else(|| {
+                at(
+                    m.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "ros2.service_mapping: `{}` is not \"enhanced\" or \"cyclone\"",
+                        m.get_ref()
+                    )),
+                )
+            })?;
         }
         for (key, v, slot) in [
             ("heartbeat", &f.heartbeat, &mut s.heartbeat),

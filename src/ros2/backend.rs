@@ -1,7 +1,8 @@
 //! [`Ros2Backend`]: the supervisor's ROS 2 side of `plan-runner run`.
 //!
 //! ```text
-//! connect   node `/gspn/supervisor`, heartbeat watch, /gspn/firings + /gspn/marking
+//! connect   node `/gspn/supervisor`, its own heartbeat (robots leave when it stops), the
+//!           robots' heartbeat watch, /gspn/firings + /gspn/marking
 //!           publishers, one ExecPlace client per (robot, server); waits (≤ startup) for
 //!           every robot's heartbeat and server and for the wanted firing subscribers
 //! attach    registers the `ros2` action (RemotePlaces) on the runtime builder
@@ -16,7 +17,6 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use ros2_client::action::ActionClientQosPolicies;
-use ros2_client::dds::ServiceMapping;
 use ros2_client::qos::{Durability, History};
 use ros2_client::{Name, Node, QosProfile};
 use tokio::task::JoinHandle;
@@ -24,7 +24,7 @@ use tokio::task::JoinHandle;
 use super::Ros2Error;
 use super::config::DdsConfig;
 use super::firings::{FiringPublisher, Published, RunStatePublisher};
-use super::heartbeat::RobotWatch;
+use super::heartbeat::{self, RobotWatch};
 use super::msgs::{
     ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RUN_OVER, RUN_RUNNING, RunState,
     exec_place_type,
@@ -38,6 +38,8 @@ use crate::runtime::{Events, RuntimeBuilder};
 pub struct Ros2Backend {
     node: Node,
     spin: JoinHandle<()>,
+    /// The supervisor's heartbeat.
+    beat: AbortOnDrop,
     publisher: Option<FiringPublisher>,
     task: Option<JoinHandle<Published>>,
     places: RemotePlaces,
@@ -88,6 +90,8 @@ impl Ros2Backend {
                 tracing::warn!("ROS 2 spinner: {e:?}");
             }
         });
+        // Aborted when connecting fails too: robots then see the supervisor leave.
+        let beat = AbortOnDrop(heartbeat::publish_supervisor(&mut node, cfg.heartbeat)?);
         let watch = RobotWatch::start(&mut node, robots, cfg.lost_after)?;
         let publisher = FiringPublisher::new(&mut node, Arc::new(net.clone()))?;
         let run_state = RunStatePublisher::new(&mut node)?;
@@ -100,7 +104,7 @@ impl Ros2Backend {
                 let name = Name::new(&format!("/{robot}"), server).map_err(Ros2Error::dds)?;
                 let client = node
                     .create_action_client::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
-                        ServiceMapping::Enhanced,
+                        cfg.service_mapping,
                         &name,
                         &exec_place_type(),
                         client_qos(),
@@ -161,6 +165,7 @@ impl Ros2Backend {
             run_state,
             node,
             spin,
+            beat,
             publisher: Some(publisher),
             task: None,
             places: RemotePlaces::new(servers, links),
@@ -209,7 +214,17 @@ impl Ros2Backend {
             published.errors += 1;
         }
         tokio::time::sleep(linger).await;
+        self.beat.0.abort();
         self.spin.abort();
         published
+    }
+}
+
+/// A task aborted when its handle is dropped.
+struct AbortOnDrop(JoinHandle<()>);
+
+impl Drop for AbortOnDrop {
+    fn drop(&mut self) {
+        self.0.abort();
     }
 }

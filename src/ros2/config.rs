@@ -11,6 +11,7 @@
 use std::net::IpAddr;
 use std::time::Duration;
 
+use ros2_client::dds::ServiceMapping;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::{Context, NodeName, NodeOptions};
 
@@ -34,6 +35,10 @@ pub struct DdsConfig {
     pub lost_after: Duration,
     /// How long the supervisor waits for every robot (and subscriber) before it starts.
     pub startup: Duration,
+    /// How ExecPlace's services carry their request ids: `Enhanced` (RPC over DDS, in
+    /// inline QoS; Fast DDS's ROS 2) or `Cyclone` (a header in the payload, as
+    /// `rmw_cyclonedds_cpp` does; any DDS that cannot write inline QoS can speak it).
+    pub service_mapping: ServiceMapping,
 }
 
 impl Default for DdsConfig {
@@ -45,6 +50,7 @@ impl Default for DdsConfig {
             heartbeat: Duration::from_millis(100),
             lost_after: Duration::from_millis(1000),
             startup: Duration::from_secs(30),
+            service_mapping: ServiceMapping::Enhanced,
         }
     }
 }
@@ -115,6 +121,10 @@ impl DdsConfig {
         if let Some(s) = plan.startup {
             c.startup = crate::limits::duration(s);
         }
+        c.service_mapping = match plan.service_mapping {
+            super::settings::ServiceMapping::Enhanced => ServiceMapping::Enhanced,
+            super::settings::ServiceMapping::Cyclone => ServiceMapping::Cyclone,
+        };
         c.bind_address()?;
         Ok(c)
     }

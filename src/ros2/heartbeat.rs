@@ -1,7 +1,10 @@
 //! Heartbeats: every robot process publishes one on `/gspn/heartbeat` a few times a second;
 //! the supervisor's [`RobotWatch`] marks a robot lost when its heartbeats stop for
 //! `lost_after` (a killed process sends nothing, so DDS alone would notice only when the
-//! participant's lease ends, tens of seconds later).
+//! participant's lease ends, tens of seconds later). The supervisor publishes its own on
+//! `/gspn/supervisor_heartbeat`, which each robot watches the same way
+//! ([`RobotWatch::supervisor`]): a robot that missed the end of the run still leaves when its
+//! supervisor falls silent.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -14,7 +17,10 @@ use tokio::sync::watch;
 use tokio::time::Instant;
 
 use super::Ros2Error;
-use super::msgs::{HEARTBEAT_TOPIC, Heartbeat, heartbeat_type};
+use super::msgs::{HEARTBEAT_TOPIC, Heartbeat, SUPERVISOR_HEARTBEAT_TOPIC, heartbeat_type};
+
+/// The sender name of the supervisor's heartbeats.
+pub const SUPERVISOR: &str = "supervisor";
 
 /// What the supervisor knows of a robot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,8 +39,8 @@ fn qos() -> QosProfile {
         .history(History::KeepLast { depth: 64 })
 }
 
-fn topic(node: &Node) -> Result<ros2_client::dds::rustdds::Topic, Ros2Error> {
-    let name = Name::parse(HEARTBEAT_TOPIC).map_err(Ros2Error::dds)?;
+fn topic(node: &Node, name: &str) -> Result<ros2_client::dds::rustdds::Topic, Ros2Error> {
+    let name = Name::parse(name).map_err(Ros2Error::dds)?;
     node.create_topic(&name, heartbeat_type(), &qos())
         .map_err(Ros2Error::dds)
 }
@@ -45,7 +51,24 @@ pub fn publish(
     robot: &str,
     period: Duration,
 ) -> Result<tokio::task::JoinHandle<()>, Ros2Error> {
-    let t = topic(node)?;
+    publish_on(node, HEARTBEAT_TOPIC, robot, period)
+}
+
+/// Publishes the supervisor's heartbeat every `period` until the task is aborted.
+pub fn publish_supervisor(
+    node: &mut Node,
+    period: Duration,
+) -> Result<tokio::task::JoinHandle<()>, Ros2Error> {
+    publish_on(node, SUPERVISOR_HEARTBEAT_TOPIC, SUPERVISOR, period)
+}
+
+fn publish_on(
+    node: &mut Node,
+    topic_name: &str,
+    robot: &str,
+    period: Duration,
+) -> Result<tokio::task::JoinHandle<()>, Ros2Error> {
+    let t = topic(node, topic_name)?;
     let publisher: Publisher<Heartbeat> =
         node.create_publisher(&t, None).map_err(Ros2Error::dds)?;
     let robot = robot.to_string();
@@ -62,7 +85,8 @@ pub fn publish(
     }))
 }
 
-/// The supervisor's view of its robots' heartbeats: one [`Liveness`] per robot.
+/// The supervisor's view of its robots' heartbeats (one [`Liveness`] per robot), or a
+/// robot's view of its supervisor's.
 #[derive(Clone, Debug)]
 pub struct RobotWatch {
     states: Arc<HashMap<String, watch::Receiver<Liveness>>>,
@@ -76,7 +100,27 @@ impl RobotWatch {
         robots: &[String],
         lost_after: Duration,
     ) -> Result<RobotWatch, Ros2Error> {
-        let t = topic(node)?;
+        RobotWatch::start_on(node, HEARTBEAT_TOPIC, "robot", robots, lost_after)
+    }
+
+    /// Subscribes to the supervisor's heartbeats: [`RobotWatch::liveness`] of
+    /// [`SUPERVISOR`] follows it.
+    pub fn supervisor(node: &mut Node, lost_after: Duration) -> Result<RobotWatch, Ros2Error> {
+        let who = [SUPERVISOR.to_string()];
+        RobotWatch::start_on(node, SUPERVISOR_HEARTBEAT_TOPIC, "", &who, lost_after)
+    }
+
+    /// Watches the senders `names` on `topic_name`; `kind` names them in the warning
+    /// (`robot `r2`: no heartbeat …`; empty: `supervisor: no heartbeat …`).
+    fn start_on(
+        node: &mut Node,
+        topic_name: &str,
+        kind: &'static str,
+        names: &[String],
+        lost_after: Duration,
+    ) -> Result<RobotWatch, Ros2Error> {
+        let robots = names;
+        let t = topic(node, topic_name)?;
         let sub: Subscription<Heartbeat> =
             node.create_subscription(&t, None).map_err(Ros2Error::dds)?;
         let mut senders = HashMap::new();
@@ -114,7 +158,11 @@ impl RobotWatch {
                                 && now.duration_since(*t) > lost_after
                                 && *tx.borrow() == Liveness::Alive
                             {
-                                tracing::warn!("robot `{robot}`: no heartbeat for {lost_after:?}: lost");
+                                if kind.is_empty() {
+                                    tracing::warn!("{robot}: no heartbeat for {lost_after:?}: lost");
+                                } else {
+                                    tracing::warn!("{kind} `{robot}`: no heartbeat for {lost_after:?}: lost");
+                                }
                                 let _ = tx.send(Liveness::Lost);
                             }
                         }

@@ -13,6 +13,9 @@ pub const FIRINGS_TOPIC: &str = "/gspn/firings";
 pub const MARKING_TOPIC: &str = "/gspn/marking";
 /// Topic of the robots' [`Heartbeat`]s.
 pub const HEARTBEAT_TOPIC: &str = "/gspn/heartbeat";
+/// Topic of the supervisor's own [`Heartbeat`]s (`robot` = `supervisor`): robots leave when
+/// they stop.
+pub const SUPERVISOR_HEARTBEAT_TOPIC: &str = "/gspn/supervisor_heartbeat";
 /// Topic of the supervisor's [`RunState`].
 pub const RUN_TOPIC: &str = "/gspn/run";
 /// Topic of the live monitor's drifts (`run --monitor`), as JSON in a [`StringMsg`].

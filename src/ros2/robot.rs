@@ -22,13 +22,13 @@ use ros2_client::action::{
     ActionServerQosPolicies, AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId,
     NewGoalHandle,
 };
-use ros2_client::dds::ServiceMapping;
 use ros2_client::qos::{Durability, History};
 use ros2_client::{Name, QosProfile};
 use tokio::sync::oneshot;
 
 use super::config::DdsConfig;
 use super::firings::FiringListener;
+use super::heartbeat::{Liveness, RobotWatch, SUPERVISOR};
 use super::msgs::{
     ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RUN_OVER, Time, exec_place_type,
 };
@@ -50,7 +50,8 @@ pub struct RobotOptions {
     pub time_scale: f64,
     /// Appends `seq stamp_ns received_ns` for each firing received to this file.
     pub latency_log: Option<PathBuf>,
-    /// Keep serving when the supervisor's run is over (else [`serve`] returns then).
+    /// Keep serving when the supervisor's run is over or its heartbeat stops (else
+    /// [`serve`] returns then).
     pub stay: bool,
 }
 
@@ -59,13 +60,34 @@ pub struct RobotOptions {
 pub struct RobotStats {
     /// Goals received.
     pub goals: u64,
-    /// Goals cancelled by the supervisor.
+    /// Goals cancelled: by the supervisor, or because the robot left while they ran.
     pub cancelled: u64,
     /// Firings received on `/gspn/firings`.
     pub firings: u64,
+    /// Why the robot left by itself; `None` when it was stopped (Ctrl-C, SIGTERM).
+    pub left: Option<Leave>,
+}
+
+/// Why a robot left by itself.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Leave {
     /// The supervisor said its run is over: why it stopped and after how many firings
-    /// (`max_firings after 100 firings`); `None` when the robot was stopped otherwise.
-    pub run_over: Option<String>,
+    /// (`max_firings after 100 firings`).
+    RunOver(String),
+    /// The supervisor's heartbeats stopped for this long (it died, or the network is cut)
+    /// without saying the run is over.
+    SupervisorLost(Duration),
+}
+
+impl std::fmt::Display for Leave {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Leave::RunOver(why) => write!(f, "the supervisor's run is over ({why})"),
+            Leave::SupervisorLost(after) => {
+                write!(f, "the supervisor's heartbeat stopped (none for {after:?})")
+            }
+        }
+    }
 }
 
 /// The local decision for one goal: wait this long, then answer this transition.
@@ -133,15 +155,30 @@ fn id_hash(id: &str) -> u64 {
 }
 
 struct Shared {
+    id: String,
     net: Arc<Net>,
     rng: Mutex<Rng>,
     time_scale: f64,
     stats: Mutex<RobotStats>,
-    /// Running goals and how to cancel them.
-    running: Mutex<BTreeMap<GoalId, oneshot::Sender<()>>>,
+    running: Mutex<Running>,
+    /// The tasks of the goals received (finished ones pruned as new ones come).
+    goal_tasks: Mutex<Vec<tokio::task::JoinHandle<()>>>,
 }
 
-/// Serves the plan's `ros2` places as robot `opts.id` until `stop` completes.
+/// Running goals and how to cancel them; once `closed` (the robot is leaving) a new goal is
+/// cancelled as soon as it is accepted.
+#[derive(Default)]
+struct Running {
+    goals: BTreeMap<GoalId, oneshot::Sender<()>>,
+    closed: bool,
+}
+
+/// How long a leaving robot waits for its cancelled goals to send their results.
+const LEAVE_WAIT: Duration = Duration::from_secs(1);
+
+/// Serves the plan's `ros2` places as robot `opts.id` until `stop` completes, the
+/// supervisor says its run is over or its heartbeat stops (both ignored with `opts.stay`).
+/// Goals still running then are cancelled (and counted).
 pub async fn serve(
     net: &Net,
     settings: &Ros2Settings,
@@ -154,12 +191,15 @@ pub async fn serve(
     let spinner = node.spinner().map_err(Ros2Error::dds)?;
     let spin = tokio::spawn(spinner.spin());
     let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;
+    let supervisor = RobotWatch::supervisor(&mut node, cfg.lost_after)?;
     let shared = Arc::new(Shared {
+        id: opts.id.clone(),
         net: Arc::new(net.clone()),
         rng: Mutex::new(Rng::seed_from_u64(opts.seed ^ id_hash(&opts.id))),
         time_scale: opts.time_scale,
         stats: Mutex::new(RobotStats::default()),
-        running: Mutex::new(BTreeMap::new()),
+        running: Mutex::new(Running::default()),
+        goal_tasks: Mutex::new(Vec::new()),
     });
     let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
     servers.sort_unstable();
@@ -169,7 +209,7 @@ pub async fn serve(
         let name = Name::new(&format!("/{}", opts.id), s).map_err(Ros2Error::dds)?;
         let server = node
             .create_action_server::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
-                ServiceMapping::Enhanced,
+                cfg.service_mapping,
                 &name,
                 &exec_place_type(),
                 server_qos(),
@@ -181,41 +221,91 @@ pub async fn serve(
     let listener = FiringListener::new(&mut node)?;
     let listen = listen(&listener, opts.latency_log.clone(), Arc::clone(&shared));
     let over = run_over(&listener, &opts);
-    let mut run_over = None;
+    let lost = supervisor_lost(&supervisor, &opts, cfg.lost_after);
+    let mut left = None;
     tokio::select! {
         _ = stop => {}
         r = listen => r?,
-        o = over => run_over = Some(o),
+        l = over => left = Some(l),
+        l = lost => left = Some(l),
     }
-    beat.abort();
+    // No new goals; the running ones are cancelled and given a moment to say so.
     for t in tasks {
         t.abort();
     }
+    cancel_running(&shared);
+    let mut goals = shared
+        .goal_tasks
+        .lock()
+        .map(|mut g| std::mem::take(&mut *g))
+        .unwrap_or_default();
+    let ended = async {
+        for g in &mut goals {
+            let _ = g.await;
+        }
+    };
+    let _ = tokio::time::timeout(LEAVE_WAIT, ended).await;
+    for g in goals {
+        g.abort();
+    }
+    beat.abort();
     spin.abort();
     let mut stats = shared
         .stats
         .lock()
         .map_err(|_| Ros2Error::Other("poisoned".into()))?
         .clone();
-    stats.run_over = run_over;
+    stats.left = left;
     Ok(stats)
+}
+
+/// Cancels every running goal and every goal still to be accepted (the robot is leaving).
+fn cancel_running(shared: &Shared) {
+    if let Ok(mut r) = shared.running.lock() {
+        r.closed = true;
+        for (_, tx) in std::mem::take(&mut r.goals) {
+            let _ = tx.send(());
+        }
+    }
+}
+
+/// Completes when the supervisor's heartbeat, once heard, stops for `after` (never with
+/// `opts.stay`, which says so and keeps serving).
+async fn supervisor_lost(watch: &RobotWatch, opts: &RobotOptions, after: Duration) -> Leave {
+    let Some(mut live) = watch.liveness(SUPERVISOR) else {
+        return std::future::pending().await;
+    };
+    while live.changed().await.is_ok() {
+        let now = *live.borrow_and_update();
+        match now {
+            Liveness::Lost if !opts.stay => return Leave::SupervisorLost(after),
+            Liveness::Lost => tracing::info!(
+                "robot {}: {}; idle, serving until stopped (--stay)",
+                opts.id,
+                Leave::SupervisorLost(after)
+            ),
+            Liveness::Alive => tracing::info!("robot {}: a supervisor is here", opts.id),
+            Liveness::Unknown => {}
+        }
+    }
+    std::future::pending().await
 }
 
 /// Completes when the supervisor says its run is over (never with `opts.stay`, which says
 /// once that the robot stays, idle).
-async fn run_over(listener: &FiringListener, opts: &RobotOptions) -> String {
+async fn run_over(listener: &FiringListener, opts: &RobotOptions) -> Leave {
     let states = listener.run_states();
     futures::pin_mut!(states);
     while let Some(s) = states.next().await {
         if s.state != RUN_OVER {
             continue;
         }
-        let why = format!("{} after {} firings", s.stopped, s.firings);
+        let over = Leave::RunOver(format!("{} after {} firings", s.stopped, s.firings));
         if !opts.stay {
-            return why;
+            return over;
         }
         tracing::info!(
-            "robot {}: the supervisor's run is over ({why}); idle, serving until stopped (--stay)",
+            "robot {}: {over}; idle, serving until stopped (--stay)",
             opts.id
         );
     }
@@ -265,7 +355,12 @@ async fn serve_goals(server: Arc<Server>, shared: Arc<Shared>) {
         tokio::select! {
             g = server.receive_new_goal() => match g {
                 Ok(handle) => {
-                    tokio::spawn(run_goal(Arc::clone(&server), handle, Arc::clone(&shared)));
+                    let task =
+                        tokio::spawn(run_goal(Arc::clone(&server), handle, Arc::clone(&shared)));
+                    if let Ok(mut tasks) = shared.goal_tasks.lock() {
+                        tasks.retain(|t| !t.is_finished());
+                        tasks.push(task);
+                    }
                 }
                 Err(e) => tracing::warn!("receiving a goal: {e:?}"),
             },
@@ -277,9 +372,9 @@ async fn serve_goals(server: Arc<Server>, shared: Arc<Shared>) {
                             Err(_) => continue,
                         };
                         let ids: Vec<GoalId> =
-                            cancel.goals().filter(|g| running.contains_key(g)).collect();
+                            cancel.goals().filter(|g| running.goals.contains_key(g)).collect();
                         for g in &ids {
-                            if let Some(tx) = running.remove(g) {
+                            if let Some(tx) = running.goals.remove(g) {
                                 let _ = tx.send(());
                             }
                         }
@@ -312,7 +407,11 @@ async fn run_goal(server: Arc<Server>, handle: NewGoalHandle<ExecPlaceGoal>, sha
     let id = handle.goal_id();
     let (tx, rx) = oneshot::channel();
     if let Ok(mut r) = shared.running.lock() {
-        r.insert(id, tx);
+        if r.closed {
+            let _ = tx.send(());
+        } else {
+            r.goals.insert(id, tx);
+        }
     }
     let Ok(accepted) = server.accept_goal(handle).await else {
         return;
@@ -320,9 +419,23 @@ async fn run_goal(server: Arc<Server>, handle: NewGoalHandle<ExecPlaceGoal>, sha
     let Ok(executing) = server.start_executing_goal(accepted).await else {
         return;
     };
+    tracing::debug!(
+        "robot {}: goal `{}` (agent {}) started: {:?} after {:.3} s",
+        shared.id,
+        goal.place,
+        goal.agent,
+        decision.transition,
+        decision.delay
+    );
     let (status, result) = run_decision(&server, executing.clone(), decision, rx, &shared).await;
+    tracing::debug!(
+        "robot {}: goal `{}` (agent {}) ended: {status:?}",
+        shared.id,
+        goal.place,
+        goal.agent
+    );
     if let Ok(mut r) = shared.running.lock() {
-        r.remove(&id);
+        r.goals.remove(&id);
     }
     let send = server.send_result_response(executing, status, result);
     if tokio::time::timeout(Duration::from_secs(5), send)

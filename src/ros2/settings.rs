@@ -23,6 +23,32 @@ pub struct Ros2Settings {
     pub lost_after: Option<f64>,
     /// Seconds the supervisor waits for its robots before it gives up.
     pub startup: Option<f64>,
+    /// How ExecPlace's services carry request ids (default [`ServiceMapping::Enhanced`]).
+    pub service_mapping: ServiceMapping,
     /// Places whose action is `ros2`, with their ExecPlace server name, in net order.
     pub servers: Vec<(PlaceId, String)>,
+}
+
+/// How the ExecPlace services (send goal, get result, cancel) carry the id that pairs a
+/// response with its request on the wire; the supervisor and its robots must agree.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ServiceMapping {
+    /// RPC over DDS "Enhanced": the id in the samples' inline QoS (ROS 2 on Fast DDS;
+    /// gspn's robots).
+    #[default]
+    Enhanced,
+    /// A 16-byte header before the payload, as ROS 2's `rmw_cyclonedds_cpp` writes it: what a
+    /// DDS without access to inline QoS can speak (the Python robot on Cyclone DDS).
+    Cyclone,
+}
+
+impl ServiceMapping {
+    /// The mapping named `s` in a plan (`"enhanced"`, `"cyclone"`).
+    pub fn parse(s: &str) -> Option<ServiceMapping> {
+        match s {
+            "enhanced" => Some(ServiceMapping::Enhanced),
+            "cyclone" => Some(ServiceMapping::Cyclone),
+            _ => None,
+        }
+    }
 }

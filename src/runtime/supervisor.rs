@@ -448,27 +448,39 @@ impl Supervisor {
     }
 
     fn fast_path(&mut self) {
+        let more = self.fire_burst();
+        // Model time moved without reading the tokio clock: anchor it once, before an action
+        // started in the burst can report (its end time is counted from here).
+        self.clock.anchor();
+        if more {
+            self.schedule();
+        }
+    }
+
+    /// Up to `BATCH` virtual-time firings while no action runs; false when the run stopped or
+    /// died in the burst.
+    fn fire_burst(&mut self) -> bool {
         for _ in 0..BATCH {
             if self.stopping.is_some() || self.eng.running() > 0 {
                 break;
             }
             let Some((dt, t)) = self.eng.sample_race() else {
                 self.dead();
-                return;
+                return false;
             };
             let at = self.now() + dt;
             if let Some(u) = self.stop.time_limit
                 && at > u
             {
-                self.clock.jump_to(u);
+                self.clock.set(u);
                 self.begin_stop(StopReason::TimeLimit);
-                return;
+                return false;
             }
-            self.clock.jump_to(at);
+            self.clock.set(at);
             self.fire_one(t);
             self.settle();
         }
-        self.schedule();
+        true
     }
 
     fn begin_stop(&mut self, reason: StopReason) {

@@ -13,8 +13,10 @@ use std::time::Instant;
 use serde_json::{Value, json};
 use tokio::sync::watch;
 
+use crate::analysis::decision::RewardSpec;
 use crate::analysis::state_space::Monitor;
 use crate::net::Net;
+use crate::policy::Policy;
 
 /// What the analysis is doing, for the progress line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,22 +74,29 @@ enum State {
     Running {
         progress: Arc<Progress>,
         started: Instant,
+        max_states: usize,
     },
     Done {
         value: Arc<Value>,
         seconds: f64,
+        max_states: usize,
     },
     Cancelled {
         markings: usize,
         phase: Phase,
         seconds: f64,
+        max_states: usize,
     },
 }
 
-/// The analysis of one net, run at most once at a time.
+/// The analysis of one net (under its plan's policy, with its rewards), run at most once at
+/// a time.
 #[derive(Debug)]
 pub(crate) struct AnalysisJob {
     net: Arc<Net>,
+    policy: Arc<Policy>,
+    rewards: Vec<RewardSpec>,
+    /// The limit of the next run when the page does not give one.
     max_states: usize,
     state: Mutex<State>,
     /// Bumped whenever the job ends (done or cancelled).
@@ -103,9 +112,16 @@ pub(crate) enum Outcome {
 }
 
 impl AnalysisJob {
-    pub(crate) fn new(net: Arc<Net>, max_states: usize) -> AnalysisJob {
+    pub(crate) fn new(
+        net: Arc<Net>,
+        policy: Arc<Policy>,
+        rewards: Vec<RewardSpec>,
+        max_states: usize,
+    ) -> AnalysisJob {
         AnalysisJob {
             net,
+            policy,
+            rewards,
             max_states,
             state: Mutex::new(State::Idle),
             ended: watch::channel(0).0,
@@ -119,24 +135,44 @@ impl AnalysisJob {
     }
 
     /// Starts the analysis unless it is running or done; returns the progress. Call inside a
-    /// tokio runtime.
-    pub(crate) fn start(self: &Arc<Self>) -> Value {
+    /// tokio runtime. With `max_states` (the page's field), a finished analysis that ran
+    /// with another limit runs again with this one (a net with too many markings for the
+    /// first limit can be retried with a larger one).
+    pub(crate) fn start(self: &Arc<Self>, max_states: Option<usize>) -> Value {
         let mut s = self.lock();
-        if matches!(*s, State::Idle | State::Cancelled { .. }) {
+        let again = match (&*s, max_states) {
+            (State::Idle | State::Cancelled { .. }, _) => true,
+            (
+                State::Done {
+                    max_states: used, ..
+                },
+                Some(m),
+            ) => *used != m,
+            _ => false,
+        };
+        if again {
+            let max_states = max_states.unwrap_or(self.max_states);
             let progress = Arc::new(Progress::default());
             *s = State::Running {
                 progress: progress.clone(),
                 started: Instant::now(),
+                max_states,
             };
             let job = self.clone();
-            tokio::task::spawn_blocking(move || job.run(progress));
+            tokio::task::spawn_blocking(move || job.run(progress, max_states));
         }
-        progress_json(&s)
+        progress_json(&s, self.max_states)
     }
 
-    fn run(&self, progress: Arc<Progress>) {
+    fn run(&self, progress: Arc<Progress>, max_states: usize) {
         let started = Instant::now();
-        let value = crate::web::report::analyse(&self.net, self.max_states, &progress);
+        let value = crate::web::report::analyse(
+            &self.net,
+            &self.policy,
+            &self.rewards,
+            max_states,
+            &progress,
+        );
         let seconds = started.elapsed().as_secs_f64();
         {
             let mut s = self.lock();
@@ -147,11 +183,13 @@ impl AnalysisJob {
                     markings: progress.monitor.markings(),
                     phase: progress.phase(),
                     seconds,
+                    max_states,
                 }
             } else {
                 State::Done {
                     value: Arc::new(value),
                     seconds,
+                    max_states,
                 }
             };
         }
@@ -165,24 +203,26 @@ impl AnalysisJob {
         if let State::Running { progress, .. } = &*s {
             progress.monitor.cancel();
         }
-        progress_json(&s)
+        progress_json(&s, self.max_states)
     }
 
     /// The progress as JSON: `state`, and `phase`, `markings`, `seconds` where they apply.
     pub(crate) fn progress(&self) -> Value {
-        progress_json(&self.lock())
+        progress_json(&self.lock(), self.max_states)
     }
 
     /// Starts the analysis if needed and waits for it to end.
     pub(crate) async fn result(self: &Arc<Self>) -> Outcome {
         let mut ended = self.ended.subscribe();
-        self.start();
+        self.start(None);
         loop {
             {
                 let s = self.lock();
                 match &*s {
                     State::Done { value, .. } => return Outcome::Done(value.clone()),
-                    State::Cancelled { .. } => return Outcome::Cancelled(progress_json(&s)),
+                    State::Cancelled { .. } => {
+                        return Outcome::Cancelled(progress_json(&s, self.max_states));
+                    }
                     State::Idle | State::Running { .. } => {}
                 }
             }
@@ -193,30 +233,43 @@ impl AnalysisJob {
     }
 }
 
-fn progress_json(s: &State) -> Value {
+/// The progress of `s`; `max_states` is the limit an idle job would run with.
+fn progress_json(s: &State, default_max: usize) -> Value {
     match s {
-        State::Idle => json!({ "state": "idle" }),
-        State::Running { progress, started } => json!({
+        State::Idle => json!({ "state": "idle", "max_states": default_max }),
+        State::Running {
+            progress,
+            started,
+            max_states,
+        } => json!({
             "state": if progress.monitor.is_cancelled() { "cancelling" } else { "running" },
             "phase": progress.phase().name(),
             "markings": progress.monitor.markings(),
             "seconds": started.elapsed().as_secs_f64(),
+            "max_states": max_states,
         }),
-        State::Done { value, seconds } => json!({
+        State::Done {
+            value,
+            seconds,
+            max_states,
+        } => json!({
             "state": "done",
             "markings": value.get("reachable").cloned().unwrap_or(Value::Null),
             "seconds": seconds,
             "error": value.get("error").cloned().unwrap_or(Value::Null),
+            "max_states": max_states,
         }),
         State::Cancelled {
             markings,
             phase,
             seconds,
+            max_states,
         } => json!({
             "state": "cancelled",
             "phase": phase.name(),
             "markings": markings,
             "seconds": seconds,
+            "max_states": max_states,
         }),
     }
 }

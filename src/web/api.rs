@@ -217,9 +217,27 @@ pub(crate) async fn analysis(State(state): State<WebState>) -> Response {
     }
 }
 
-/// `POST /api/analysis/start`: starts the analysis (unless running or done); the progress.
-pub(crate) async fn analysis_start(State(state): State<WebState>) -> Json<Value> {
-    Json(state.inner.analysis.start())
+/// Body of `POST /api/analysis/start`.
+#[derive(Debug, Default, Deserialize)]
+pub(crate) struct StartBody {
+    /// Most reachable markings to explore (the server's limit when absent).
+    max_states: Option<usize>,
+}
+
+/// `POST /api/analysis/start {max_states}`: starts the analysis (unless running, or done
+/// with the same limit); the progress. 400 for a limit of 0.
+pub(crate) async fn analysis_start(
+    State(state): State<WebState>,
+    body: Option<Json<StartBody>>,
+) -> Response {
+    let max_states = body.and_then(|Json(b)| b.max_states);
+    if max_states == Some(0) {
+        return error(
+            StatusCode::BAD_REQUEST,
+            "max_states = 0: the analysis needs at least the initial marking",
+        );
+    }
+    Json(state.inner.analysis.start(max_states)).into_response()
 }
 
 /// `GET /api/analysis/progress`: `{state, phase, markings, seconds}`.

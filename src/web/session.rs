@@ -109,6 +109,10 @@ impl Session {
         &self.net
     }
 
+    pub(crate) fn policy(&self) -> Option<&Policy> {
+        self.policy.as_deref()
+    }
+
     pub(crate) fn seed(&self) -> u64 {
         self.seed
     }

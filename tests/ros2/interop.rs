@@ -9,42 +9,19 @@
 
 use crate::ros2_support as support;
 
-use std::path::PathBuf;
 use std::process::Stdio;
 use std::time::Duration;
 
 use gspn::io::{ReadOptions, read_net};
-use support::{domain, finish, repo, robot, supervisor};
+use support::{CYCLONE_CONFIG, domain, finish, python, repo, robot, supervisor};
 use tokio::io::{AsyncBufReadExt, BufReader};
-
-/// Cyclone on loopback only, unicast discovery of the local participants.
-const CYCLONE_CONFIG: &str = "<CycloneDDS><Domain id=\"any\"><General><Interfaces>\
-<NetworkInterface address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast>\
-</General><Discovery><ParticipantIndex>auto</ParticipantIndex>\
-<MaxAutoParticipantIndex>60</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/>\
-</Peers></Discovery></Domain></CycloneDDS>";
-
-fn python() -> PathBuf {
-    let venv = std::env::var_os("GSPN_ROS2_VENV")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo("target/venv-ros2"));
-    let py = venv.join("bin/python");
-    assert!(
-        py.is_file(),
-        "the ROS 2 interop test needs a Python venv with cyclonedds at {} \
-         (create it: python3 -m venv {0} && {0}/bin/pip install cyclonedds==11.0.1; \
-         .ci/run does this; or point GSPN_ROS2_VENV at one)",
-        venv.display()
-    );
-    py
-}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn cyclone_dds_in_python_receives_every_firing_with_its_fields() {
     const N: usize = 40;
     let py = python();
     let dir = tempfile::tempdir().unwrap();
-    let d = domain(5);
+    let d = domain(10);
     let mut listener = tokio::process::Command::new(&py)
         .arg(repo("tests/ros2/firings_listener.py"))
         .args([d.to_string(), N.to_string(), "90".into()])

@@ -1,7 +1,7 @@
 //! How ROS 2 processes start and end: the domain's precedence (flag, plan,
 //! `GSPN_ROS2_DOMAIN`, `ROS_DOMAIN_ID`, 0), robots leaving when the supervisor's run is
-//! over (`--stay` keeps one), virtual time refused with ros2 places, Ctrl-C while the
-//! supervisor waits for its robots.
+//! over or when its heartbeat stops (`--stay` keeps one), cancelling the goals they still
+//! run, virtual time refused with ros2 places.
 #![cfg(feature = "ros2")]
 
 use crate::ros2_support as support;
@@ -10,7 +10,9 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 
-use support::{domain, finish, repo, robot_with, supervisor, terminate, wait_for_log};
+use support::{
+    GOAL_LOG, domain, finish, repo, robot_env, robot_with, supervisor, terminate, wait_for_log,
+};
 
 /// `plan-runner robot --id r1 --plan PLAN EXTRA…` with environment `env`: the domain its
 /// log says it serves.
@@ -129,6 +131,74 @@ async fn robots_leave_when_the_run_is_over_unless_told_to_stay() {
     assert!(stay.child.try_wait().unwrap().is_none(), "{}", stay.log());
     let log = terminate(stay, Duration::from_secs(10)).await;
     assert!(!log.contains("leaving"), "{log}");
+}
+
+/// Bug: a robot that missed the supervisor's "the run is over" served forever, and a robot
+/// leaving while a goal ran neither cancelled nor counted it. Now a robot leaves when the
+/// supervisor's heartbeat stops for `lost_after` (here the supervisor is killed: it says
+/// nothing), cancelling its running goal; a `--stay` robot says so and keeps serving, and
+/// cancels its goal when it is stopped.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn robots_leave_when_the_supervisor_dies_and_cancel_their_running_goals() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(9);
+    let plan = Path::new(support::PLAN);
+    // 10,000 s per model unit: each robot's first goal runs until it is cancelled.
+    let slow = ["--time-scale", "10000"];
+    let stay = ["--time-scale", "10000", "--stay"];
+    let r1 = robot_env(dir.path(), "r1", plan, d, &slow, &[GOAL_LOG]);
+    let r2 = robot_env(dir.path(), "r2", plan, d, &slow, &[GOAL_LOG]);
+    let r3 = robot_env(dir.path(), "r3", plan, d, &stay, &[GOAL_LOG]);
+    let mut sup = supervisor(dir.path(), d, &[]);
+    for r in [&r1, &r2, &r3] {
+        assert!(
+            wait_for_log(r, ") started: ", Duration::from_secs(60)).await,
+            "{}: {}\nsupervisor: {}",
+            r.name,
+            r.log(),
+            sup.log()
+        );
+    }
+    sup.child.start_kill().expect("kill the supervisor");
+    let killed = Instant::now();
+    for r in [r1, r2] {
+        let (name, log) = (r.name.clone(), r.log.clone());
+        let (code, _) = finish(r, Duration::from_secs(30)).await;
+        let after = killed.elapsed();
+        let log = std::fs::read_to_string(log).unwrap();
+        assert_eq!(code, Some(0), "{name}: {log}");
+        assert!(
+            log.contains(&format!(
+                "robot {name}: the supervisor's heartbeat stopped (none for 1s): leaving"
+            )),
+            "{name}: {log}"
+        );
+        assert!(
+            log.contains(&format!("robot {name}: 1 goals, 1 cancelled")),
+            "{name}: {log}"
+        );
+        // Not before lost_after (the plan's 1 s) without a heartbeat.
+        assert!(
+            after >= Duration::from_secs(1),
+            "{name} left after {after:?}"
+        );
+        println!("{name} left {after:?} after the supervisor was killed");
+    }
+    assert!(
+        wait_for_log(
+            &r3,
+            "robot r3: the supervisor's heartbeat stopped (none for 1s); idle, serving until stopped (--stay)",
+            Duration::from_secs(30)
+        )
+        .await,
+        "{}",
+        r3.log()
+    );
+    let mut r3 = r3;
+    assert!(r3.child.try_wait().unwrap().is_none(), "{}", r3.log());
+    let log = terminate(r3, Duration::from_secs(10)).await;
+    assert!(!log.contains("leaving"), "{log}");
+    assert!(log.contains("robot r3: 1 goals, 1 cancelled"), "{log}");
 }
 
 #[test]

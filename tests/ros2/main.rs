@@ -10,8 +10,11 @@ mod ros2_support;
 #[path = "rtps.rs"]
 mod ros2_rtps;
 
+mod concurrent_goals;
 mod ctrl_c_while_waiting_for_robots;
 mod interop;
 mod lifecycle;
 mod multiprocess;
+mod netns;
+mod python_robot;
 mod security;

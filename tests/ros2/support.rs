@@ -19,10 +19,11 @@ pub fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
-/// A DDS domain for test `k` of this process: tests in parallel (and other test processes
-/// on the machine) do not hear each other.
+/// A DDS domain for test `k` (< 20) of this process: tests in parallel (and other test
+/// processes on the machine) do not hear each other.
 pub fn domain(k: u16) -> u16 {
-    10 + (std::process::id() % 20) as u16 * 10 + k
+    assert!(k < 20, "test domain index {k} ≥ 20");
+    10 + (std::process::id() % 10) as u16 * 20 + k
 }
 
 /// A process whose stderr goes to a file in `dir`, killed when dropped.
@@ -39,12 +40,23 @@ impl Proc {
 }
 
 fn command(dir: &Path, name: &str, args: &[String], stdout: bool) -> Proc {
+    command_env(dir, name, args, stdout, &[])
+}
+
+fn command_env(
+    dir: &Path,
+    name: &str,
+    args: &[String],
+    stdout: bool,
+    env: &[(&str, &str)],
+) -> Proc {
     let log = dir.join(format!("{name}.log"));
     let err = std::fs::File::create(&log).expect("log file");
     let child = Command::new(env!("CARGO_BIN_EXE_plan-runner"))
         .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .env_remove("RUST_LOG")
+        .envs(env.iter().copied())
         .stdin(Stdio::null())
         .stdout(if stdout {
             Stdio::piped()
@@ -69,6 +81,25 @@ pub fn robot(dir: &Path, id: &str, domain: u16) -> Proc {
 
 /// `plan-runner robot --id ID --plan PLAN --ros2-domain D EXTRA…`.
 pub fn robot_with(dir: &Path, id: &str, plan: &Path, domain: u16, extra: &[&str]) -> Proc {
+    robot_env(dir, id, plan, domain, extra, &[])
+}
+
+/// The robot's debug log on: it says when each goal starts and ends.
+pub const GOAL_LOG: (&str, &str) = (
+    "RUST_LOG",
+    "warn,gspn=debug,rustdds::rtps::writer=error,ros2_client::distributions=error,\
+     ros2_client::service::wrappers=error",
+);
+
+/// [`robot_with`] with environment variables `env`.
+pub fn robot_env(
+    dir: &Path,
+    id: &str,
+    plan: &Path,
+    domain: u16,
+    extra: &[&str],
+    env: &[(&str, &str)],
+) -> Proc {
     let mut args: Vec<String> = vec![
         "robot".into(),
         "--id".into(),
@@ -79,7 +110,7 @@ pub fn robot_with(dir: &Path, id: &str, plan: &Path, domain: u16, extra: &[&str]
         domain.to_string(),
     ];
     args.extend(extra.iter().map(|s| s.to_string()));
-    command(dir, id, &args, false)
+    command_env(dir, id, &args, false, env)
 }
 
 /// `plan-runner run PLAN --ros2-domain D --json EXTRA…` (stdout piped: the JSON summary).
@@ -250,4 +281,29 @@ pub async fn wait_for_log(p: &Proc, what: &str, limit: Duration) -> bool {
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
     false
+}
+
+/// Cyclone on loopback only, unicast discovery of the local participants (the Python peers'
+/// `CYCLONEDDS_URI`).
+pub const CYCLONE_CONFIG: &str = "<CycloneDDS><Domain id=\"any\"><General><Interfaces>\
+<NetworkInterface address=\"127.0.0.1\"/></Interfaces><AllowMulticast>false</AllowMulticast>\
+</General><Discovery><ParticipantIndex>auto</ParticipantIndex>\
+<MaxAutoParticipantIndex>60</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/>\
+</Peers></Discovery></Domain></CycloneDDS>";
+
+/// The Python of the venv `.ci/run` makes (`target/venv-ros2`, or `$GSPN_ROS2_VENV`), with
+/// `cyclonedds`; fails, saying how to make it, when it is missing.
+pub fn python() -> PathBuf {
+    let venv = std::env::var_os("GSPN_ROS2_VENV")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| repo("target/venv-ros2"));
+    let py = venv.join("bin/python");
+    assert!(
+        py.is_file(),
+        "the ROS 2 tests with Python peers need a Python venv with cyclonedds at {} \
+         (create it: python3 -m venv {0} && {0}/bin/pip install cyclonedds==11.0.1; \
+         .ci/run does this; or point GSPN_ROS2_VENV at one)",
+        venv.display()
+    );
+    py
 }

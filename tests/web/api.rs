@@ -26,7 +26,7 @@ fn state_for(path: &Path, seed: u64) -> WebState {
 }
 
 /// One request through the router; the status and the body as JSON (or as a string).
-async fn call(
+pub(crate) async fn call(
     state: &WebState,
     method: &str,
     uri: &str,

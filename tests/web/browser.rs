@@ -60,14 +60,14 @@ async fn http_get_raw(addr: SocketAddr, path: &str) -> (String, String) {
     (head.to_string(), body.to_string())
 }
 
-async fn http_get(addr: SocketAddr, path: &str) -> Value {
+pub(crate) async fn http_get(addr: SocketAddr, path: &str) -> Value {
     let (head, body) = http_get_raw(addr, path).await;
     assert!(head.starts_with("HTTP/1.1 200"), "{head}");
     serde_json::from_str(&body).unwrap()
 }
 
 /// Opens the page and waits until its first drawing is on the screen.
-async fn open(b: &Browser, addr: SocketAddr) {
+pub(crate) async fn open(b: &Browser, addr: SocketAddr) {
     b.client.goto(&format!("http://{addr}/")).await.unwrap();
     wait_drawn(b).await;
 }

@@ -94,14 +94,16 @@ fn main() -> ExitCode {
 }
 
 /// The default log filter. RustDDS's writer warns "No locators" for every same-host reader
-/// reached over loopback (it does reach it), and ros2-client that `ROS_DISTRO` is unset:
-/// both would flood stderr, so only their errors show.
-const DEFAULT_LOG: &str =
-    "warn,gspn=info,rustdds::rtps::writer=error,ros2_client::distributions=error";
+/// reached over loopback (it does reach it), ros2-client that `ROS_DISTRO` is unset, and its
+/// service server that a request has no related sample identity (its own client never
+/// sends one in the Enhanced mapping; the server then uses the request's own identity, as
+/// it should): all three would flood stderr, so only their errors show.
+const DEFAULT_LOG: &str = "warn,gspn=info,rustdds::rtps::writer=error,\
+     ros2_client::distributions=error,ros2_client::service::wrappers=error";
 
 /// Warnings and errors of the library and of its dependencies (RustDDS and ros2-client log
 /// through `log`, bridged) go to stderr; `RUST_LOG` overrides the default filter
-/// (`DEFAULT_LOG`: the library's notices, everyone's warnings but two noisy ones).
+/// (`DEFAULT_LOG`: the library's notices, everyone's warnings but three noisy ones).
 fn init_logging() {
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(DEFAULT_LOG));

@@ -41,7 +41,8 @@ pub(crate) fn endless_warning(plan: &Plan) -> Option<String> {
     if !plan.stop.is_empty() || plan.time_scale.unwrap_or(0.0) > 0.0 {
         return None;
     }
-    let why = endless::ending(&plan.net, gspn::check::ENDING_BUDGET).describe(&plan.net)?;
+    let why =
+        endless::ending(&plan.net, gspn::check::ending_budget(&plan.net)).describe(&plan.net)?;
     Some(format!(
         "this run has no stop condition and {why}: it goes on until Ctrl-C (add --max-firings N or --until T, or [stop] in the plan)"
     ))

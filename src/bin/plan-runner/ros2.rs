@@ -12,6 +12,7 @@ use gspn::ros2::config::{parse_domain, parse_networks};
 use gspn::ros2::heartbeat::Liveness;
 use gspn::ros2::robot::{RobotOptions, serve};
 use gspn::ros2::{DdsConfig, Ros2Backend};
+use gspn::runtime::Role;
 use gspn::runtime::{
     Backend, BackendError, BackendFuture, Events, RuntimeBuilder, RuntimeHandle, Section, Summary,
 };
@@ -47,7 +48,7 @@ impl DdsArgs {
         }
         c.bind_address().map_err(|e| BadInput(e.to_string()))?;
         // The supervisor, the robots and a viewer or two on one host: any start order.
-        Ok(c.for_fleet(plan.robots.len() + 2))
+        Ok(c.for_fleet(robots(plan).len() + 2))
     }
 }
 
@@ -76,9 +77,9 @@ pub(crate) fn check_plan(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
     if !wanted(plan) {
         return Ok(());
     }
-    if plan.robots.is_empty() {
+    if robots(plan).is_empty() {
         return Err(BadInput(format!(
-            "{}: the plan has ros2 places but no `robots = [...]` to send their goals to",
+            "{}: the plan has ros2 places but no `robots = [...]` (nor a place's `robot`) to send their goals to",
             plan.path.display()
         ))
         .into());
@@ -95,30 +96,46 @@ pub(crate) fn check_plan(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The plan's robots, when it has `ros2` places (else the ROS 2 backend stays off).
+/// Whether the plan has `ros2` places (else the ROS 2 backend stays off).
 pub(crate) fn wanted(plan: &Plan) -> bool {
     !plan.ros2.servers.is_empty()
+}
+
+/// The robots the supervisor links to: the plan's `robots`, then the `robot` of each `ros2`
+/// place not among them (several places may name one robot: its server then gets their
+/// goals concurrently).
+fn robots(plan: &Plan) -> Vec<String> {
+    let mut out = plan.robots.clone();
+    for (p, _) in &plan.ros2.servers {
+        if let Some(Some(Role::Action { robot: Some(r), .. })) = plan.roles.get(p.index())
+            && !out.contains(r)
+        {
+            out.push(r.clone());
+        }
+    }
+    out
 }
 
 /// Joins DDS and links to the plan's robots.
 pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2Run> {
     let cfg = args.dds.config(plan)?;
+    let robots = robots(plan);
     eprintln!(
         "ros2: domain {}, waiting for robot(s) {}",
         cfg.domain_id,
-        plan.robots.join(", ")
+        robots.join(", ")
     );
     let backend = Ros2Backend::connect(
         &plan.net,
         &plan.ros2,
-        &plan.robots,
+        &robots,
         &cfg,
         args.ros2_wait_subscribers,
     )
     .await?;
     eprintln!("ros2: robots ready");
     // Say when a robot is lost or back (the runs' errors say which action it failed).
-    for r in &plan.robots {
+    for r in &robots {
         if let Some(mut live) = backend.watch().liveness(r) {
             let r = r.clone();
             let after = cfg.lost_after;
@@ -215,7 +232,8 @@ pub(crate) struct RobotArgs {
     /// Append `seq stamp_ns received_ns` for every firing received to this file.
     #[arg(long, value_name = "FILE")]
     latency_log: Option<PathBuf>,
-    /// Keep serving after the supervisor says its run is over (default: exit then).
+    /// Keep serving after the supervisor says its run is over or its heartbeat stops
+    /// (default: exit then).
     #[arg(long)]
     stay: bool,
     #[command(flatten)]
@@ -235,11 +253,12 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    if !plan.robots.is_empty() && !plan.robots.contains(&args.id) {
+    let robots = robots(&plan);
+    if !robots.contains(&args.id) {
         eprintln!(
             "warning: robot `{}` is not in the plan's robots ({})",
             args.id,
-            plan.robots.join(", ")
+            robots.join(", ")
         );
     }
     let scale = args
@@ -271,11 +290,8 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         );
         serve(&plan.net, &plan.ros2, &cfg, opts, shutdown()).await
     })?;
-    if let Some(over) = &stats.run_over {
-        eprintln!(
-            "robot {}: the supervisor's run is over ({over}): leaving",
-            args.id
-        );
+    if let Some(left) = &stats.left {
+        eprintln!("robot {}: {left}: leaving", args.id);
     }
     eprintln!(
         "robot {}: {} goals, {} cancelled, {} firings received",

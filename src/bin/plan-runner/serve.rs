@@ -34,6 +34,10 @@ pub(crate) struct Args {
     /// Seed of the token game [default: the plan's seed, else 0].
     #[arg(long)]
     seed: Option<u64>,
+    /// Most reachable markings the analysis panel explores before it gives up (the page's
+    /// "max states" field starts at this value).
+    #[arg(long, value_name = "N", default_value_t = gspn::web::DEFAULT_MAX_STATES)]
+    max_states: usize,
     #[command(flatten)]
     net: NetArgs,
 }
@@ -45,8 +49,22 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         eprintln!("warning: {w}");
     }
     let seed = args.seed.or(plan.seed).unwrap_or(0);
-    let policy = (!plan.policy.is_empty()).then_some(plan.policy);
-    let state = WebState::new(plan.net, policy, seed).with_source(&plan.net_path);
+    if args.max_states == 0 {
+        return Err(BadInput(
+            "--max-states 0: the analysis needs at least the initial marking".into(),
+        )
+        .into());
+    }
+    // The panel analyses the net under the plan's policy, with its rewards (the bare net
+    // for a net file), as `plan-runner analyze` does.
+    let state = WebState::for_plan(
+        plan.net,
+        Some(plan.policy),
+        plan.rewards,
+        seed,
+        args.max_states,
+    )
+    .with_source(&plan.net_path);
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()

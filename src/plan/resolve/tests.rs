@@ -3,6 +3,7 @@
 use super::*;
 use crate::net::{NetBuilder, Servers};
 use crate::ros2::DEFAULT_SERVER;
+use crate::ros2::settings::ServiceMapping;
 
 /// P1 -T1-> P2 -t2|t3-> P3|P1 ; P3 -T4-> P1. Names with `:` as in the thesis.
 fn net() -> Net {
@@ -182,6 +183,7 @@ fn role_mistakes_are_refused() {
 fn ros2_places_and_settings_resolve() {
     let plan = load(
         "net = \"n.xml\"\n[ros2]\ndomain_id = 42\nnetworks = [\"127.0.0.1\"]\nlost_after = 0.5\n\
+         service_mapping = \"cyclone\"\n\
          [places.P2]\naction = \"ros2\"\nserver = \"exec_p2\"\n[places.P3]\naction = \"ros2\"\n",
     )
     .unwrap();
@@ -192,6 +194,7 @@ fn ros2_places_and_settings_resolve() {
     );
     assert_eq!(plan.ros2.lost_after, Some(0.5));
     assert_eq!(plan.ros2.heartbeat, None);
+    assert_eq!(plan.ros2.service_mapping, ServiceMapping::Cyclone);
     assert_eq!(
         plan.ros2.servers,
         vec![
@@ -219,6 +222,12 @@ fn ros2_mistakes_are_refused_at_their_position() {
     assert_eq!((l, c), (3, 13));
     let (l, c, _) = err_at("net = \"n.xml\"\n[ros2]\nlost_after = 0.0\n");
     assert_eq!((l, c), (3, 14));
+    let (l, c, m) = err_at("net = \"n.xml\"\n[ros2]\nservice_mapping = \"basic\"\n");
+    assert_eq!((l, c), (3, 19));
+    assert!(
+        m.contains("ros2.service_mapping: `basic` is not \"enhanced\" or \"cyclone\""),
+        "{m}"
+    );
     let (l, c, m) = err_at("net = \"n.xml\"\n[ros2]\ndomian_id = 3\n");
     assert_eq!((l, c), (3, 1));
     assert!(m.contains("domian_id"), "{m}");

@@ -1,6 +1,8 @@
-// gspn viewer, the analysis panel: starts the analysis on the server, shows its progress
-// (phase, markings, seconds) with a cancel button, then the properties, the steady-state
-// bars and the dead markings (click one to replay its firing sequence on the net).
+// gspn viewer, the analysis panel: starts the analysis on the server (with the "max states"
+// field's limit), shows its progress (phase, markings, seconds) with a cancel button, then
+// what was analysed ("net under plan policy" or "bare net"), the properties, the place
+// bounds, the invariants, the steady-state bars, the plan's reward rates and the dead
+// markings (click one to replay its firing sequence on the net).
 'use strict';
 
 // ---- analysis --------------------------------------------------------------------------
@@ -24,6 +26,16 @@ function escapeHtml(s) {
 
 let analysing = false;
 
+// The "max states" field starts at the server's limit (`serve --max-states`).
+async function initMaxStates() {
+  try {
+    const p = await api('GET', '/api/analysis/progress');
+    if (p.max_states && !$('max-states').value) $('max-states').value = p.max_states;
+  } catch (e) {
+    status(e.message);
+  }
+}
+
 function showProgress(p) {
   const t = p.seconds !== undefined ? ', ' + fmt(Math.round(p.seconds * 10) / 10) + ' s' : '';
   const m = p.markings !== undefined && p.markings !== null ? ', ' + p.markings.toLocaleString('en') + ' markings' : '';
@@ -41,7 +53,9 @@ async function analyse() {
   $('analysis-cancel').classList.remove('hidden');
   let a;
   try {
-    let p = await api('POST', '/api/analysis/start');
+    const max = Number($('max-states').value);
+    const body = Number.isSafeInteger(max) && max > 0 ? { max_states: max } : {};
+    let p = await api('POST', '/api/analysis/start', body);
     while (p.state === 'running' || p.state === 'cancelling') {
       showProgress(p);
       await new Promise((r) => setTimeout(r, 200));
@@ -62,20 +76,26 @@ async function analyse() {
     analysing = false;
     $('analysis-cancel').classList.add('hidden');
   }
+  const analysed = a.analysed ? '<p class="analysed" data-analysed="' + escapeHtml(a.analysed) +
+    '">' + escapeHtml(a.analysed) + '</p>' : '';
   if (a.error) {
-    out.innerHTML = '<p class="error">' + escapeHtml(a.error) + '</p>';
+    out.innerHTML = analysed + '<p class="error">' + escapeHtml(a.error) + '</p>';
     return;
   }
-  let html = '<p>' + a.reachable + ' reachable markings (' + a.tangible + ' tangible, ' +
+  let html = analysed + '<p>' + a.reachable + ' reachable markings (' + a.tangible + ' tangible, ' +
     a.vanishing + ' vanishing); safe: ' + a.safe + '; reversible: ' + a.reversible +
     '; deadlock-free: ' + a.deadlock_free + '</p>';
   if (a.steady) {
     html += bars('mean tokens' + (a.steady.ergodic ? '' : ' (limiting)'), a.steady.mean_tokens, 'tok',
       net.places.map((p) => p.name));
     html += bars('throughput', a.steady.throughput, 'thr', net.transitions.map((t) => t.name));
+    if (a.steady.rewards) html += rewardTable(a.steady.rewards);
   } else if (a.steady_error) {
     html += '<p class="error">' + escapeHtml(a.steady_error) + '</p>';
   }
+  html += boundsTable(a.place_bounds);
+  html += invariantList('P-invariants', a.p_invariants, net.places.map((p) => p.name));
+  html += invariantList('T-invariants', a.t_invariants, net.transitions.map((t) => t.name));
   html += '<h4>dead markings (' + a.dead_markings.length + ')</h4><ol>';
   a.dead_markings.forEach((d, i) => {
     html += '<li class="dead mono" data-dead="' + i + '" title="click to replay">' +
@@ -87,6 +107,42 @@ async function analyse() {
   for (const li of out.querySelectorAll('[data-dead]')) {
     li.addEventListener('click', () => replay(a.dead_markings[Number(li.dataset.dead)].path));
   }
+}
+
+// Most tokens each place ever holds, in the net's order.
+function boundsTable(bounds) {
+  if (!bounds) return '';
+  let html = '<h4>place bounds</h4><table class="bounds">';
+  for (const p of net.places) {
+    if (!(p.name in bounds)) continue;
+    html += '<tr data-bound="' + escapeHtml(p.name) + '"><td>' + escapeHtml(p.name) +
+      '</td><td class="mono">' + bounds[p.name] + '</td></tr>';
+  }
+  return html + '</table>';
+}
+
+// Invariants as weighted sums of names (`P1 + 2·P3`), the names in the net's order; the
+// first 50.
+function invariantList(title, vectors, names) {
+  if (!vectors) return '';
+  const shown = vectors.slice(0, 50);
+  let html = '<h4>' + title + ' (' + vectors.length + ')</h4><ol class="invariants mono">';
+  for (const v of shown) {
+    const terms = names.filter((n) => n in v).map((n) => (v[n] === 1 ? '' : v[n] + '·') + n);
+    html += '<li>' + escapeHtml(terms.join(' + ')) + '</li>';
+  }
+  if (vectors.length > shown.length) html += '<li>… ' + (vectors.length - shown.length) + ' more</li>';
+  return html + '</ol>';
+}
+
+// The plan's reward structures: long-run reward per unit of time.
+function rewardTable(rewards) {
+  let html = '<h4>rewards (per unit of time)</h4><table class="rewards">';
+  for (const [name, r] of Object.entries(rewards)) {
+    html += '<tr data-reward="' + escapeHtml(name) + '"><td>' + escapeHtml(name) +
+      '</td><td class="mono">' + fmt(r.rate) + '</td></tr>';
+  }
+  return html + '</table>';
 }
 
 // Replays a firing sequence from the initial marking, one firing at a time.

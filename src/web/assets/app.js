@@ -35,6 +35,8 @@ const $ = (id) => document.getElementById(id);
 // the message to the paint after it, and the script's share of it (the last 1000 of each).
 const gspnPerf = { drawn: null, frames: [], handler: [] };
 window.gspnPerf = gspnPerf;
+// The token game's last state from the server, for the browser tests.
+window.gspnState = () => state;
 
 // Runs `fn` after the next paint: a frame callback runs just before it, a task after that.
 function afterPaint(fn) {
@@ -411,10 +413,36 @@ function setAgents(i, text) {
   g.agents.textContent = text;
 }
 
+// The plan policy's choice in the current vanishing marking, as a label over each
+// transition it picks from (`policy 0.9`), with data-policy="P" on the transition's hook.
+let choiceShown = [];
+function setChoice(choice) {
+  for (const i of choiceShown) {
+    transEls[i].removeAttribute('data-policy');
+    if (transEls[i].choice) transEls[i].choice.remove();
+    transEls[i].choice = null;
+  }
+  choiceShown = [];
+  if (!choice) return;
+  for (const [name, p] of Object.entries(choice.probabilities)) {
+    const i = transitionIndex(name);
+    if (i < 0) continue;
+    choiceShown.push(i);
+    const g = transEls[i];
+    g.setAttribute('data-policy', String(p));
+    if (cvs.on) continue;
+    const [, hh] = transitionHalf(net.transitions[i]);
+    g.choice = el('text', { class: 'choice', y: -hh - 18 }, g);
+    g.choice.textContent = 'policy ' + fmt(p);
+    el('title', {}, g.choice).textContent = 'rule ' + (choice.rule + 1) + ' of the plan policy';
+  }
+}
+
 function applyState(s) {
   state = s;
   s.tokens.forEach((k, i) => setTokens(i, k));
   setAllEnabled(s.firable);
+  setChoice(s.choice);
   const last = s.trace.length ? s.trace[s.trace.length - 1] : null;
   setFired(last ? transitionIndex(last.transition) : -1);
   if (document.activeElement !== $('seed')) $('seed').value = s.seed;
@@ -704,6 +732,7 @@ async function main() {
       return;
     }
     applyState(await api('GET', '/api/sim/state'));
+    initMaxStates();
     markDrawn();
   } catch (e) {
     status(e.message);
