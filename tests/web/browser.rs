@@ -279,6 +279,7 @@ async fn the_page_loads_everything_from_its_own_server() {
         "analysis.js",
         "live.js",
         "follow.js",
+        "share.js",
         "app.js",
         "api/net",
     ] {
