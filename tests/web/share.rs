@@ -3,7 +3,7 @@
 //! (with its style inside) and PNG.
 #![cfg(feature = "web")]
 
-use crate::browser::{BROWSER, PATROL, WAIT, http_get, open, screenshot_path};
+use crate::browser::{BROWSER, PATROL, WAIT, analyse_on_page, http_get, open, screenshot_path};
 use crate::support as common;
 use crate::support::browser::Browser;
 
@@ -111,13 +111,7 @@ async fn a_step_in_one_tab_shows_in_the_other() {
     b.screenshot(&screenshot_path("cross-tab.png")).await;
 
     // The server goes away: a banner, and the last analysis stays.
-    b.click("#analyze").await;
-    b.wait_js(
-        "return document.getElementById('analysis').textContent.includes('reachable markings');",
-        WAIT,
-        "the analysis",
-    )
-    .await;
+    analyse_on_page(&b).await;
     let before = b.text("#analysis").await;
     let hidden = b
         .js(
