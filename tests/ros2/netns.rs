@@ -244,6 +244,13 @@ fn args(v: &[&str]) -> Vec<String> {
     v.iter().map(|s| s.to_string()).collect()
 }
 
+/// `plan-runner robot --id ID --plan PLAN --ros2-domain 0 EXTRA…` on `host`.
+fn robot_on(host: &Host, dir: &Path, id: &str, plan: &str, extra: &[&str]) -> Proc {
+    let mut a = args(&["robot", "--id", id, "--plan", plan, "--ros2-domain", "0"]);
+    a.extend(args(extra));
+    spawn_in(host, dir, id, &a, &[])
+}
+
 /// The journal's firings: (transition, robots).
 fn firings(journal: &Path) -> Vec<(String, Vec<String>)> {
     std::fs::read_to_string(journal)
@@ -281,8 +288,10 @@ async fn sixteen_robots_on_four_hosts_run_the_fleet_plan() {
     for k in 1..=16 {
         let host = &lab.hosts[1 + (k - 1) % 4];
         let id = format!("r{k}");
-        let a = args(&["robot", "--id", &id, "--plan", &plan_s, "--ros2-domain", d]);
-        robots.push((1 + (k - 1) % 4, spawn_in(host, dir.path(), &id, &a, &[])));
+        robots.push((
+            1 + (k - 1) % 4,
+            robot_on(host, dir.path(), &id, &plan_s, &[]),
+        ));
     }
     let journal = dir.path().join("journal.jsonl");
     let a = args(&[
@@ -352,17 +361,13 @@ async fn a_host_cut_off_for_5_s_is_lost_repaired_and_serves_again() {
     for k in 1..=4 {
         let id = format!("r{k}");
         // --stay: a robot cut off from its supervisor keeps serving for when it is back.
-        let a = args(&[
-            "robot",
-            "--id",
+        robots.push(robot_on(
+            &lab.hosts[k],
+            dir.path(),
             &id,
-            "--plan",
             &plan_s,
-            "--ros2-domain",
-            "0",
-            "--stay",
-        ]);
-        robots.push(spawn_in(&lab.hosts[k], dir.path(), &id, &a, &[]));
+            &["--stay"],
+        ));
     }
     let journal = dir.path().join("journal.jsonl");
     let a = args(&[
@@ -471,19 +476,9 @@ async fn over_lossy_slow_links_every_firing_reaches_every_robot_once_in_order() 
         let lat = dir.path().join(format!("latency_{id}.txt"));
         // --stay: a robot that hears "over" before the last firings' repairs keeps
         // receiving them.
-        let a = args(&[
-            "robot",
-            "--id",
-            &id,
-            "--plan",
-            &plan_s,
-            "--ros2-domain",
-            "0",
-            "--stay",
-            "--latency-log",
-            lat.to_str().unwrap(),
-        ]);
-        robots.push((lat, spawn_in(&lab.hosts[k], dir.path(), &id, &a, &[])));
+        let extra = ["--stay", "--latency-log", lat.to_str().unwrap()];
+        let r = robot_on(&lab.hosts[k], dir.path(), &id, &plan_s, &extra);
+        robots.push((lat, r));
     }
     // The 4 robots subscribe to /gspn/firings: no firing before they are all matched.
     let a = args(&[
