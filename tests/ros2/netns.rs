@@ -490,7 +490,7 @@ async fn over_lossy_slow_links_every_firing_reaches_every_robot_once_in_order() 
         "--ros2-wait-subscribers",
         "4",
         "--ros2-linger",
-        "3",
+        "20",
     ]);
     let sup = spawn_in(&lab.hosts[0], dir.path(), "supervisor", &a, &[]);
     let started = Instant::now();
