@@ -131,6 +131,11 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/live.js"),
     },
     Asset {
+        path: "/follow.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/follow.js"),
+    },
+    Asset {
         path: "/style.css",
         mime: "text/css; charset=utf-8",
         body: include_str!("web/assets/style.css"),

@@ -25,13 +25,23 @@ pub struct Sccs {
 }
 
 impl Sccs {
-    /// The vertices of each component, components in numbering order.
-    pub fn members(&self) -> Vec<Vec<u32>> {
-        let mut out = vec![Vec::new(); self.count];
-        for (v, &c) in self.component.iter().enumerate() {
-            out[c as usize].push(v as u32);
+    /// The vertices of each component, components in numbering order (one flat array: no
+    /// allocation per component).
+    pub fn members(&self) -> Members {
+        let mut start = vec![0u32; self.count + 1];
+        for &c in &self.component {
+            start[c as usize + 1] += 1;
         }
-        out
+        for c in 0..self.count {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut vertices = vec![0u32; self.component.len()];
+        for (v, &c) in self.component.iter().enumerate() {
+            vertices[fill[c as usize] as usize] = v as u32;
+            fill[c as usize] += 1;
+        }
+        Members { start, vertices }
     }
 
     /// For each component, whether it is a bottom component (no edge leaves it).
@@ -50,6 +60,76 @@ impl Sccs {
             }
         }
         bottom
+    }
+}
+
+/// The vertices of each component ([`Sccs::members`]), in increasing order within each.
+#[derive(Clone, Debug, Default)]
+pub struct Members {
+    start: Vec<u32>,
+    vertices: Vec<u32>,
+}
+
+impl Members {
+    /// Number of components.
+    pub fn len(&self) -> usize {
+        self.start.len() - 1
+    }
+
+    /// Whether there are no components.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The components' vertex lists in numbering order.
+    pub fn iter(&self) -> MembersIter<'_> {
+        self.into_iter()
+    }
+}
+
+impl<'a> IntoIterator for &'a Members {
+    type Item = &'a [u32];
+    type IntoIter = MembersIter<'a>;
+
+    fn into_iter(self) -> MembersIter<'a> {
+        MembersIter {
+            members: self,
+            next: 0,
+        }
+    }
+}
+
+/// Iterator over the components of [`Members`].
+#[derive(Clone, Debug)]
+pub struct MembersIter<'a> {
+    members: &'a Members,
+    next: usize,
+}
+
+impl<'a> Iterator for MembersIter<'a> {
+    type Item = &'a [u32];
+
+    fn next(&mut self) -> Option<&'a [u32]> {
+        if self.next >= self.members.len() {
+            return None;
+        }
+        self.next += 1;
+        Some(&self.members[self.next - 1])
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let rest = self.members.len() - self.next;
+        (rest, Some(rest))
+    }
+}
+
+impl ExactSizeIterator for MembersIter<'_> {}
+
+impl std::ops::Index<usize> for Members {
+    type Output = [u32];
+
+    fn index(&self, c: usize) -> &[u32] {
+        &self.vertices[self.start[c] as usize..self.start[c + 1] as usize]
     }
 }
 

@@ -93,7 +93,7 @@ pub(crate) fn eliminate(
     let mut flow: Vec<Vec<(u32, f64)>> = vec![Vec::new(); vanishing];
     let mut acc_d = Acc::new(tangible);
     let mut acc_f = Acc::new(net.transition_count());
-    for members in sccs.members() {
+    for members in sccs.members().iter() {
         let single = members.len() == 1 && {
             let v = members[0];
             !raw.moves
@@ -129,7 +129,7 @@ pub(crate) fn eliminate(
                 order,
                 new_id,
                 tangible,
-                &members,
+                members,
                 &sccs.component,
                 &mut dist,
                 &mut flow,

@@ -17,7 +17,7 @@ use serde_json::{Map, Value, json};
 use tokio::sync::watch;
 
 use crate::net::Net;
-use crate::runtime::{EventKind, Events, Outcome, Received, RuntimeHandle};
+use crate::runtime::{AgentInfo, EventKind, Events, Outcome, Received, RuntimeHandle};
 use crate::web::WebState;
 use crate::web::api::net_json;
 
@@ -40,6 +40,9 @@ struct LiveInner {
     version: watch::Sender<u64>,
     /// The simulated world (map and robots), when a backend feeds one.
     world: OnceLock<watch::Receiver<Value>>,
+    /// The agents as the supervisor listed them after the latest firing: what the page
+    /// shows once the run is over and the supervisor lists none.
+    last_agents: Mutex<Vec<AgentInfo>>,
 }
 
 #[derive(Debug)]
@@ -73,6 +76,7 @@ impl LiveRun {
                 }),
                 version,
                 world: OnceLock::new(),
+                last_agents: Mutex::new(Vec::new()),
             }),
         };
         tokio::spawn(live.clone().fold(events));
@@ -121,8 +125,24 @@ impl LiveRun {
             .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
+    fn last_agents(&self) -> MutexGuard<'_, Vec<AgentInfo>> {
+        self.inner
+            .last_agents
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
     async fn fold(self, mut events: Events) {
         while let Some(r) = events.recv().await {
+            // Where every agent (and robot) is after a firing, from the supervisor itself
+            // (it answers after the firing it reported): kept for after the run.
+            if matches!(&r, Received::Event(e) if matches!(e.kind, EventKind::Fired { .. } | EventKind::AgentSpawned { .. }))
+            {
+                let agents = self.inner.handle.agents().await;
+                if !agents.is_empty() {
+                    *self.last_agents() = agents;
+                }
+            }
             {
                 let net = self.net();
                 let mut s = self.snapshot();
@@ -164,8 +184,26 @@ impl LiveRun {
 
     /// The snapshot as JSON, with the log entries after `after_seq` (all kept ones if `None`).
     async fn state_json(&self, after_seq: Option<u64>) -> Value {
-        let agents = self.inner.handle.agents().await;
+        let mut agents = self.inner.handle.agents().await;
+        if agents.is_empty() {
+            agents = self.last_agents().clone();
+        }
         let net = self.net();
+        let state_name = |a: &AgentInfo| {
+            serde_json::to_value(a.state)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default()
+        };
+        let agent_list: Vec<Value> = agents
+            .iter()
+            .map(|a| {
+                json!({
+                    "id": a.id.0, "place": net.place(a.place).name, "state": state_name(a),
+                    "robot": a.robot.as_deref(),
+                })
+            })
+            .collect();
         let mut per_place: Vec<Map<String, Value>> = vec![Map::new(); net.place_count()];
         for a in &agents {
             let state = serde_json::to_value(a.state).unwrap_or(Value::Null);
@@ -205,6 +243,7 @@ impl LiveRun {
             "stopped": s.stopped,
             "lagged": s.lagged,
             "agents": agents_by_place,
+            "agent_list": agent_list,
             "log": log,
         });
         drop(s);

@@ -1,6 +1,6 @@
 //! [`WorldBackend`]: the simulated world as a [`Backend`] of its run — after the run it
-//! reports the world's [`SimMetrics`](super::SimMetrics) (summary key `sim`), then stops the
-//! world.
+//! reports the world's [`SimMetrics`](super::SimMetrics) (summary key `sim`) and stops the
+//! world (its robots and its clock), before any later backend finishes.
 
 use super::WorldHandle;
 use crate::runtime::{Backend, BackendFuture, Section, Summary};
@@ -28,6 +28,9 @@ impl Backend for WorldBackend {
             let metrics = self.world.metrics().await;
             let json = serde_json::to_value(&metrics).unwrap_or(serde_json::Value::Null);
             let text = metrics.map(|m| m.to_string()).unwrap_or_default();
+            // The run is over: the robots stop where they are and the world's clock with
+            // them, even while a later backend (the viewer) keeps the process up.
+            self.world.stop();
             Some(Section::new(json, text))
         })
     }

@@ -262,7 +262,21 @@ fn a_long_token_game_under_the_policy_earns_the_optimal_rate() {
     );
 }
 
-/// Policy iteration (exact evaluation by sparse LU, then one bounding step) and value
+/// The optimal long-run average by `algorithm`.
+fn lra(
+    model: &DecisionModel,
+    rewards: &gspn::analysis::decision::Rewards,
+    max: bool,
+    algorithm: gspn::analysis::decision::Algorithm,
+) -> Result<gspn::analysis::decision::Solution, gspn::analysis::decision::DecisionError> {
+    let opts = SolveOptions {
+        algorithm,
+        ..SolveOptions::default()
+    };
+    solve(model, rewards, &Objective::Lra { max }, &opts)
+}
+
+/// Policy iteration (exact evaluation, then one bounding step) and value
 /// iteration agree to 1e-9 on the fixtures Storm checks (`storm_cross_check.rs`) and on the
 /// home model with the cleaning rewards, max and min (relative to the value, absolute below
 /// 1: some minima are 0); each says which method ran, and the policy iteration's policy is
@@ -289,16 +303,8 @@ fn policy_iteration_agrees_with_value_iteration() {
         let rewards = model.rewards(spec);
         for max in [true, false] {
             let run = |algorithm| {
-                solve(
-                    &model,
-                    &rewards,
-                    &Objective::Lra { max },
-                    &SolveOptions {
-                        algorithm,
-                        ..SolveOptions::default()
-                    },
-                )
-                .unwrap_or_else(|e| panic!("{name} max={max} {algorithm:?}: {e}"))
+                lra(&model, &rewards, max, algorithm)
+                    .unwrap_or_else(|e| panic!("{name} max={max} {algorithm:?}: {e}"))
             };
             let vi = run(Algorithm::ValueIteration);
             let pi = run(Algorithm::PolicyIteration);
@@ -322,6 +328,84 @@ fn policy_iteration_agrees_with_value_iteration() {
                 "{name} max={max}: the policy is worth {}, policy iteration said {}",
                 exact.lra,
                 pi.value
+            );
+        }
+    }
+}
+
+/// Policy iteration solves the policy's equations component by component (dense LU up to 48
+/// states, sparse LU above): a token leaves a transient ring of 55 places (a component of 55
+/// states), then chooses for ever between ring A (60 places, rates 1–3, reward `i mod 5`
+/// while on place `i`) and ring B (20 places, reward 1). Each ring's gain is
+/// `Σ reward/rate ÷ Σ 1/rate`; policy iteration finds the better (max) and the worse (min)
+/// to 1e-12, value iteration to its precision 1e-9.
+#[test]
+fn policy_iteration_solves_large_components_exactly() {
+    use gspn::analysis::decision::{Algorithm, Method};
+    use gspn::net::{NetBuilder, Servers};
+    let mut b = NetBuilder::new("rings");
+    let choose = b.place("Choose", 0);
+    let mut spec = RewardSpec {
+        name: "r".into(),
+        ..RewardSpec::default()
+    };
+    // A ring of `k` places entered from Choose by controllable `enter`, back to Choose.
+    let mut ring = |b: &mut NetBuilder,
+                    name: &str,
+                    k: usize,
+                    rate: &dyn Fn(usize) -> f64,
+                    reward: &dyn Fn(usize) -> f64| {
+        let places: Vec<_> = (0..k).map(|i| b.place(format!("{name}{i}"), 0)).collect();
+        let enter = b.immediate(format!("enter_{name}"), 0.0, 1);
+        b.input(choose, enter, 1);
+        b.output(enter, places[0], 1);
+        for i in 0..k {
+            let t = b.exponential(format!("t{name}{i}"), rate(i), Servers::Single);
+            b.input(places[i], t, 1);
+            b.output(t, if i + 1 < k { places[i + 1] } else { choose }, 1);
+            spec.places.push((places[i], reward(i), PlaceMode::Marked));
+        }
+        let time: f64 = (0..k).map(|i| 1.0 / rate(i)).sum();
+        (0..k).map(|i| reward(i) / rate(i)).sum::<f64>() / time
+    };
+    let g_a = ring(&mut b, "a", 60, &|i| 1.0 + (i % 3) as f64, &|i| {
+        (i % 5) as f64
+    });
+    let g_b = ring(&mut b, "b", 20, &|i| 2.0 + (i % 2) as f64, &|_| 1.0);
+    // The transient ring: c0 → … → c54 → c0, and c0 leaves to Choose at rate 0.5.
+    let c: Vec<_> = (0..55)
+        .map(|i| b.place(format!("c{i}"), u32::from(i == 0)))
+        .collect();
+    for i in 0..55 {
+        let t = b.exponential(format!("tc{i}"), 1.0, Servers::Single);
+        b.input(c[i], t, 1);
+        b.output(t, c[(i + 1) % 55], 1);
+    }
+    let leave = b.exponential("leave", 0.5, Servers::Single);
+    b.input(c[0], leave, 1);
+    b.output(leave, choose, 1);
+    let net = b.build().unwrap();
+    let model =
+        DecisionModel::build(&net, &Controls::zero_weight(&net), &Default::default()).unwrap();
+    assert_eq!((model.state_count(), model.decision_count()), (136, 1));
+    let rewards = model.rewards(&spec);
+    assert!((g_a - g_b).abs() > 0.1, "{g_a} {g_b}");
+    for max in [true, false] {
+        let expected = if max { g_a.max(g_b) } else { g_a.min(g_b) };
+        for (algorithm, method, tol) in [
+            (Algorithm::PolicyIteration, Method::PolicyIteration, 1e-12),
+            (
+                Algorithm::ValueIteration,
+                Method::RelativeValueIteration,
+                1e-9,
+            ),
+        ] {
+            let sol = lra(&model, &rewards, max, algorithm).unwrap();
+            assert_eq!(sol.method, method);
+            assert!(
+                (sol.value - expected).abs() <= tol * expected,
+                "max={max} {method:?}: {} vs {expected}",
+                sol.value
             );
         }
     }

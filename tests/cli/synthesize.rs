@@ -172,7 +172,8 @@ fn a_plan_naming_an_unknown_place_in_rewards_is_refused_at_its_line_and_column()
 
 /// `analyze PLAN` analyses the net under the plan's policy: the written optimal policy earns
 /// the synthesised value (to 1e-9), the plan without a policy is the bare net and earns
-/// less; the output says which. Policy iteration (`--method policy`) finds the same value.
+/// less; the output says which. Policy iteration (`--method policy`, and the default `auto`
+/// for lra) and value iteration (`--method value`) find the same value.
 #[test]
 fn analyze_of_the_written_policy_gives_the_synthesised_value() {
     let dir = tempfile::tempdir().unwrap();
@@ -222,12 +223,17 @@ fn analyze_of_the_written_policy_gives_the_synthesised_value() {
     let text = analyze(out.to_str().unwrap(), false);
     assert!(text.contains("analysed: net under plan policy ("), "{text}");
     assert!(text.contains("rewards (long-run rate per unit of time, net under plan policy):"));
-    // Value iteration agrees with policy iteration.
-    let (code, stdout, err) = synthesize(&[&home_plan(), "--json"]);
+    // Value iteration agrees with policy iteration; `auto` runs policy iteration for lra.
+    let (code, stdout, err) = synthesize(&[&home_plan(), "--json", "--method", "value"]);
     assert_eq!(code, 0, "{err}");
     let v: Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(v["method"], "RelativeValueIteration");
     assert!((v["value"].as_f64().unwrap() - optimum).abs() <= 1e-9 * optimum);
+    let (code, stdout, err) = synthesize(&[&home_plan(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let a: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(a["method"], "PolicyIteration");
+    assert!((a["value"].as_f64().unwrap() - optimum).abs() <= 1e-9 * optimum);
 }
 
 #[test]

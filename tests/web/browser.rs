@@ -216,7 +216,7 @@ async fn five_steps_in_the_browser_give_the_marking_of_plan_runner_simulate() {
     }
     b.screenshot(&screenshot_path("token-game.png")).await;
 
-    // The analysis panel: the library's counts.
+    // The analysis panel: the library's counts, of the bare net (no plan).
     b.click("#analyze").await;
     b.wait_js(
         "return document.getElementById('analysis').textContent.includes('reachable markings');",
@@ -228,7 +228,7 @@ async fn five_steps_in_the_browser_give_the_marking_of_plan_runner_simulate() {
     let text = b.text("#analysis").await;
     assert!(
         text.starts_with(&format!(
-            "{} reachable markings ({} tangible, {} vanishing)",
+            "bare net{} reachable markings ({} tangible, {} vanishing)",
             ss.reachable_count(),
             ss.tangible_count(),
             ss.vanishing_count()
@@ -278,6 +278,7 @@ async fn the_page_loads_everything_from_its_own_server() {
         "map.js",
         "analysis.js",
         "live.js",
+        "follow.js",
         "app.js",
         "api/net",
     ] {

@@ -67,7 +67,7 @@ pub(crate) fn absorb(
     };
     let (mut acc_d, mut acc_c) = (Acc::default(), Acc::default());
     let mut steps = Vec::new();
-    for members in sccs.members() {
+    for members in sccs.members().iter() {
         let v = members[0];
         buf.clear();
         arcs(v, &mut buf);
@@ -101,7 +101,7 @@ pub(crate) fn absorb(
             res.counts[v as usize] = acc_c.take();
             continue;
         }
-        solve_component(&members, &sccs.component, &mut arcs, &mut own, &mut res)?;
+        solve_component(members, &sccs.component, &mut arcs, &mut own, &mut res)?;
     }
     Ok(res)
 }

@@ -28,68 +28,77 @@ pub(super) fn mecs(model: &DecisionModel) -> Mecs {
     let n = model.state_count();
     let mut alive = vec![true; model.choice_count()];
     let mut live = vec![true; n];
-    loop {
-        let sccs = tarjan(n, |s, out| {
-            if !live[s as usize] {
-                return;
-            }
-            for c in model.choices(s as usize) {
+    let mut of = vec![u32::MAX; n];
+    let mut count = 0u32;
+    // Candidate sets, each closed off from the others: the components of the choices still
+    // alive. A set whose components lose nothing is final; a component that loses a choice
+    // or a state is searched again alone (only it can split).
+    let mut work: Vec<Vec<u32>> = vec![(0..n as u32).collect()];
+    let mut local = vec![u32::MAX; n];
+    while let Some(set) = work.pop() {
+        for (i, &s) in set.iter().enumerate() {
+            local[s as usize] = i as u32;
+        }
+        let sccs = tarjan(set.len(), |v, out| {
+            for c in model.choices(set[v as usize] as usize) {
                 if alive[c] {
                     out.extend(
                         model
                             .branches(c)
-                            .map(|(t, _)| t)
-                            .filter(|&t| live[t as usize]),
+                            .map(|(t, _)| local[t as usize])
+                            .filter(|&l| l != u32::MAX),
                     );
                 }
             }
         });
         let comp = &sccs.component;
-        let mut changed = false;
-        for s in 0..n {
-            if !live[s] {
-                continue;
-            }
+        let mut changed = vec![false; sccs.count];
+        for (v, &s) in set.iter().enumerate() {
+            let s = s as usize;
             let mut any = false;
             for c in model.choices(s) {
                 if !alive[c] {
                     continue;
                 }
-                if model
-                    .branches(c)
-                    .any(|(t, _)| !live[t as usize] || comp[t as usize] != comp[s])
-                {
+                let leaves = model.branches(c).any(|(t, _)| {
+                    let l = local[t as usize];
+                    l == u32::MAX || comp[l as usize] != comp[v]
+                });
+                if leaves {
                     alive[c] = false;
-                    changed = true;
+                    changed[comp[v] as usize] = true;
                 } else {
                     any = true;
                 }
             }
             if !any {
                 live[s] = false;
-                changed = true;
+                changed[comp[v] as usize] = true;
             }
         }
-        if !changed {
-            let mut ids = vec![u32::MAX; sccs.count];
-            let mut of = vec![u32::MAX; n];
-            let mut count = 0;
-            for s in 0..n {
-                if live[s] {
-                    let k = &mut ids[comp[s] as usize];
-                    if *k == u32::MAX {
-                        *k = count;
-                        count += 1;
-                    }
-                    of[s] = *k;
+        for &s in &set {
+            local[s as usize] = u32::MAX;
+        }
+        for (c, members) in sccs.members().iter().enumerate() {
+            let states = members.iter().map(|&v| set[v as usize]);
+            if changed[c] {
+                let rest: Vec<u32> = states.filter(|&s| live[s as usize]).collect();
+                if !rest.is_empty() {
+                    work.push(rest);
                 }
+            } else {
+                for s in states {
+                    of[s as usize] = count;
+                }
+                count += 1;
             }
-            return Mecs {
-                of,
-                count: count as usize,
-                inside: alive,
-            };
         }
+    }
+    // A state outside every MEC lost all its choices on the way: none is `inside`.
+    Mecs {
+        of,
+        count: count as usize,
+        inside: alive,
     }
 }
 
@@ -323,7 +332,10 @@ pub(super) fn solve(
     };
     let eq_lo = stop_of(|v| v.0, max);
     let eq_hi = stop_of(|v| v.1, max);
-    let single = mecs.count == 1 && mecs.of.iter().all(|&m| m == 0);
+    // With one MEC every policy ends in it almost surely (the choices visited infinitely
+    // often form an end component), so its value holds everywhere and any choice of a state
+    // outside it will do.
+    let single = mecs.count == 1;
     let (sol_lo, sol_hi) = if single {
         (None, None)
     } else {

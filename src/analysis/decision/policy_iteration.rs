@@ -1,12 +1,16 @@
 //! Policy iteration for the long-run average reward inside one maximal end component.
 //!
 //! A MEC is communicating, so its optimal average `g` is one number. Each round evaluates the
-//! current policy exactly — gain `g` and bias `h` from the linear system (sparse LU)
+//! current policy exactly — gain `g` and bias `h` from the linear system
 //!
 //! - Markovian state `s` (exit rate `E`): `g + E·h(s) − E·Σ p·h(s') = rate(s) + E·impulse`,
 //! - instant state `s`: `h(s) − Σ p·h(s') = impulse`,
 //! - `h(ref) = 0` for one recurrent Markovian state,
 //!
+//! solved one strongly connected component of the policy's graph at a time, sinks first
+//! ([`evaluate`]: dense LU for small components, sparse LU for large ones; the GSPNR models'
+//! policies have components of at most a few states, so a round is a few passes over the
+//! branches, where one LU of the whole system filled in to hundreds of MB at 8 robots),
 //! then improves it: an instant state switches to a choice whose `impulse + Σ p·h(s')` is
 //! strictly better (Markovian states have one choice). A policy whose chain has several
 //! bottom components is repaired first: each bottom component's gain is evaluated alone, and
@@ -21,7 +25,8 @@
 use super::lra::Mecs;
 use super::solve::SolveOptions;
 use super::{DecisionError, DecisionModel, Kind, Rewards};
-use crate::analysis::scc::tarjan;
+use crate::analysis::scc::{Sccs, tarjan};
+use crate::analysis::vanishing::lu_solve;
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
@@ -56,16 +61,18 @@ pub(super) fn mec_policy_iteration(
     // choice reaching a Markovian state, so the start has no timeless loop when avoidable.
     for &s in states {
         let s = s as usize;
-        let inside: Vec<usize> = model.choices(s).filter(|&c| mecs.inside[c]).collect();
+        let mut inside = model.choices(s).filter(|&c| mecs.inside[c]);
+        let first = inside
+            .clone()
+            .next()
+            .expect("a MEC state has an inside choice");
         policy[s] = inside
-            .iter()
-            .copied()
             .find(|&c| {
                 model
                     .branches(c)
                     .any(|(t, _)| model.kind(t as usize) != Kind::Instant)
             })
-            .unwrap_or(inside[0]) as u32;
+            .unwrap_or(first) as u32;
     }
     let mut rounds = 0;
     loop {
@@ -80,8 +87,8 @@ pub(super) fn mec_policy_iteration(
             });
         }
         rounds += 1;
-        let reference = make_unichain(model, rewards, mecs, states, &local, max, policy)?;
-        let x = evaluate(model, rewards, states, &local, policy, reference)?;
+        let (reference, sccs) = make_unichain(model, rewards, mecs, states, &local, max, policy)?;
+        let x = evaluate(model, rewards, states, &local, policy, reference, &sccs)?;
         for (i, &s) in states.iter().enumerate() {
             h[s as usize] = if i == reference { 0.0 } else { x[i] };
         }
@@ -122,9 +129,35 @@ pub(super) fn mec_policy_iteration(
     }
 }
 
+/// The strongly connected components of the policy's graph on `states`.
+fn policy_sccs(model: &DecisionModel, states: &[u32], local: &[u32], policy: &[u32]) -> Sccs {
+    tarjan(states.len(), |v, out| {
+        successors(model, states, local, policy, v, out)
+    })
+}
+
+/// The local successors of local state `v` under the policy.
+fn successors(
+    model: &DecisionModel,
+    states: &[u32],
+    local: &[u32],
+    policy: &[u32],
+    v: u32,
+    out: &mut Vec<u32>,
+) {
+    let s = states[v as usize] as usize;
+    out.extend(
+        model
+            .branches(policy[s] as usize)
+            .filter(|&(_, p)| p > 0.0)
+            .map(|(t, _)| local[t as usize]),
+    );
+}
+
 /// Makes the policy unichain: when its chain on the MEC has several bottom components (or one
 /// where time never passes), evaluates each and steers every state to the best. Returns the
-/// local index of a Markovian state of the remaining bottom component.
+/// local index of a Markovian state of the remaining bottom component, and the components of
+/// the policy's graph.
 fn make_unichain(
     model: &DecisionModel,
     rewards: &Rewards,
@@ -133,20 +166,11 @@ fn make_unichain(
     local: &[u32],
     max: bool,
     policy: &mut [u32],
-) -> Result<usize, DecisionError> {
-    let succ = |policy: &[u32], v: u32, out: &mut Vec<u32>| {
-        let s = states[v as usize] as usize;
-        out.extend(
-            model
-                .branches(policy[s] as usize)
-                .filter(|&(_, p)| p > 0.0)
-                .map(|(t, _)| local[t as usize]),
-        );
-    };
-    let sccs = tarjan(states.len(), |v, out| succ(policy, v, out));
-    let bottom = sccs.bottom(|v, out| succ(policy, v, out));
+) -> Result<(usize, Sccs), DecisionError> {
+    let sccs = policy_sccs(model, states, local, policy);
+    let bottom = sccs.bottom(|v, out| successors(model, states, local, policy, v, out));
     let members = sccs.members();
-    let markovian = |comp: &Vec<u32>| {
+    let markovian = |comp: &[u32]| {
         comp.iter()
             .copied()
             .find(|&v| model.kind(states[v as usize] as usize) == Kind::Markovian)
@@ -155,22 +179,30 @@ fn make_unichain(
     if let [only] = bottoms[..]
         && let Some(r) = markovian(&members[only])
     {
-        return Ok(r as usize);
+        return Ok((r as usize, sccs));
     }
     // Several bottom components: the gain of each (timeless ones are worst).
     let better = |a: f64, b: f64| if max { a > b } else { a < b };
     let mut best: Option<(f64, usize, u32)> = None;
+    let mut sub_local = vec![u32::MAX; model.state_count()];
     for &c in &bottoms {
         let Some(r) = markovian(&members[c]) else {
             continue;
         };
         let comp: Vec<u32> = members[c].iter().map(|&v| states[v as usize]).collect();
-        let mut sub_local = vec![u32::MAX; model.state_count()];
         for (i, &s) in comp.iter().enumerate() {
             sub_local[s as usize] = i as u32;
         }
         let r_sub = sub_local[states[r as usize] as usize] as usize;
-        let x = evaluate(model, rewards, &comp, &sub_local, policy, r_sub)?;
+        // A bottom component is one component of its own graph.
+        let one = Sccs {
+            count: 1,
+            component: vec![0; comp.len()],
+        };
+        let x = evaluate(model, rewards, &comp, &sub_local, policy, r_sub, &one)?;
+        for &s in &comp {
+            sub_local[s as usize] = u32::MAX;
+        }
         let g = x[r_sub];
         if best.is_none_or(|(b, _, _)| better(g, b)) {
             best = Some((g, c, r));
@@ -186,7 +218,7 @@ fn make_unichain(
         target[states[v as usize] as usize] = true;
     }
     steer(model, &mecs.inside, states, &mut target, policy);
-    Ok(r as usize)
+    Ok((r as usize, policy_sccs(model, states, local, policy)))
 }
 
 /// Steers every state of `states` not in `target` towards it, almost surely: a backward
@@ -250,15 +282,24 @@ pub(super) fn steer(
     }
 }
 
+/// Components of the policy's graph up to this size are solved by dense LU; larger ones by
+/// sparse LU.
+const DENSE: usize = 48;
+
 /// The gain and bias of the policy on `states` (closed under it), `h(reference) = 0`: the
-/// local solution vector, whose entry `reference` is the gain.
+/// local solution vector, whose entry `reference` is the gain. `sccs`: the components of the
+/// policy's graph on `states`.
 ///
-/// The gain would be a dense column of the system (every Markovian row has it), which makes a
-/// sparse LU fill in; so the reference row and column are left out instead: with `M` the
-/// rows and columns of the other states, `M·u = b` (rewards) and `M·w = τ` (time: 1 in each
-/// Markovian row) give `h = u − g·w` (expected reward and time to reach the reference), and
-/// the reference's own row then gives `g`. `M` is regular when the reference is recurrent and
-/// reached from every state — the policy is unichain ([`make_unichain`]).
+/// The equations follow the policy's graph, so they are solved one strongly connected
+/// component at a time. The reference's component — the one bottom component of a unichain
+/// policy ([`make_unichain`]) — comes first: with `M` its rows and columns other than the
+/// reference's, `M·u = b` (rewards) and `M·w = τ` (time: 1 in each Markovian row) give
+/// `h = u − g·w` (expected reward and time to reach the reference), and the reference's own
+/// row then gives `g` (solving for `g` as an unknown instead would put a dense column in the
+/// system). Every other component follows sinks first, its equations taking the bias of the
+/// states it leads to as known. Under the GSPNR models' policies the components have a few
+/// states each, so a round costs about one pass over the chosen branches; a large component
+/// is solved by sparse LU.
 fn evaluate(
     model: &DecisionModel,
     rewards: &Rewards,
@@ -266,81 +307,157 @@ fn evaluate(
     local: &[u32],
     policy: &[u32],
     reference: usize,
+    sccs: &Sccs,
 ) -> Result<Vec<f64>, DecisionError> {
     let k = states.len();
-    // Local index without the reference.
-    let at = |i: usize| if i > reference { i - 1 } else { i };
-    let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(4 * k);
-    let mut b = vec![0.0f64; k];
-    let mut tau = vec![0.0f64; k];
-    // The reference's row: (column, coefficient) over the other states.
-    let mut ref_row: Vec<(usize, f64)> = Vec::new();
-    for (i, &s) in states.iter().enumerate() {
-        let s = s as usize;
+    // Per local state: the row's scale, its time flag and right-hand side, and the choice.
+    let row = |i: usize| {
+        let s = states[i] as usize;
         let c = policy[s] as usize;
-        let (scale, timed) = match model.kind(s) {
-            Kind::Instant => (1.0, false),
-            Kind::Markovian => (model.exit_rate(s), true),
-            Kind::Dead => (1.0, true),
-        };
-        if timed {
-            tau[i] = 1.0;
-            b[i] = rewards.rate[s] + scale * rewards.impulse[c];
-        } else {
-            b[i] = rewards.impulse[c];
-        }
-        if i == reference {
-            for (t, p) in model.branches(c) {
-                let j = local[t as usize] as usize;
-                if j != reference {
-                    ref_row.push((at(j), -scale * p));
-                }
+        match model.kind(s) {
+            Kind::Instant => (1.0, 0.0, rewards.impulse[c], c),
+            Kind::Markovian => {
+                let e = model.exit_rate(s);
+                (e, 1.0, rewards.rate[s] + e * rewards.impulse[c], c)
             }
-            continue;
+            Kind::Dead => (1.0, 1.0, rewards.rate[s] + rewards.impulse[c], c),
         }
-        triplets.push(Triplet::new(at(i), at(i), scale));
+    };
+    let members = sccs.members();
+    let mut pos = vec![0usize; k];
+    for comp in &members {
+        for (i, &v) in comp.iter().enumerate() {
+            pos[v as usize] = i;
+        }
+    }
+    let fail = |size: usize, e: String| {
+        DecisionError::Unsupported(format!(
+            "policy evaluation (LU of a component of {size} states): {e}"
+        ))
+    };
+    // The bias (h(reference) = 0) and the gain.
+    let mut h = vec![0.0f64; k];
+    let rc = sccs.component[reference] as usize;
+    let bottom = &members[rc];
+    let rp = pos[reference];
+    let at = |i: usize| if i > rp { i - 1 } else { i };
+    let m = bottom.len() - 1;
+    let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
+    let mut rhs = vec![0.0f64; 2 * m];
+    // The reference's row: (unknown, coefficient), its right-hand side and time flag.
+    let mut ref_row: Vec<(usize, f64)> = Vec::new();
+    let (mut b_ref, mut tau_ref) = (0.0, 1.0);
+    for (i, &v) in bottom.iter().enumerate() {
+        let (scale, tau, b, c) = row(v as usize);
+        if i == rp {
+            (b_ref, tau_ref) = (b, tau);
+        } else {
+            triplets.push((at(i), at(i), scale));
+            rhs[2 * at(i)] = b;
+            rhs[2 * at(i) + 1] = tau;
+        }
         for (t, p) in model.branches(c) {
             let j = local[t as usize] as usize;
-            if j != reference {
-                triplets.push(Triplet::new(at(i), at(j), -scale * p));
+            if j == reference {
+                continue;
+            }
+            let entry = (at(pos[j]), -scale * p);
+            if i == rp {
+                ref_row.push(entry);
+            } else {
+                triplets.push((at(i), entry.0, entry.1));
             }
         }
     }
-    let fail = |e: String| {
-        DecisionError::Unsupported(format!("policy evaluation (sparse LU on {k} states): {e}"))
-    };
-    let m = k - 1;
-    let (u, w) = if m == 0 {
-        (Vec::new(), Vec::new())
-    } else {
-        let a = SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &triplets)
-            .map_err(|e| fail(format!("{e:?}")))?;
-        let lu = a.sp_lu().map_err(|e| fail(format!("{e:?}")))?;
-        let rhs = Mat::from_fn(m, 2, |r, col| {
-            let i = if r >= reference { r + 1 } else { r };
-            if col == 0 { b[i] } else { tau[i] }
-        });
-        let x = lu.solve(&rhs);
-        let u: Vec<f64> = (0..m).map(|r| x[(r, 0)]).collect();
-        let w: Vec<f64> = (0..m).map(|r| x[(r, 1)]).collect();
-        (u, w)
-    };
+    solve_block(m, &triplets, &mut rhs, 2).map_err(|e| fail(m, e))?;
     // The reference's row, h(reference) = 0: g·τ + Σ a_j·(u_j − g·w_j) = b.
-    let (au, aw) = ref_row
-        .iter()
-        .fold((0.0, 0.0), |(x, y), &(j, a)| (x + a * u[j], y + a * w[j]));
-    let g = (b[reference] - au) / (tau[reference] - aw);
-    let mut x = vec![0.0f64; k];
-    for i in 0..k {
-        x[i] = if i == reference {
-            g
+    let (au, aw) = ref_row.iter().fold((0.0, 0.0), |(x, y), &(j, a)| {
+        (x + a * rhs[2 * j], y + a * rhs[2 * j + 1])
+    });
+    let g = (b_ref - au) / (tau_ref - aw);
+    for (i, &v) in bottom.iter().enumerate() {
+        if i != rp {
+            h[v as usize] = rhs[2 * at(i)] - g * rhs[2 * at(i) + 1];
+        }
+    }
+    // The other components, sinks first: every branch leaving one leads to a component
+    // numbered below it, already solved.
+    for (ci, comp) in members.iter().enumerate() {
+        if ci == rc {
+            continue;
+        }
+        triplets.clear();
+        rhs.clear();
+        rhs.resize(comp.len(), 0.0);
+        for (i, &v) in comp.iter().enumerate() {
+            let (scale, tau, b, c) = row(v as usize);
+            let mut diag = scale;
+            let mut r = b - tau * g;
+            for (t, p) in model.branches(c) {
+                let j = local[t as usize] as usize;
+                if sccs.component[j] as usize == ci {
+                    if pos[j] == i {
+                        diag -= scale * p;
+                    } else {
+                        triplets.push((i, pos[j], -scale * p));
+                    }
+                } else {
+                    r += scale * p * h[j];
+                }
+            }
+            triplets.push((i, i, diag));
+            rhs[i] = r;
+        }
+        if let [v] = comp[..] {
+            h[v as usize] = rhs[0] / triplets[triplets.len() - 1].2;
         } else {
-            u[at(i)] - g * w[at(i)]
-        };
+            solve_block(comp.len(), &triplets, &mut rhs, 1).map_err(|e| fail(comp.len(), e))?;
+            for (i, &v) in comp.iter().enumerate() {
+                h[v as usize] = rhs[i];
+            }
+        }
     }
-    if x.iter().all(|v| v.is_finite()) {
-        Ok(x)
+    h[reference] = g;
+    if h.iter().all(|v| v.is_finite()) {
+        Ok(h)
     } else {
-        Err(fail("singular matrix".into()))
+        Err(fail(k, "singular matrix".into()))
     }
+}
+
+/// Solves `A·X = B` in place of `b` (row-major, `w` columns) for the `k × k` matrix given by
+/// `(row, column, value)` entries (repeated entries add up): dense LU up to [`DENSE`]
+/// unknowns, sparse LU above.
+fn solve_block(
+    k: usize,
+    entries: &[(usize, usize, f64)],
+    b: &mut [f64],
+    w: usize,
+) -> Result<(), String> {
+    if k == 0 {
+        return Ok(());
+    }
+    if k <= DENSE {
+        let mut a = vec![0.0f64; k * k];
+        for &(i, j, x) in entries {
+            a[i * k + j] += x;
+        }
+        lu_solve(&mut a, k, b, w);
+        return Ok(());
+    }
+    let triplets: Vec<Triplet<usize, usize, f64>> = entries
+        .iter()
+        .map(|&(i, j, x)| Triplet::new(i, j, x))
+        .collect();
+    let a = SparseColMat::<usize, f64>::try_new_from_triplets(k, k, &triplets)
+        .map_err(|e| format!("{e:?}"))?;
+    let lu = a.sp_lu().map_err(|e| format!("{e:?}"))?;
+    let rhs = Mat::from_fn(k, w, |r, c| b[r * w + c]);
+    let x = lu.solve(&rhs);
+    for r in 0..k {
+        for c in 0..w {
+            b[r * w + c] = x[(r, c)];
+        }
+    }
+    Ok(())
 }

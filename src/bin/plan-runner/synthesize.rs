@@ -62,9 +62,10 @@ pub(crate) struct Args {
     /// Relative width of the value's interval.
     #[arg(long, default_value_t = 1e-9)]
     precision: f64,
-    /// `value` (value iteration with sound bounds) or `policy` (policy iteration with exact
-    /// evaluation by sparse LU; long-run average only), then the same bounding step.
-    #[arg(long, value_name = "METHOD", default_value = "value")]
+    /// `value` (value iteration with sound bounds), `policy` (policy iteration with exact
+    /// evaluation, component by component; long-run average only), then the same bounding
+    /// step; `auto`: policy for lra, value for the others.
+    #[arg(long, value_name = "METHOD", default_value = "auto")]
     method: String,
     /// Most reachable markings before giving up.
     #[arg(long, value_name = "N", default_value_t = 10_000_000)]
@@ -218,13 +219,15 @@ fn read_rewards(path: &Path, net: &Net) -> anyhow::Result<(RewardSpec, Option<Co
 fn algorithm(args: &Args, goal: &Goal) -> anyhow::Result<Algorithm> {
     match args.method.as_str() {
         "value" => Ok(Algorithm::ValueIteration),
+        "auto" if matches!(goal, Goal::Lra) => Ok(Algorithm::PolicyIteration),
+        "auto" => Ok(Algorithm::ValueIteration),
         "policy" if matches!(goal, Goal::Lra) => Ok(Algorithm::PolicyIteration),
         "policy" => Err(BadInput(format!(
             "--method policy: policy iteration is implemented for lra-max and lra-min only, not --objective {}",
             args.objective
         ))
         .into()),
-        other => Err(BadInput(format!("--method `{other}`: expected value or policy")).into()),
+        other => Err(BadInput(format!("--method `{other}`: expected auto, value or policy")).into()),
     }
 }
 

@@ -443,6 +443,8 @@ function applyState(s) {
   s.tokens.forEach((k, i) => setTokens(i, k));
   setAllEnabled(s.firable);
   setChoice(s.choice);
+  recordTokens(s.time, s.tokens);
+  scheduleFollowDraw();
   const last = s.trace.length ? s.trace[s.trace.length - 1] : null;
   setFired(last ? transitionIndex(last.transition) : -1);
   if (document.activeElement !== $('seed')) $('seed').value = s.seed;
@@ -561,6 +563,9 @@ function setupInteraction() {
     box.classList.remove('panning');
     if (d && d.node && !d.moved && !d.node.isPlace && transEnabled[d.node.i] && state) {
       fire(net.transitions[d.node.i].name);
+    }
+    if (d && d.node && !d.moved && d.node.isPlace) {
+      selectPlace(follow.place === d.node.i ? -1 : d.node.i);
     }
   });
 }
@@ -711,6 +716,7 @@ async function main() {
   setupInteraction();
   setupKeys();
   setupResize();
+  setupPanes();
   for (const [list, box] of [['trace', 'trace-filter'], ['log', 'log-filter']]) {
     $(box).addEventListener('input', () => applyFilter($(list), $(box)));
   }

@@ -56,11 +56,8 @@ function connectLive() {
 function applyLive(s) {
   s.tokens.forEach((k, i) => setTokens(i, k));
   setAllEnabled(s.firable);
-  net.places.forEach((p, i) => {
-    const agents = s.agents[p.name];
-    setAgents(i, agents ? Object.entries(agents).map(([k, n]) => k + ' ' + n).join(', ') : '');
-  });
   if (s.world) drawWorld(s.world);
+  followLive(s);
   $('clock').textContent = 'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
     (s.stopped ? ' — stopped: ' + s.stopped : '') +
     (s.lagged ? ' (' + s.lagged + ' events skipped)' : '');

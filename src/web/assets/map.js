@@ -104,6 +104,7 @@ function drawWorld(w) {
     let g = map.robots.get(id);
     if (!g) {
       g = mapEl('g', { class: 'robot', 'data-robot': id }, layer);
+      g.addEventListener('click', () => selectRobot(id));
       const c = mapEl('circle', { r: r.radius || map.size * 0.4 }, g);
       c.style.fill = robotColour(id);
       const t = mapEl('text', { 'font-size': map.size * 0.9, y: -(r.radius || map.size * 0.4) - map.size * 0.2 }, g);
@@ -121,5 +122,6 @@ function drawWorld(w) {
     }
   }
   const n = (w.robots || []).length;
-  $('map-time').textContent = 'sim time ' + fmt(w.time || 0) + ' s, ' + n + ' robot' + (n === 1 ? '' : 's');
+  $('map-time').textContent = 'sim time ' + fmt(w.time || 0) + ' s, ' + n + ' robot' + (n === 1 ? '' : 's') +
+    ($('map-panel').classList.contains('stopped') ? ' — stopped' : '');
 }
