@@ -73,7 +73,9 @@ pub use action::{
     OutputSink, OutputStream, action_fn,
 };
 pub use agent::{AgentMode, AgentState};
-pub use backend::{Backend, BackendError, BackendFuture, Backends, RunError, Section};
+pub use backend::{
+    Backend, BackendError, BackendFuture, Backends, RunError, Section, Start, Started,
+};
 pub use builder::RuntimeBuilder;
 pub use builtin::{BUILTIN_WORDS, Builtin};
 pub use event::{Event, EventKind, Events, Received};

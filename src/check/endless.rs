@@ -71,10 +71,7 @@ impl Ending {
                         format!(
                             "place `{}` is unbounded (pumped by {})",
                             net.place(*p).name,
-                            ts.iter()
-                                .map(|&t| format!("`{}`", net.transition(t).name))
-                                .collect::<Vec<_>>()
-                                .join(", ")
+                            named(net, ts)
                         )
                     })
                     .collect::<Vec<_>>()
@@ -95,13 +92,18 @@ pub fn unbounded_warnings(net: &Net, ending: &Ending) -> Vec<String> {
             format!(
                 "place `{}` can grow without limit (coverability): pumped by {}",
                 net.place(*p).name,
-                ts.iter()
-                    .map(|&t| format!("`{}`", net.transition(t).name))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                named(net, ts)
             )
         })
         .collect()
+}
+
+/// Transitions by name, quoted: "`a`, `b`".
+fn named(net: &Net, ts: &[TransitionId]) -> String {
+    ts.iter()
+        .map(|&t| format!("`{}`", net.transition(t).name))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The transitions that put more tokens into `p` than they take out of it.

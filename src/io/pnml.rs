@@ -33,11 +33,18 @@ pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Loaded, Loa
     super::xml::read(path, bytes, opts, Dialect::Pnml)
 }
 
-fn position(s: &mut String, indent: &str, p: Option<Position>) {
+/// Opens a `<place>` or `<transition>` element: its id, name and position.
+fn open_node(s: &mut String, tag: &str, id: &str, name: &str, p: Option<Position>) {
+    let _ = writeln!(
+        s,
+        "      <{tag} id=\"{}\">\n        <name><text>{}</text></name>",
+        esc(id),
+        esc(name)
+    );
     if let Some(p) = p {
         let _ = writeln!(
             s,
-            "{indent}<graphics><position x=\"{}\" y=\"{}\"/></graphics>",
+            "        <graphics><position x=\"{}\" y=\"{}\"/></graphics>",
             p.x, p.y
         );
     }
@@ -55,13 +62,7 @@ pub fn write(net: &Net) -> String {
         esc(net.name())
     );
     for (i, p) in net.places().iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "      <place id=\"{}\">\n        <name><text>{}</text></name>",
-            esc(&pid[i]),
-            esc(&p.name)
-        );
-        position(&mut s, "        ", p.position);
+        open_node(&mut s, "place", &pid[i], &p.name, p.position);
         if p.initial > 0 {
             let _ = writeln!(
                 s,
@@ -75,13 +76,7 @@ pub fn write(net: &Net) -> String {
         s.push_str("      </place>\n");
     }
     for (i, t) in net.transitions().iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "      <transition id=\"{}\">\n        <name><text>{}</text></name>",
-            esc(&tid[i]),
-            esc(&t.name)
-        );
-        position(&mut s, "        ", t.position);
+        open_node(&mut s, "transition", &tid[i], &t.name, t.position);
         match t.timing {
             Timing::Immediate { weight, priority } => {
                 let _ = writeln!(

@@ -31,6 +31,7 @@
 //! `t4`) is a [`LoadError`] at its position in the JSON file. A policy entry for an
 //! exponential transition — which the thesis code never consulted — is dropped with a warning.
 
+mod cursor;
 mod input;
 mod json;
 mod pylit;

@@ -8,8 +8,8 @@
 //!
 //! use gspn::net::{NetBuilder, Servers};
 //! use gspn::runtime::{
-//!     Backend, BackendError, BackendFuture, Backends, EventKind, Events, Received, Runtime,
-//!     RuntimeHandle, Section, Summary,
+//!     Backend, BackendFuture, Backends, EventKind, Received, Runtime, Section, Start, Started,
+//!     Summary,
 //! };
 //!
 //! /// Counts the firings it observes; reports them under `"counter"`.
@@ -25,12 +25,8 @@
 //!     fn observes_events(&self) -> bool {
 //!         true
 //!     }
-//!     fn started<'a>(
-//!         &'a mut self,
-//!         _run: &'a Arc<RuntimeHandle>,
-//!         events: Option<Events>,
-//!     ) -> BackendFuture<'a, Result<(), BackendError>> {
-//!         let mut events = events.expect("it observes events");
+//!     fn started<'a>(&'a mut self, start: Start<'a>) -> Started<'a> {
+//!         let mut events = start.events.expect("it observes events");
 //!         self.task = Some(tokio::spawn(async move {
 //!             let mut n = 0;
 //!             while let Some(r) = events.recv().await {
@@ -81,6 +77,19 @@ use super::{Events, RuntimeBuilder, RuntimeError, RuntimeHandle, Summary};
 
 /// A boxed future a [`Backend`] returns (backends are kept as `Box<dyn Backend>`).
 pub type BackendFuture<'a, T> = Pin<Box<dyn Future<Output = T> + Send + 'a>>;
+
+/// What [`Backend::started`] returns.
+pub type Started<'a> = BackendFuture<'a, Result<(), BackendError>>;
+
+/// What [`Backend::started`] is given: the running run, and its event stream when the
+/// backend [observes events](Backend::observes_events).
+#[derive(Debug)]
+pub struct Start<'a> {
+    /// The run's handle.
+    pub run: &'a Arc<RuntimeHandle>,
+    /// The run's events (`None` unless the backend observes events).
+    pub events: Option<Events>,
+}
 
 /// Why a backend could not join a run.
 #[derive(Debug, thiserror::Error)]
@@ -148,13 +157,9 @@ pub trait Backend: Send + std::fmt::Debug {
         false
     }
 
-    /// The run is spawned: `events` is its event stream when the backend observes events.
-    fn started<'a>(
-        &'a mut self,
-        run: &'a Arc<RuntimeHandle>,
-        events: Option<Events>,
-    ) -> BackendFuture<'a, Result<(), BackendError>> {
-        let _ = (run, events);
+    /// The run is spawned: its handle, and its event stream when the backend observes events.
+    fn started<'a>(&'a mut self, start: Start<'a>) -> Started<'a> {
+        let _ = start;
         Box::pin(async { Ok(()) })
     }
 
@@ -217,7 +222,11 @@ impl Backends {
             .collect();
         let handle = Arc::new(handle);
         for (b, events) in self.list.iter_mut().zip(streams) {
-            b.started(&handle, events).await?;
+            b.started(Start {
+                run: &handle,
+                events,
+            })
+            .await?;
         }
         Ok(handle)
     }

@@ -3,7 +3,6 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
@@ -14,7 +13,7 @@ use gspn::ros2::robot::{RobotOptions, serve};
 use gspn::ros2::{DdsConfig, Ros2Backend};
 use gspn::runtime::Role;
 use gspn::runtime::{
-    Backend, BackendError, BackendFuture, Events, RuntimeBuilder, RuntimeHandle, Section, Summary,
+    Backend, BackendError, BackendFuture, RuntimeBuilder, Section, Start, Started, Summary,
 };
 
 use crate::common::{BadInput, NetArgs};
@@ -184,12 +183,8 @@ impl Backend for Ros2Run {
         true
     }
 
-    fn started<'a>(
-        &'a mut self,
-        _run: &'a Arc<RuntimeHandle>,
-        events: Option<Events>,
-    ) -> BackendFuture<'a, Result<(), BackendError>> {
-        if let (Some(b), Some(events)) = (&mut self.backend, events) {
+    fn started<'a>(&'a mut self, start: Start<'a>) -> Started<'a> {
+        if let (Some(b), Some(events)) = (&mut self.backend, start.events) {
             b.publish(events);
         }
         Box::pin(async { Ok(()) })

@@ -12,9 +12,7 @@ use std::sync::Arc;
 
 use anyhow::Context as _;
 
-use gspn::runtime::{
-    Backend, BackendError, BackendFuture, Events, RuntimeHandle, Section, Summary,
-};
+use gspn::runtime::{Backend, BackendError, BackendFuture, Section, Start, Started, Summary};
 use gspn::web::{LiveRun, WebState, serve};
 
 use crate::common::{BadInput, NetArgs};
@@ -135,16 +133,12 @@ impl Backend for LiveViewer {
         true
     }
 
-    fn started<'a>(
-        &'a mut self,
-        run: &'a Arc<RuntimeHandle>,
-        events: Option<Events>,
-    ) -> BackendFuture<'a, Result<(), BackendError>> {
+    fn started<'a>(&'a mut self, start: Start<'a>) -> Started<'a> {
         Box::pin(async move {
-            let Some(events) = events else {
+            let Some(events) = start.events else {
                 return Ok(());
             };
-            let mut live = LiveRun::start(Arc::clone(run), events);
+            let mut live = LiveRun::start(Arc::clone(start.run), events);
             if let Some(world) = self.world.take() {
                 live = live.with_world(world);
             }

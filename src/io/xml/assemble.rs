@@ -278,11 +278,11 @@ fn check_clashes<T>(
 
 fn place(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Place, LoadError> {
     let initial = match &n.initial_marking {
-        Some(v) => count(x, v, "initial marking", name, 0)?,
+        Some(v) => count(x, v, Of("initial marking", name), 0)?,
         None => 0,
     };
     let capacity = match &n.capacity {
-        Some(v) => match count(x, v, "capacity", name, 0)? {
+        Some(v) => match count(x, v, Of("capacity", name), 0)? {
             0 => None,
             k => Some(k),
         },
@@ -292,15 +292,8 @@ fn place(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Place, LoadErr
         && initial > c
     {
         let v = n.initial_marking.as_ref().expect("initial > 0 was written");
-        return Err(x.error(
-            v.at,
-            LoadErrorKind::OutOfRange {
-                what: "initial marking",
-                name: name.to_string(),
-                value: initial.to_string(),
-                expected: "must not exceed the place's capacity",
-            },
-        ));
+        let expected = "must not exceed the place's capacity";
+        return Err(Of("initial marking", name).out_of_range(x, v, &initial.to_string(), expected));
     }
     Ok(Place {
         name: name.to_string(),
@@ -312,21 +305,21 @@ fn place(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Place, LoadErr
 
 fn transition(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Transition, LoadError> {
     let timed = match &n.timed {
-        Some(v) => boolean(x, v, "timed", name)?,
+        Some(v) => boolean(x, v, Of("timed", name))?,
         None => true,
     };
     let timing = if timed {
         let rate = match &n.rate {
-            Some(v) => real(x, v, "rate", name, true)?,
+            Some(v) => real(x, v, Of("rate", name), true)?,
             None => 1.0,
         };
         let infinite = match &n.infinite_server {
-            Some(v) => boolean(x, v, "infiniteServer", name)?,
+            Some(v) => boolean(x, v, Of("infiniteServer", name))?,
             None => false,
         };
         let servers = match (&n.servers, infinite) {
             (_, true) => Servers::Infinite,
-            (Some(v), false) => match count(x, v, "servers", name, 1)? {
+            (Some(v), false) => match count(x, v, Of("servers", name), 1)? {
                 1 => Servers::Single,
                 k => Servers::K(k),
             },
@@ -335,11 +328,11 @@ fn transition(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Transitio
         Timing::Exponential { rate, servers }
     } else {
         let weight = match &n.rate {
-            Some(v) => real(x, v, "weight", name, false)?,
+            Some(v) => real(x, v, Of("weight", name), false)?,
             None => 1.0,
         };
         let priority = match &n.priority {
-            Some(v) => count(x, v, "priority", name, 1)?,
+            Some(v) => count(x, v, Of("priority", name), 1)?,
             None => 1,
         };
         Timing::Immediate { weight, priority }
@@ -400,7 +393,7 @@ fn resolve_arc(
         ),
     };
     let weight = match &a.inscription {
-        Some(v) => count(x, v, "arc weight", &arc_name(), 1)?,
+        Some(v) => count(x, v, Of("arc weight", &arc_name()), 1)?,
         None => 1,
     };
     let ty = a
@@ -458,22 +451,51 @@ fn resolve_arc(
     Ok(Some((kind, p, t, weight, points)))
 }
 
+/// The value of `what` (`"rate"`, `"arc weight"`…) of the node `name`, for errors naming both.
+#[derive(Clone, Copy)]
+struct Of<'a>(&'static str, &'a str);
+
+impl Of<'_> {
+    fn not_a_number(self, x: &XmlStream<'_>, v: &Value) -> LoadError {
+        x.error(
+            v.at,
+            LoadErrorKind::NotANumber {
+                what: self.0,
+                name: self.1.to_string(),
+                value: v.text.clone(),
+            },
+        )
+    }
+
+    fn out_of_range(
+        self,
+        x: &XmlStream<'_>,
+        v: &Value,
+        value: &str,
+        expected: &'static str,
+    ) -> LoadError {
+        x.error(
+            v.at,
+            LoadErrorKind::OutOfRange {
+                what: self.0,
+                name: self.1.to_string(),
+                value: value.to_string(),
+                expected,
+            },
+        )
+    }
+}
+
 /// A non-negative integer at least `min`; `Default,k` is read as `k`.
-fn count(
-    x: &XmlStream<'_>,
-    v: &Value,
-    what: &'static str,
-    name: &str,
-    min: u32,
-) -> Result<u32, LoadError> {
+fn count(x: &XmlStream<'_>, v: &Value, of: Of<'_>, min: u32) -> Result<u32, LoadError> {
     let s = match v.text.split_once(',') {
         Some((_class, k)) if !k.contains(',') => k.trim(),
         Some(_) => {
             return Err(x.error(
                 v.at,
                 LoadErrorKind::Unsupported(format!(
-                    "{what} of `{name}` is `{}`: tokens of several colours are not read",
-                    v.text
+                    "{} of `{}` is `{}`: tokens of several colours are not read",
+                    of.0, of.1, v.text
                 )),
             ));
         }
@@ -484,92 +506,41 @@ fn count(
         Err(_) => match s.parse::<f64>() {
             // "2.0" is accepted as 2; "2.5" is not a count.
             Ok(f) if f.fract() == 0.0 && f.abs() < 1e15 => f as i64,
-            _ => {
-                return Err(x.error(
-                    v.at,
-                    LoadErrorKind::NotANumber {
-                        what,
-                        name: name.to_string(),
-                        value: v.text.clone(),
-                    },
-                ));
-            }
+            _ => return Err(of.not_a_number(x, v)),
         },
     };
     if n < min as i64 || n > u32::MAX as i64 {
-        return Err(x.error(
-            v.at,
-            LoadErrorKind::OutOfRange {
-                what,
-                name: name.to_string(),
-                value: s.to_string(),
-                expected: if n > u32::MAX as i64 {
-                    crate::net::TOO_MANY_TOKENS
-                } else if min == 0 {
-                    "must be a whole number ≥ 0"
-                } else {
-                    "must be a whole number ≥ 1"
-                },
-            },
-        ));
+        let expected = if n > u32::MAX as i64 {
+            crate::net::TOO_MANY_TOKENS
+        } else if min == 0 {
+            "must be a whole number ≥ 0"
+        } else {
+            "must be a whole number ≥ 1"
+        };
+        return Err(of.out_of_range(x, v, s, expected));
     }
     Ok(n as u32)
 }
 
 /// A finite real: `> 0` when `positive`, else `≥ 0`.
-fn real(
-    x: &XmlStream<'_>,
-    v: &Value,
-    what: &'static str,
-    name: &str,
-    positive: bool,
-) -> Result<f64, LoadError> {
-    let f: f64 = v.text.parse().map_err(|_| {
-        x.error(
-            v.at,
-            LoadErrorKind::NotANumber {
-                what,
-                name: name.to_string(),
-                value: v.text.clone(),
-            },
-        )
-    })?;
+fn real(x: &XmlStream<'_>, v: &Value, of: Of<'_>, positive: bool) -> Result<f64, LoadError> {
+    let f: f64 = v.text.parse().map_err(|_| of.not_a_number(x, v))?;
     let ok = f.is_finite() && if positive { f > 0.0 } else { f >= 0.0 };
     if !ok {
-        return Err(x.error(
-            v.at,
-            LoadErrorKind::OutOfRange {
-                what,
-                name: name.to_string(),
-                value: v.text.clone(),
-                expected: if positive {
-                    "must be a finite number > 0"
-                } else {
-                    "must be a finite number ≥ 0"
-                },
-            },
-        ));
+        let expected = if positive {
+            "must be a finite number > 0"
+        } else {
+            "must be a finite number ≥ 0"
+        };
+        return Err(of.out_of_range(x, v, &v.text, expected));
     }
     Ok(f)
 }
 
-fn boolean(
-    x: &XmlStream<'_>,
-    v: &Value,
-    what: &'static str,
-    name: &str,
-) -> Result<bool, LoadError> {
+fn boolean(x: &XmlStream<'_>, v: &Value, of: Of<'_>) -> Result<bool, LoadError> {
     match v.text.to_ascii_lowercase().as_str() {
         "true" | "1" | "yes" => Ok(true),
         "false" | "0" | "no" => Ok(false),
-        _ => Err(x.error(
-            v.at,
-            LoadErrorKind::OutOfRange {
-                what,
-                name: name.to_string(),
-                value: v.text.clone(),
-                expected: "must be `true` or `false`",
-            },
-        )),
+        _ => Err(of.out_of_range(x, v, &v.text, "must be `true` or `false`")),
     }
 }

@@ -105,31 +105,31 @@ impl Parser<'_> {
     }
 
     fn or(&mut self) -> Result<Expr, PredicateError> {
-        let first = self.and()?;
-        if self.peek_op() != Some("||") {
-            return Ok(first);
-        }
-        let mut v = vec![self.bool_of(first, "||")?];
-        while self.peek_op() == Some("||") {
-            self.pos += 1;
-            let e = self.and()?;
-            v.push(self.bool_of(e, "||")?);
-        }
-        Ok(Expr::Bool(Node::Or(v)))
+        self.chain("||", Self::and, Node::Or)
     }
 
     fn and(&mut self) -> Result<Expr, PredicateError> {
-        let first = self.not()?;
-        if self.peek_op() != Some("&&") {
+        self.chain("&&", Self::not, Node::And)
+    }
+
+    /// `operand (op operand)*`: one operand as it is, more joined into one `node`.
+    fn chain(
+        &mut self,
+        op: &str,
+        operand: fn(&mut Self) -> Result<Expr, PredicateError>,
+        node: fn(Vec<Node>) -> Node,
+    ) -> Result<Expr, PredicateError> {
+        let first = operand(self)?;
+        if self.peek_op() != Some(op) {
             return Ok(first);
         }
-        let mut v = vec![self.bool_of(first, "&&")?];
-        while self.peek_op() == Some("&&") {
+        let mut v = vec![self.bool_of(first, op)?];
+        while self.peek_op() == Some(op) {
             self.pos += 1;
-            let e = self.not()?;
-            v.push(self.bool_of(e, "&&")?);
+            let e = operand(self)?;
+            v.push(self.bool_of(e, op)?);
         }
-        Ok(Expr::Bool(Node::And(v)))
+        Ok(Expr::Bool(node(v)))
     }
 
     fn not(&mut self) -> Result<Expr, PredicateError> {

@@ -4,6 +4,8 @@
 //! where each character came from, so this reader keeps, for every decoded byte, the byte
 //! offset in the file it was read from.
 
+use super::cursor::{Cursor, SyntaxError};
+
 /// A JSON string value with, for each byte of `text`, its offset in the file.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct JsonStr {
@@ -45,19 +47,9 @@ pub(crate) struct Field {
     pub(crate) value: JsonValue,
 }
 
-/// A syntax error at a byte offset.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) struct JsonError {
-    pub(crate) offset: usize,
-    pub(crate) message: String,
-}
-
 /// Parses `text` as one JSON object and returns its fields in file order.
-pub(crate) fn parse_object(text: &str) -> Result<Vec<Field>, JsonError> {
-    let mut p = Parser {
-        b: text.as_bytes(),
-        i: 0,
-    };
+pub(crate) fn parse_object(text: &str) -> Result<Vec<Field>, SyntaxError> {
+    let mut p = Cursor::new(text, "the file");
     // A UTF-8 byte order mark is allowed before the object.
     if p.b.starts_with(b"\xEF\xBB\xBF") {
         p.i = 3;
@@ -110,36 +102,9 @@ pub(crate) fn parse_object(text: &str) -> Result<Vec<Field>, JsonError> {
     Ok(fields)
 }
 
-struct Parser<'a> {
-    b: &'a [u8],
-    i: usize,
-}
-
-impl Parser<'_> {
-    fn peek(&self) -> Option<u8> {
-        self.b.get(self.i).copied()
-    }
-
-    fn err(&self, message: &str) -> JsonError {
-        let message = if self.i >= self.b.len() {
-            format!("{message} (the file ends here)")
-        } else {
-            message.to_string()
-        };
-        JsonError {
-            offset: self.i,
-            message,
-        }
-    }
-
-    fn ws(&mut self) {
-        while matches!(self.peek(), Some(b' ' | b'\t' | b'\n' | b'\r')) {
-            self.i += 1;
-        }
-    }
-
+impl Cursor<'_> {
     /// A string starting at the current `"`.
-    fn string(&mut self) -> Result<JsonStr, JsonError> {
+    fn string(&mut self) -> Result<JsonStr, SyntaxError> {
         let start = self.i;
         self.i += 1;
         let mut out: Vec<u8> = Vec::new();
@@ -192,14 +157,14 @@ impl Parser<'_> {
             }
         }
         // The input was a &str and escapes produce whole characters, so this is UTF-8.
-        let text = String::from_utf8(out).map_err(|_| JsonError {
+        let text = String::from_utf8(out).map_err(|_| SyntaxError {
             offset: start,
             message: "string is not UTF-8".into(),
         })?;
         Ok(JsonStr { text, start, raw })
     }
 
-    fn hex4(&mut self) -> Result<u32, JsonError> {
+    fn hex4(&mut self) -> Result<u32, SyntaxError> {
         let digits = self.b.get(self.i..self.i + 4).unwrap_or_default();
         let s = std::str::from_utf8(digits).unwrap_or("");
         let v = u32::from_str_radix(s, 16)
@@ -210,7 +175,7 @@ impl Parser<'_> {
         Ok(v)
     }
 
-    fn unicode_escape(&mut self, at: usize) -> Result<char, JsonError> {
+    fn unicode_escape(&mut self, at: usize) -> Result<char, SyntaxError> {
         let hi = self.hex4()?;
         let code = if (0xD800..0xDC00).contains(&hi) {
             if self.b.get(self.i..self.i + 2) != Some(b"\\u") {
@@ -225,14 +190,14 @@ impl Parser<'_> {
         } else {
             hi
         };
-        char::from_u32(code).ok_or(JsonError {
+        char::from_u32(code).ok_or(SyntaxError {
             offset: at,
             message: "invalid \\u escape".into(),
         })
     }
 
     /// Skips any JSON value (checking its syntax).
-    fn skip_value(&mut self, depth: usize) -> Result<(), JsonError> {
+    fn skip_value(&mut self, depth: usize) -> Result<(), SyntaxError> {
         if depth > 128 {
             return Err(self.err("nested too deeply"));
         }

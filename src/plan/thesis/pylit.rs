@@ -2,6 +2,8 @@
 //! tuples, lists, dicts, strings in `'` or `"`, integers, floats, `True`/`False`/`None`.
 //! Every value keeps the byte offset where it starts, so an error can name its position.
 
+use super::cursor::{Cursor, SyntaxError};
+
 /// A Python literal value and the byte offset where it starts.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Py {
@@ -48,20 +50,9 @@ impl PyKind {
     }
 }
 
-/// A syntax error at a byte offset.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) struct PyError {
-    pub(crate) offset: usize,
-    pub(crate) message: String,
-}
-
 /// Parses `text` as exactly one Python literal.
-pub(crate) fn parse(text: &str) -> Result<Py, PyError> {
-    let mut p = Parser {
-        s: text,
-        b: text.as_bytes(),
-        i: 0,
-    };
+pub(crate) fn parse(text: &str) -> Result<Py, SyntaxError> {
+    let mut p = Cursor::new(text, "the text");
     let v = p.value(0)?;
     p.ws();
     if p.i < p.b.len() {
@@ -70,43 +61,15 @@ pub(crate) fn parse(text: &str) -> Result<Py, PyError> {
     Ok(v)
 }
 
-struct Parser<'a> {
-    s: &'a str,
-    b: &'a [u8],
-    i: usize,
-}
-
-impl Parser<'_> {
-    fn peek(&self) -> Option<u8> {
-        self.b.get(self.i).copied()
-    }
-
-    fn err(&self, message: &str) -> PyError {
-        let message = if self.i >= self.b.len() {
-            format!("{message} (the text ends here)")
-        } else {
-            message.to_string()
-        };
-        PyError {
-            offset: self.i,
-            message,
-        }
-    }
-
-    fn ws(&mut self) {
-        while matches!(self.peek(), Some(b' ' | b'\t' | b'\n' | b'\r')) {
-            self.i += 1;
-        }
-    }
-
-    fn value(&mut self, depth: usize) -> Result<Py, PyError> {
+impl Cursor<'_> {
+    fn value(&mut self, depth: usize) -> Result<Py, SyntaxError> {
         if depth > 64 {
             return Err(self.err("nested too deeply"));
         }
         self.ws();
         let at = self.i;
         let kind = match self.peek() {
-            Some(q @ (b'\'' | b'"')) => PyKind::Str(self.string(q)?),
+            Some(q @ (b'\'' | b'"')) => PyKind::Str(self.quoted(q)?),
             Some(b'(') => {
                 let (items, comma) = self.sequence(b')', depth)?;
                 if items.len() == 1 && !comma {
@@ -142,7 +105,7 @@ impl Parser<'_> {
     }
 
     /// Items up to `close`; also says whether a comma was seen (for 1-tuples).
-    fn sequence(&mut self, close: u8, depth: usize) -> Result<(Vec<Py>, bool), PyError> {
+    fn sequence(&mut self, close: u8, depth: usize) -> Result<(Vec<Py>, bool), SyntaxError> {
         self.i += 1;
         let mut items = Vec::new();
         let mut comma = false;
@@ -165,7 +128,7 @@ impl Parser<'_> {
         }
     }
 
-    fn dict(&mut self, depth: usize) -> Result<Vec<(Py, Py)>, PyError> {
+    fn dict(&mut self, depth: usize) -> Result<Vec<(Py, Py)>, SyntaxError> {
         self.i += 1;
         let mut items = Vec::new();
         loop {
@@ -191,7 +154,7 @@ impl Parser<'_> {
         }
     }
 
-    fn string(&mut self, quote: u8) -> Result<String, PyError> {
+    fn quoted(&mut self, quote: u8) -> Result<String, SyntaxError> {
         let start = self.i;
         self.i += 1;
         let mut out = String::new();
@@ -238,7 +201,7 @@ impl Parser<'_> {
         }
     }
 
-    fn number(&mut self) -> Result<PyKind, PyError> {
+    fn number(&mut self) -> Result<PyKind, SyntaxError> {
         let start = self.i;
         if matches!(self.peek(), Some(b'-' | b'+')) {
             self.i += 1;
