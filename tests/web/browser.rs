@@ -66,6 +66,17 @@ pub(crate) async fn http_get(addr: SocketAddr, path: &str) -> Value {
     serde_json::from_str(&body).unwrap()
 }
 
+/// Clicks `analyse` and waits for the panel's result.
+pub(crate) async fn analyse_on_page(b: &Browser) {
+    b.click("#analyze").await;
+    b.wait_js(
+        "return document.getElementById('analysis').textContent.includes('reachable markings');",
+        WAIT,
+        "the analysis",
+    )
+    .await;
+}
+
 /// Opens the page and waits until its first drawing is on the screen.
 pub(crate) async fn open(b: &Browser, addr: SocketAddr) {
     b.client.goto(&format!("http://{addr}/")).await.unwrap();
@@ -217,13 +228,7 @@ async fn five_steps_in_the_browser_give_the_marking_of_plan_runner_simulate() {
     b.screenshot(&screenshot_path("token-game.png")).await;
 
     // The analysis panel: the library's counts, of the bare net (no plan).
-    b.click("#analyze").await;
-    b.wait_js(
-        "return document.getElementById('analysis').textContent.includes('reachable markings');",
-        WAIT,
-        "the analysis",
-    )
-    .await;
+    analyse_on_page(&b).await;
     let ss = StateSpace::build(&net, &Options::default()).unwrap();
     let text = b.text("#analysis").await;
     assert!(
@@ -279,6 +284,7 @@ async fn the_page_loads_everything_from_its_own_server() {
         "analysis.js",
         "live.js",
         "follow.js",
+        "share.js",
         "app.js",
         "api/net",
     ] {

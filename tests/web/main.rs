@@ -12,3 +12,4 @@ mod layout;
 mod live;
 mod look;
 mod security;
+mod share;

@@ -7,20 +7,22 @@ use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use anyhow::Context;
 use gspn::analysis::decision::{
-    Action, Algorithm, BuildOptions, Controls, DecisionModel, Objective, PlaceMode, RewardSpec,
-    Rewards, Solution, SolveOptions, compress, solve,
+    Action, Algorithm, BuildOptions, Controls, DecisionError, DecisionModel, Objective, PlaceMode,
+    RewardSpec, Rewards, Solution, SolveOptions, compress, solve,
 };
+use gspn::analysis::state_space::{AnalysisError, Monitor};
 use gspn::io::drn;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
 use gspn::policy::{Pattern, Rule};
 use serde_json::json;
 
-use crate::common::{BadInput, NetArgs, load_net};
+use crate::common::{BadInput, Interrupted, NetArgs, load_net};
 
 mod policy_file;
 mod sweep;
@@ -240,6 +242,70 @@ struct Solved {
     solve_s: f64,
 }
 
+/// Ctrl-C (SIGINT) cancels `monitor`, which the search checks at each batch of markings and
+/// the solver at each sweep or round: the command then stops within about a second with
+/// exit code 130 ([`interrupted`]). A thread of its own waits for the signal, registered
+/// before any work starts.
+fn cancel_on_interrupt(monitor: &Monitor) -> anyhow::Result<()> {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_io()
+        .build()?;
+    #[cfg(unix)]
+    let mut int = {
+        let _guard = rt.enter();
+        tokio::signal::unix::signal(tokio::signal::unix::SignalKind::interrupt())?
+    };
+    let flag = monitor.cancel_flag();
+    std::thread::Builder::new()
+        .name("sigint".into())
+        .spawn(move || {
+            #[cfg(unix)]
+            let got = rt.block_on(int.recv()).is_some();
+            #[cfg(not(unix))]
+            let got = rt.block_on(tokio::signal::ctrl_c()).is_ok();
+            if got {
+                flag.store(true, Ordering::Relaxed);
+            }
+        })?;
+    Ok(())
+}
+
+/// The error of a command that Ctrl-C stopped while `doing`: exit code 130.
+fn interrupted(doing: String) -> anyhow::Error {
+    anyhow::Error::new(Interrupted {
+        what: "synthesize",
+        signal: "SIGINT",
+        code: 130,
+    })
+    .context(doing)
+}
+
+/// Turns a cancelled search or solver into [`interrupted`] when the monitor was cancelled;
+/// any other error gets `context`.
+fn or_interrupted(
+    e: DecisionError,
+    monitor: &Monitor,
+    file: &Path,
+    context: impl std::fmt::Display + Send + Sync + 'static,
+) -> anyhow::Error {
+    match e {
+        DecisionError::Analysis(AnalysisError::Cancelled { markings })
+            if monitor.is_cancelled() =>
+        {
+            interrupted(format!(
+                "{}: stopped building the model after {markings} markings",
+                file.display()
+            ))
+        }
+        DecisionError::Cancelled { iterations } if monitor.is_cancelled() => interrupted(format!(
+            "{}: stopped solving after {iterations} iterations",
+            file.display()
+        )),
+        e => anyhow::Error::new(e).context(context),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
 fn synthesize(
     net: &Net,
     controls: &Controls,
@@ -248,9 +314,10 @@ fn synthesize(
     max: bool,
     args: &Args,
     progress: bool,
+    monitor: &Monitor,
 ) -> anyhow::Result<Solved> {
     let t0 = Instant::now();
-    let model = DecisionModel::build(
+    let model = DecisionModel::build_monitored(
         net,
         controls,
         &BuildOptions {
@@ -258,8 +325,9 @@ fn synthesize(
             progress,
             threads: 0,
         },
+        monitor,
     )
-    .with_context(|| format!("{}", args.file.display()))?;
+    .map_err(|e| or_interrupted(e, monitor, &args.file, args.file.display().to_string()))?;
     let build_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let flags = |p: &Predicate| model.states_where(|m| p.eval(m));
@@ -302,10 +370,11 @@ fn synthesize(
         &SolveOptions {
             precision: args.precision,
             algorithm: algorithm(args, goal)?,
+            cancel: Some(monitor.cancel_flag()),
             ..SolveOptions::default()
         },
     )
-    .context("solving")?;
+    .map_err(|e| or_interrupted(e, monitor, &args.file, "solving"))?;
     let solve_s = t1.elapsed().as_secs_f64();
     Ok(Solved {
         model,
@@ -434,6 +503,8 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         controls.keep_races = true;
     }
     let progress = !args.json && std::io::stderr().is_terminal();
+    let monitor = Monitor::new();
+    cancel_on_interrupt(&monitor)?;
     if let Some(sweep) = &args.sweep {
         return run_sweep(
             &args,
@@ -443,13 +514,25 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             &goal,
             max,
             parse_sweep(sweep)?,
+            &monitor,
         );
     }
-    let s = synthesize(net, &controls, &spec, &goal, max, &args, progress)?;
+    let s = synthesize(net, &controls, &spec, &goal, max, &args, progress, &monitor)?;
+    let check = |doing: &str| {
+        if monitor.is_cancelled() {
+            Err(interrupted(format!(
+                "{}: stopped {doing}",
+                args.file.display()
+            )))
+        } else {
+            Ok(())
+        }
+    };
     if let Some(path) = &args.export_drn {
         let text = drn::to_string(net, &s.model, &[(spec.name.as_str(), &s.rewards)], &[]);
         std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
     }
+    check("after solving")?;
     let (table, waits) = table(&s);
     let exact: Vec<Rule> = table
         .iter()
@@ -459,6 +542,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         })
         .collect();
     let compressed = compress(&table);
+    check("compressing the policy")?;
     let sol = &s.solution;
     if let Some(out) = &args.out {
         let dir = out

@@ -597,8 +597,10 @@ async function act(method, path, body) {
   try {
     applyState(await api(method, path, body));
     status('');
+    online();
   } catch (e) {
     status(e.message);
+    offline(e);
     stopRun();
   } finally {
     busy = false;
@@ -717,6 +719,7 @@ async function main() {
   setupKeys();
   setupResize();
   setupPanes();
+  setupExport();
   for (const [list, box] of [['trace', 'trace-filter'], ['log', 'log-filter']]) {
     $(box).addEventListener('input', () => applyFilter($(list), $(box)));
   }
@@ -740,8 +743,10 @@ async function main() {
     applyState(await api('GET', '/api/sim/state'));
     initMaxStates();
     markDrawn();
+    followSession();
   } catch (e) {
     status(e.message);
+    offline(e);
   }
 }
 

@@ -46,9 +46,13 @@ function connectLive() {
       markDrawn();
     }
   };
-  socket.onopen = () => status('');
+  socket.onopen = () => {
+    status('');
+    online();
+  };
   socket.onclose = () => {
     status('connection lost, reconnecting…');
+    offline();
     setTimeout(connectLive, 1000);
   };
 }
@@ -56,6 +60,8 @@ function connectLive() {
 function applyLive(s) {
   s.tokens.forEach((k, i) => setTokens(i, k));
   setAllEnabled(s.firable);
+  // Before the map is drawn: its clock line says when the run (and so the world) stopped.
+  $('map-panel').classList.toggle('stopped', !!s.stopped);
   if (s.world) drawWorld(s.world);
   followLive(s);
   $('clock').textContent = 'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +

@@ -49,6 +49,7 @@ pub(super) fn finite(v: f64) -> serde_json::Value {
         json!(format!("{v}"))
     }
 }
+#[allow(clippy::too_many_arguments)]
 pub(super) fn run_sweep(
     args: &Args,
     net: &Net,
@@ -57,6 +58,7 @@ pub(super) fn run_sweep(
     goal: &Goal,
     max: bool,
     range: std::ops::RangeInclusive<usize>,
+    monitor: &Monitor,
 ) -> anyhow::Result<ExitCode> {
     let mut rows = Vec::new();
     if !args.json {
@@ -68,7 +70,7 @@ pub(super) fn run_sweep(
     for n in range {
         let t0 = Instant::now();
         let net_n = scaled(net, n)?;
-        let s = synthesize(&net_n, controls, spec, goal, max, args, false)?;
+        let s = synthesize(&net_n, controls, spec, goal, max, args, false, monitor)?;
         let total = t0.elapsed().as_secs_f64();
         if args.json {
             rows.push(json!({
