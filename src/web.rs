@@ -142,6 +142,11 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/share.js"),
     },
     Asset {
+        path: "/navigate.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/navigate.js"),
+    },
+    Asset {
         path: "/style.css",
         mime: "text/css; charset=utf-8",
         body: include_str!("web/assets/style.css"),

@@ -129,8 +129,19 @@ impl FiringPublisher {
         }
     }
 
+    /// Waits (at most `limit`) until every matched subscriber has acknowledged every firing
+    /// and marking published; false if some had not by then.
+    pub async fn acknowledged(&self, limit: std::time::Duration) -> bool {
+        let both = async {
+            let f = self.firings.async_wait_for_acknowledgments().await;
+            let m = self.marking.async_wait_for_acknowledgments().await;
+            matches!((f, m), (Ok(true), Ok(true)))
+        };
+        tokio::time::timeout(limit, both).await.unwrap_or(false)
+    }
+
     /// Publishes the initial marking, then every firing of `events` until the run is over.
-    pub async fn run(self, mut events: Events) -> Published {
+    pub async fn run(&self, mut events: Events) -> Published {
         let mut out = Published::default();
         let initial = self.net.initial_marking();
         if self
@@ -214,6 +225,13 @@ impl RunStatePublisher {
     /// Publishes `state`.
     pub async fn publish(&self, state: RunState) -> Result<(), Ros2Error> {
         self.run.async_publish(state).await.map_err(Ros2Error::dds)
+    }
+
+    /// Waits (at most `limit`) until every matched subscriber has acknowledged the states
+    /// published; false if some had not by then.
+    pub async fn acknowledged(&self, limit: std::time::Duration) -> bool {
+        let acked = self.run.async_wait_for_acknowledgments();
+        matches!(tokio::time::timeout(limit, acked).await, Ok(Ok(true)))
     }
 }
 

@@ -285,6 +285,7 @@ async fn the_page_loads_everything_from_its_own_server() {
         "live.js",
         "follow.js",
         "share.js",
+        "navigate.js",
         "app.js",
         "api/net",
     ] {

@@ -205,6 +205,8 @@ function drawNet() {
     arcsOfPlace[a.place].push(i);
     arcsOfTransition[a.transition].push(i);
   });
+  fillNames();
+  drawMinimap();
   if (canvasInit()) {
     const hooks = canvasHooks();
     placeEls.push(...hooks.places);
@@ -472,6 +474,7 @@ function applyState(s) {
 function applyView() {
   $('viewport').setAttribute('transform', 'translate(' + view.x + ',' + view.y + ') scale(' + view.k + ')');
   canvasDirty();
+  viewChanged();
 }
 
 // Whether the view is the fitted one (a resize then fits again); panning or zooming by hand
@@ -500,6 +503,7 @@ function fit() {
   const w = xb + 90 - x0;
   const h = yb + 60 - y0;
   const k = Math.min(box.clientWidth / w, box.clientHeight / h, 2);
+  nav.fitK = k;
   view = { k, x: -x0 * k + (box.clientWidth - w * k) / 2, y: -y0 * k + (box.clientHeight - h * k) / 2 };
   applyView();
 }
@@ -522,10 +526,7 @@ function setupInteraction() {
     const rect = box.getBoundingClientRect();
     const mx = ev.clientX - rect.left;
     const my = ev.clientY - rect.top;
-    const f = Math.exp(-ev.deltaY * 0.001);
-    view.x = mx - (mx - view.x) * f;
-    view.y = my - (my - view.y) * f;
-    view.k *= f;
+    zoomAbout(mx, my, Math.exp(-ev.deltaY * 0.001));
     fitted = false;
     applyView();
   }, { passive: false });
@@ -659,6 +660,7 @@ const KEYS = [
   ['0', 'reset', () => $('reset').click()],
   ['f', 'fit the net in the view', () => fit()],
   ['a', 'analyse', () => $('analyze').click()],
+  ['g', 'find a place or transition by name', () => $('search').focus()],
   ['/', 'filter the trace / events', () => {
     const box = $('log-panel').classList.contains('hidden') ? $('trace-filter') : $('log-filter');
     box.focus();
@@ -720,6 +722,7 @@ async function main() {
   setupResize();
   setupPanes();
   setupExport();
+  setupNavigate();
   for (const [list, box] of [['trace', 'trace-filter'], ['log', 'log-filter']]) {
     $(box).addEventListener('input', () => applyFilter($(list), $(box)));
   }
