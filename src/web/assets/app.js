@@ -661,6 +661,9 @@ const KEYS = [
   ['f', 'fit the net in the view', () => fit()],
   ['a', 'analyse', () => $('analyze').click()],
   ['g', 'find a place or transition by name', () => $('search').focus()],
+  [' ', 'replay: play / pause', () => $('play').click()],
+  ['ArrowLeft', 'replay: one firing back', () => $('step-back').click()],
+  ['ArrowRight', 'replay: one firing on', () => $('step-forward').click()],
   ['/', 'filter the trace / events', () => {
     const box = $('log-panel').classList.contains('hidden') ? $('trace-filter') : $('log-filter');
     box.focus();
@@ -673,7 +676,7 @@ function setupKeys() {
   const list = $('help-keys');
   for (const [key, what] of KEYS) {
     const dt = document.createElement('dt');
-    dt.textContent = key === 'Escape' ? 'Esc' : key;
+    dt.textContent = { Escape: 'Esc', ' ': 'space', ArrowLeft: '←', ArrowRight: '→' }[key] || key;
     const dd = document.createElement('dd');
     dd.textContent = what;
     list.append(dt, dd);
@@ -740,6 +743,7 @@ async function main() {
     fit();
     if (mode.replay) {
       await startReplay();
+      initMaxStates();
       markDrawn();
       return;
     }
