@@ -36,14 +36,30 @@ pub fn marking_qos() -> QosProfile {
         .history(History::KeepLast { depth: 1 })
 }
 
-fn topic(
-    node: &Node,
+/// A publisher on the topic `name` of type `ty` with `qos`.
+fn publisher<M: serde::Serialize>(
+    node: &mut Node,
     name: &str,
     ty: ros2_client::MessageTypeName,
-    qos: &QosProfile,
-) -> Result<ros2_client::dds::rustdds::Topic, Ros2Error> {
+    qos: QosProfile,
+) -> Result<Publisher<M>, Ros2Error> {
     let name = Name::parse(name).map_err(Ros2Error::dds)?;
-    node.create_topic(&name, ty, qos).map_err(Ros2Error::dds)
+    let topic = node.create_topic(&name, ty, &qos).map_err(Ros2Error::dds)?;
+    node.create_publisher(&topic, Some(qos))
+        .map_err(Ros2Error::dds)
+}
+
+/// A subscription to the topic `name` of type `ty` with `qos`.
+fn subscription<M: serde::de::DeserializeOwned + 'static>(
+    node: &mut Node,
+    name: &str,
+    ty: ros2_client::MessageTypeName,
+    qos: QosProfile,
+) -> Result<Subscription<M>, Ros2Error> {
+    let name = Name::parse(name).map_err(Ros2Error::dds)?;
+    let topic = node.create_topic(&name, ty, &qos).map_err(Ros2Error::dds)?;
+    node.create_subscription(&topic, Some(qos))
+        .map_err(Ros2Error::dds)
 }
 
 /// Publishes a run's firings and markings.
@@ -97,21 +113,10 @@ pub struct Published {
 impl FiringPublisher {
     /// Creates the two publishers on `node` for runs of `net`.
     pub fn new(node: &mut Node, net: Arc<Net>) -> Result<FiringPublisher, Ros2Error> {
-        let fq = firings_qos();
-        let mq = marking_qos();
-        let ft = topic(node, FIRINGS_TOPIC, firing_type(), &fq)?;
-        let mt = topic(node, MARKING_TOPIC, marking_type(), &mq)?;
-        let dt = topic(node, DRIFT_TOPIC, string_type(), &fq)?;
         Ok(FiringPublisher {
-            drift: node
-                .create_publisher(&dt, Some(fq.clone()))
-                .map_err(Ros2Error::dds)?,
-            firings: node
-                .create_publisher(&ft, Some(fq))
-                .map_err(Ros2Error::dds)?,
-            marking: node
-                .create_publisher(&mt, Some(mq))
-                .map_err(Ros2Error::dds)?,
+            drift: publisher(node, DRIFT_TOPIC, string_type(), firings_qos())?,
+            firings: publisher(node, FIRINGS_TOPIC, firing_type(), firings_qos())?,
+            marking: publisher(node, MARKING_TOPIC, marking_type(), marking_qos())?,
             net,
         })
     }
@@ -215,10 +220,8 @@ impl std::fmt::Debug for RunStatePublisher {
 impl RunStatePublisher {
     /// Creates the publisher on `node`.
     pub fn new(node: &mut Node) -> Result<RunStatePublisher, Ros2Error> {
-        let q = marking_qos();
-        let t = topic(node, RUN_TOPIC, run_state_type(), &q)?;
         Ok(RunStatePublisher {
-            run: node.create_publisher(&t, Some(q)).map_err(Ros2Error::dds)?,
+            run: publisher(node, RUN_TOPIC, run_state_type(), marking_qos())?,
         })
     }
 
@@ -251,21 +254,10 @@ impl std::fmt::Debug for FiringListener {
 impl FiringListener {
     /// Subscribes on `node`.
     pub fn new(node: &mut Node) -> Result<FiringListener, Ros2Error> {
-        let fq = firings_qos();
-        let mq = marking_qos();
-        let ft = topic(node, FIRINGS_TOPIC, firing_type(), &fq)?;
-        let mt = topic(node, MARKING_TOPIC, marking_type(), &mq)?;
-        let rt = topic(node, RUN_TOPIC, run_state_type(), &mq)?;
         Ok(FiringListener {
-            run: node
-                .create_subscription(&rt, Some(mq.clone()))
-                .map_err(Ros2Error::dds)?,
-            firings: node
-                .create_subscription(&ft, Some(fq))
-                .map_err(Ros2Error::dds)?,
-            marking: node
-                .create_subscription(&mt, Some(mq))
-                .map_err(Ros2Error::dds)?,
+            run: subscription(node, RUN_TOPIC, run_state_type(), marking_qos())?,
+            firings: subscription(node, FIRINGS_TOPIC, firing_type(), firings_qos())?,
+            marking: subscription(node, MARKING_TOPIC, marking_type(), marking_qos())?,
         })
     }
 
