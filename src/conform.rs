@@ -30,13 +30,16 @@
 
 mod compare;
 mod fit;
+pub mod holding;
 mod monitor;
 pub mod stats;
 
 pub use compare::{Report, Row, RowKind, Verdict, compare};
 pub use fit::{Fitted, fit};
+pub use holding::Holding;
 
-pub use monitor::{Drift, Monitor, MonitorOptions};
+pub use crate::runtime::{Drift, Monitored};
+pub use monitor::{Monitor, MonitorOptions};
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -86,6 +89,9 @@ pub struct Trace {
     pub steps: Vec<TraceStep>,
     /// The end of the observation (the last event's time).
     pub end: f64,
+    /// The agents' stays in action places (empty for a token-game run: its tokens have no
+    /// identity), in the order they ended.
+    pub holdings: Vec<Holding>,
 }
 
 impl Trace {
@@ -119,6 +125,7 @@ impl Trace {
             initial,
             steps,
             end,
+            holdings: holding::holdings(net, events),
         }
     }
 
@@ -149,6 +156,7 @@ impl Trace {
             initial,
             steps,
             end: until,
+            holdings: Vec::new(),
         })
     }
 
@@ -195,16 +203,21 @@ pub struct Options {
     pub min_gaps: usize,
     /// Fewest expected decisions per option for a decision row.
     pub min_expected: f64,
+    /// Most exponential stages of a phase-type (Erlang) fit of a place's holding time (see
+    /// [`fit`]); 1 fits rates only.
+    pub max_stages: u32,
 }
 
 impl Default for Options {
-    /// 20 batches, 10 firings, 20 gaps, 5 expected decisions per option.
+    /// 20 batches, 10 firings, 20 gaps, 5 expected decisions per option, Erlang fits of up
+    /// to 20 stages.
     fn default() -> Self {
         Options {
             batches: 20,
             min_firings: 10,
             min_gaps: 20,
             min_expected: 5.0,
+            max_stages: 20,
         }
     }
 }
@@ -262,6 +275,8 @@ pub struct Observations {
     pub choices: Vec<(PlaceId, TransitionId, Estimate, u64)>,
     /// Decision classes, in order of first appearance.
     pub decisions: Vec<Decision>,
+    /// The agents' stays that ended within the observed span.
+    pub holdings: Vec<Holding>,
 }
 
 /// Reads a trace of `net` (run under `policy`, if any) into observations.
@@ -435,6 +450,12 @@ pub fn observe(
         exposure,
         choices,
         decisions,
+        holdings: trace
+            .holdings
+            .iter()
+            .filter(|h| h.entered + h.duration <= trace.end)
+            .cloned()
+            .collect(),
     })
 }
 

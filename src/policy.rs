@@ -425,17 +425,20 @@ mod tests {
         Rule { pattern, choose }
     }
 
+    /// The policy of `rules`, given [`net`]'s transitions a, b, c, e; and those transitions.
+    fn policy(rules: impl FnOnce([TransitionId; 4]) -> Vec<Rule>) -> (Policy, [TransitionId; 4]) {
+        let (net, ts) = net();
+        (Policy::new(&net, rules(ts)).unwrap(), ts)
+    }
+
     #[test]
     fn exact_rule_wins_over_an_earlier_partial_one() {
-        let (net, [a, b, c, _]) = net();
-        let policy = Policy::new(
-            &net,
+        let (policy, [a, b, c, _]) = policy(|[a, b, c, _]| {
             vec![
                 rule(partial(0, 1), vec![(a, 1.0)]),
                 rule(Pattern::Exact(vec![1, 0]), vec![(b, 0.4), (c, 0.6)]),
-            ],
-        )
-        .unwrap();
+            ]
+        });
         let d = policy.distribution(&[1, 0], &[a, b, c]).unwrap();
         assert_eq!(d, vec![(b, 0.4), (c, 0.6)]);
         // Another marking: only the partial rule matches.
@@ -447,15 +450,12 @@ mod tests {
 
     #[test]
     fn restricted_to_firable_and_renormalised() {
-        let (net, [a, b, c, _]) = net();
-        let policy = Policy::new(
-            &net,
+        let (policy, [_, b, c, _]) = policy(|[a, b, c, _]| {
             vec![Rule {
                 pattern: partial(0, 1),
                 choose: vec![(a, 0.2), (b, 0.3), (c, 0.5)],
-            }],
-        )
-        .unwrap();
+            }]
+        });
         let d = policy.distribution(&[1, 0], &[b, c]).unwrap();
         assert_eq!(d.len(), 2);
         assert!((d[0].1 - 0.375).abs() < 1e-12 && d[0].0 == b);
@@ -464,15 +464,12 @@ mod tests {
 
     #[test]
     fn a_rule_that_names_nothing_firable_falls_through() {
-        let (net, [a, b, c, _]) = net();
-        let policy = Policy::new(
-            &net,
+        let (policy, [a, b, c, _]) = policy(|[a, b, c, _]| {
             vec![
                 rule(partial(0, 1), vec![(a, 1.0), (b, 0.0)]),
                 rule(partial(1, 0), vec![(c, 1.0)]),
-            ],
-        )
-        .unwrap();
+            ]
+        });
         // First rule matches but gives b zero mass and a is not firable: the second applies.
         assert_eq!(
             policy.distribution(&[1, 0], &[b, c]).unwrap(),
@@ -487,15 +484,12 @@ mod tests {
 
     #[test]
     fn partial_rules_apply_in_file_order() {
-        let (net, [a, b, _, _]) = net();
-        let policy = Policy::new(
-            &net,
+        let (policy, [a, b, _, _]) = policy(|[a, b, _, _]| {
             vec![
                 rule(partial(1, 0), vec![(b, 1.0)]),
                 rule(partial(0, 1), vec![(a, 1.0)]),
-            ],
-        )
-        .unwrap();
+            ]
+        });
         assert_eq!(policy.rule_for(&[1, 0], &[a, b]).map(|r| r.0), Some(0));
         assert_eq!(policy.rule_for(&[1, 2], &[a, b]).map(|r| r.0), Some(1));
     }

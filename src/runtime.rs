@@ -79,7 +79,7 @@ pub use backend::{
 };
 pub use builder::RuntimeBuilder;
 pub use builtin::{BUILTIN_WORDS, Builtin};
-pub use event::{Event, EventKind, Events, Received};
+pub use event::{Drift, Event, EventKind, Events, Monitored, Received, Watcher};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};
 pub use id::AgentId;
 pub use reward::Earned;

@@ -16,6 +16,7 @@
 //! | `POST /api/sim/reset {seed}` | back to the initial marking, with that seed |
 //! | `POST /api/sim/step {n}` | fire `n` transitions drawn by the token game: after a reset with seed S, `n` steps are exactly `plan-runner simulate --seed S --steps n` |
 //! | `POST /api/sim/fire {transition}` | fire one firable transition by hand (409 if it may not fire) |
+//! | `GET /api/sim/wait?after=V` | the state (as `/api/sim/state`, with its `version`) as soon as its version differs from `V` — at once if it already does, else when a request (from any tab) changes the token game, or after 20 s unchanged: every open page follows the same session |
 //! | `GET /api/analysis` | properties, steady-state mean tokens and throughputs, dead markings with a firing sequence to each; `{error, kind}` (422) for an unbounded net; starts the analysis if needed and waits for it (409 `kind: "cancelled"` if it is cancelled meanwhile) |
 //! | `POST /api/analysis/start` | starts the analysis on a blocking thread (unless it is running or done); the progress |
 //! | `GET /api/analysis/progress` | `{state: idle\|running\|cancelling\|cancelled\|done, phase: "state space"\|"properties"\|"steady state", markings, seconds}`: markings found so far by the state-space search |
@@ -136,6 +137,16 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/follow.js"),
     },
     Asset {
+        path: "/share.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/share.js"),
+    },
+    Asset {
+        path: "/navigate.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/navigate.js"),
+    },
+    Asset {
         path: "/style.css",
         mime: "text/css; charset=utf-8",
         body: include_str!("web/assets/style.css"),
@@ -157,6 +168,9 @@ struct Inner {
     live: OnceLock<LiveRun>,
     replay: OnceLock<Arc<Vec<Frame>>>,
     source: OnceLock<greatspn::Source>,
+    /// Bumped by every change of the token game: the pages waiting on `/api/sim/wait`
+    /// (other tabs) fetch the new state.
+    sim_version: tokio::sync::watch::Sender<u64>,
 }
 
 impl WebState {
@@ -207,6 +221,7 @@ impl WebState {
                 live: OnceLock::new(),
                 replay: OnceLock::new(),
                 source: OnceLock::new(),
+                sim_version: tokio::sync::watch::channel(0).0,
             }),
         }
     }
@@ -256,8 +271,14 @@ impl WebState {
             .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
+    /// Tells the pages that follow the token game that it changed.
+    fn sim_changed(&self) {
+        self.inner.sim_version.send_modify(|v| *v += 1);
+    }
+
     /// The token game's state as JSON, with the last `trace` firings.
     fn sim_json(&self, trace: usize) -> Value {
+        let version = *self.inner.sim_version.borrow();
         let s = self.session();
         let net = s.net().clone();
         let m = s.marking();
@@ -289,6 +310,7 @@ impl WebState {
                 json!({ "rule": rule, "probabilities": by_name })
             });
         json!({
+            "version": version,
             "choice": choice,
             "seed": s.seed(),
             "time": s.time(),
@@ -333,6 +355,7 @@ fn routes(state: WebState, bound: guard::Bound) -> Router {
         .route("/api/sim/reset", post(api::sim_reset))
         .route("/api/sim/step", post(api::sim_step))
         .route("/api/sim/fire", post(api::sim_fire))
+        .route("/api/sim/wait", get(api::sim_wait))
         .route("/api/analysis", get(api::analysis))
         .route("/api/analysis/start", post(api::analysis_start))
         .route("/api/analysis/progress", get(api::analysis_progress))

@@ -65,17 +65,10 @@ impl Ending {
                 dead_reachable: true,
             } => Some("a closed loop of markings is reachable: some runs never stop firing".into()),
             Ending::Unbounded(places) => Some(
-                places
-                    .iter()
-                    .map(|(p, ts)| {
-                        format!(
-                            "place `{}` is unbounded (pumped by {})",
-                            net.place(*p).name,
-                            named(net, ts)
-                        )
-                    })
-                    .collect::<Vec<_>>()
-                    .join("; "),
+                per_place(net, places, |p, by| {
+                    format!("place `{p}` is unbounded (pumped by {by})")
+                })
+                .join("; "),
             ),
         }
     }
@@ -86,15 +79,20 @@ pub fn unbounded_warnings(net: &Net, ending: &Ending) -> Vec<String> {
     let Ending::Unbounded(places) = ending else {
         return Vec::new();
     };
+    per_place(net, places, |p, by| {
+        format!("place `{p}` can grow without limit (coverability): pumped by {by}")
+    })
+}
+
+/// `say(place name, its pumps by name)` for each unbounded place.
+fn per_place(
+    net: &Net,
+    places: &[(PlaceId, Vec<TransitionId>)],
+    say: impl Fn(&str, String) -> String,
+) -> Vec<String> {
     places
         .iter()
-        .map(|(p, ts)| {
-            format!(
-                "place `{}` can grow without limit (coverability): pumped by {}",
-                net.place(*p).name,
-                named(net, ts)
-            )
-        })
+        .map(|(p, ts)| say(&net.place(*p).name, named(net, ts)))
         .collect()
 }
 

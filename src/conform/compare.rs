@@ -22,6 +22,11 @@ pub enum RowKind {
     Choice,
     /// The immediate choices of one decision class.
     Decision,
+    /// The mean time agents stayed in an action place before one output transition took
+    /// them out.
+    Holding,
+    /// Whether the agents' stays in an action place are exponential.
+    HoldingShape,
 }
 
 /// The outcome of a row.
@@ -279,6 +284,7 @@ pub fn compare(net: &Net, obs: &Observations, pred: &Predictions, opts: &Options
             detail: Some(detail.join(", ")),
         });
     }
+    holding_rows(net, obs, opts, &mut rows);
     Report {
         net: net.name().to_string(),
         predictions: pred.source.clone(),
@@ -286,5 +292,65 @@ pub fn compare(net: &Net, obs: &Observations, pred: &Predictions, opts: &Options
         firings: obs.firings,
         batches: obs.batches,
         rows,
+    }
+}
+
+/// The `holding` rows (per place and exit transition) and the `holding_shape` row (per
+/// place) of the agents' stays (see [`super::holding`]): tested against the model only for a
+/// race place and the stays during which the agent was alone there; otherwise shown over
+/// every stay with `no prediction`.
+fn holding_rows(net: &Net, obs: &Observations, opts: &Options, rows: &mut Vec<Row>) {
+    for (p, outs) in holding::by_place(net, &obs.holdings) {
+        let lambda = holding::race_rate(net, p);
+        let pick = |hs: &[&Holding]| -> Vec<f64> {
+            hs.iter()
+                .filter(|h| lambda.is_none() || h.alone)
+                .map(|h| h.duration)
+                .collect()
+        };
+        let mut all = Vec::new();
+        for (t, hs) in &outs {
+            let xs = pick(hs);
+            all.extend_from_slice(&xs);
+            let n = xs.len() as u64;
+            let sum: f64 = xs.iter().sum();
+            let p_value = lambda
+                .filter(|_| n >= opts.min_firings && sum > 0.0)
+                .map(|l| stats::rate_test(n, sum, l));
+            let e = (n >= 2).then(|| stats::estimate(&xs));
+            rows.push(Row {
+                kind: RowKind::Holding,
+                item: format!("{} -> {}", net.place(p).name, net.transition(*t).name),
+                observed: if n > 0 { sum / n as f64 } else { 0.0 },
+                interval: e.map(|e| [e.lo().max(0.0), e.hi()]),
+                predicted: lambda.map(|l| 1.0 / l),
+                n,
+                p_value,
+                verdict: match (lambda, p_value) {
+                    (None, _) => Verdict::NoPrediction,
+                    (Some(_), None) => Verdict::TooLittleData,
+                    (Some(_), Some(p)) => verdict(p),
+                },
+                detail: None,
+            });
+        }
+        let ks = (all.len() >= opts.min_gaps)
+            .then(|| stats::ks_exponential(&all))
+            .flatten();
+        rows.push(Row {
+            kind: RowKind::HoldingShape,
+            item: net.place(p).name.clone(),
+            observed: ks.map_or(0.0, |k| k.0),
+            interval: None,
+            predicted: None,
+            n: all.len() as u64,
+            p_value: ks.map(|k| k.1),
+            verdict: match (lambda, ks) {
+                (None, _) => Verdict::NoPrediction,
+                (Some(_), None) => Verdict::TooLittleData,
+                (Some(_), Some(k)) => verdict(k.1),
+            },
+            detail: None,
+        });
     }
 }

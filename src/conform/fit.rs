@@ -5,14 +5,15 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::*;
-use crate::net::{Net, NetBuilder, Timing, TransitionId};
+use crate::net::{Net, NetBuilder, PlaceId, Timing, TransitionId};
 
 /// One parameter of a fitted net.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Fitted {
-    /// The transition.
+    /// The transition (the place, for `stages`).
     pub transition: String,
-    /// `rate` or `weight`.
+    /// `rate`, `weight`, `stages` (of a place's Erlang holding time) or `stage_rate` (an
+    /// output transition's rate out of the last stage).
     pub parameter: &'static str,
     /// The net's value.
     pub old: f64,
@@ -33,6 +34,17 @@ pub struct Fitted {
 /// minorisation–maximisation) and scaled to keep the group's total. Parameters with fewer
 /// than [`Options::min_firings`] firings (or decisions) keep their value and are marked
 /// `kept`.
+///
+/// **Phase-type holding times.** An action place whose agents' stays (see
+/// [`super::holding`]) the exponential does not fit — a race place (so the stays are the
+/// outputs' business alone) whose `holding_shape` test rejects at [`ALPHA`] — gets an
+/// Erlang-`k` holding time by the method of moments: mean `m` and variance `v` of its stays,
+/// `k = round(m²/v)` (at most [`Options::max_stages`]; a `k` of 1 keeps the exponential).
+/// The net gets `k` stage places `P~1 … P~k` beside `P`: every arc into `P` also puts its
+/// tokens in `P~1`, stage transitions `P~1>2 …` (rate `k/m`, infinite servers) move them on,
+/// and each output `t` of `P` also takes its token from `P~k`, at rate `q_t·k/m` where `q_t`
+/// is the share of the stays that left by `t`. `P` itself keeps its tokens for the whole
+/// stay, so a policy or a plan that reads `P` reads the same marking.
 pub fn fit(net: &Net, obs: &Observations, opts: &Options) -> (Net, Vec<Fitted>) {
     let mut timings: Vec<Timing> = net.transitions().iter().map(|t| t.timing).collect();
     let mut out = Vec::new();
@@ -61,9 +73,36 @@ pub fn fit(net: &Net, obs: &Observations, opts: &Options) -> (Net, Vec<Fitted>) 
         });
     }
     fit_weights(net, obs, opts, &mut timings, &mut out);
+    let erlang = erlang_fits(net, obs, opts);
     let mut b = NetBuilder::new(net.name());
     for p in net.places() {
         b.add_place(p.clone());
+    }
+    for e in &erlang {
+        for (t, q) in &e.exits {
+            if let Timing::Exponential { servers, .. } = timings[t.index()] {
+                let rate = q * e.stage_rate();
+                timings[t.index()] = Timing::Exponential { rate, servers };
+                if let Some(f) = out
+                    .iter_mut()
+                    .find(|f| f.parameter == "rate" && f.transition == net.transition(*t).name)
+                {
+                    f.parameter = "stage_rate";
+                    f.new = rate;
+                    f.interval = None;
+                    f.kept = false;
+                }
+            }
+        }
+        out.push(Fitted {
+            transition: net.place(e.place).name.clone(),
+            parameter: "stages",
+            old: 1.0,
+            new: e.stages as f64,
+            interval: None,
+            n: e.n,
+            kept: false,
+        });
     }
     for (t, timing) in net.transitions().iter().zip(timings) {
         b.add_transition(crate::net::Transition {
@@ -74,10 +113,130 @@ pub fn fit(net: &Net, obs: &Observations, opts: &Options) -> (Net, Vec<Fitted>) 
     for a in net.arcs() {
         b.arc(a.kind, a.place, a.transition, a.weight, a.points.clone());
     }
+    for e in &erlang {
+        e.add_stages(net, &mut b);
+    }
     let fitted = b
         .build()
         .expect("the same net with positive finite rates and weights builds");
     (fitted, out)
+}
+
+/// The Erlang holding time fitted to one place.
+struct ErlangFit {
+    place: PlaceId,
+    stages: u32,
+    mean: f64,
+    /// Share of the stays out by each output transition.
+    exits: Vec<(TransitionId, f64)>,
+    n: u64,
+}
+
+impl ErlangFit {
+    fn stage_rate(&self) -> f64 {
+        self.stages as f64 / self.mean
+    }
+
+    /// The stage places and transitions (see [`fit`]), named after the place, beside it on
+    /// the canvas.
+    fn add_stages(&self, net: &Net, b: &mut NetBuilder) {
+        let p = net.place(self.place);
+        let k = self.stages as usize;
+        let unique = |b: &NetBuilder, name: String| {
+            let mut n = name.clone();
+            let mut i = 1;
+            while b.find_place(&n).is_some() || b.find_transition(&n).is_some() {
+                i += 1;
+                n = format!("{name}~{i}");
+            }
+            n
+        };
+        let at = |dx: f64, dy: f64| {
+            p.position.map(|q| crate::net::Position {
+                x: q.x + dx,
+                y: q.y + dy,
+            })
+        };
+        let stages: Vec<PlaceId> = (1..=k)
+            .map(|j| {
+                let name = unique(b, format!("{}~{j}", p.name));
+                b.add_place(crate::net::Place {
+                    name,
+                    initial: if j == 1 { p.initial } else { 0 },
+                    capacity: None,
+                    position: at(2.0 * j as f64, 3.0),
+                })
+            })
+            .collect();
+        for j in 1..k {
+            let name = unique(b, format!("{}~{j}>{}", p.name, j + 1));
+            let t = b.add_transition(crate::net::Transition {
+                name,
+                timing: Timing::Exponential {
+                    rate: self.stage_rate(),
+                    servers: crate::net::Servers::Infinite,
+                },
+                position: at(2.0 * j as f64 + 1.0, 4.0),
+            });
+            b.input(stages[j - 1], t, 1);
+            b.output(t, stages[j], 1);
+        }
+        for t in net.transition_ids() {
+            if let Some(&(_, w)) = net.outputs(t).iter().find(|(q, _)| *q == self.place) {
+                b.output(t, stages[0], w);
+            }
+        }
+        for &(t, _) in &self.exits {
+            b.input(stages[k - 1], t, 1);
+        }
+    }
+}
+
+/// The places that get an Erlang holding time (see [`fit`]).
+fn erlang_fits(net: &Net, obs: &Observations, opts: &Options) -> Vec<ErlangFit> {
+    let mut fits = Vec::new();
+    for (p, outs) in holding::by_place(net, &obs.holdings) {
+        if holding::race_rate(net, p).is_none() {
+            continue;
+        }
+        let xs: Vec<f64> = outs
+            .iter()
+            .flat_map(|(_, hs)| hs.iter().map(|h| h.duration))
+            .collect();
+        let n = xs.len();
+        if n < opts.min_gaps.max(2) || outs.iter().any(|(_, hs)| hs.is_empty()) {
+            continue;
+        }
+        match stats::ks_exponential(&xs) {
+            Some((_, p_value)) if p_value < ALPHA => {}
+            _ => continue,
+        }
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n as f64 - 1.0);
+        if !(mean > 0.0 && mean.is_finite()) {
+            continue;
+        }
+        let k = if var > 0.0 {
+            (mean * mean / var).round().min(opts.max_stages as f64)
+        } else {
+            opts.max_stages as f64
+        }
+        .max(1.0) as u32;
+        if k < 2 {
+            continue;
+        }
+        fits.push(ErlangFit {
+            place: p,
+            stages: k,
+            mean,
+            exits: outs
+                .iter()
+                .map(|(t, hs)| (*t, hs.len() as f64 / n as f64))
+                .collect(),
+            n: n as u64,
+        });
+    }
+    fits
 }
 
 fn fit_weights(

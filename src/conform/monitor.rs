@@ -1,15 +1,22 @@
-//! The live check: [`Monitor`] follows a run firing by firing and reports a [`Drift`] when an
-//! exponential transition's rate over its last firings leaves the net's (the `rate` row of
-//! [`compare`](super::compare), on a sliding window, at a stricter level since it is tested
-//! again at every firing) — once per transition until its rate returns (p back above
-//! [`MonitorOptions::back`]).
+//! The live check: [`Monitor`] follows a run firing by firing and reports a [`Drift`]
+//!
+//! - when an exponential transition's rate over its last firings leaves the net's (the
+//!   `rate` row of [`compare`](super::compare), on a sliding window, at a stricter level since
+//!   it is tested again at every firing);
+//! - when a place's time-average tokens over its last batches (of
+//!   [`MonitorOptions::batch_firings`] firings each) leave the steady state's
+//!   ([`Monitor::with_mean_tokens`]; the `mean_tokens` row, ratio batch means over the window,
+//!   Student t) —
+//!
+//! once per transition or place until it returns (p back above [`MonitorOptions::back`]).
+//! It is a [`Watcher`]: given to [`crate::runtime::RuntimeBuilder::watch`], its drifts become
+//! `drift` events of the run (journal, bus, viewer, ROS 2).
 
 use std::collections::VecDeque;
 
-use serde::Serialize;
-
 use super::{active_servers, stats};
-use crate::net::{Net, Timing, TransitionId};
+use crate::net::{Net, PlaceId, Timing, TransitionId};
+use crate::runtime::{Drift, Monitored, Watcher};
 
 /// Window and level of the live check.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,41 +27,41 @@ pub struct MonitorOptions {
     pub min_firings: usize,
     /// Level of each test (the test is repeated at every firing: keep it small).
     pub alpha: f64,
-    /// A drifting transition has returned when its p-value is back above this (hysteresis:
-    /// no alarm storm around the threshold).
+    /// A drifting transition or place has returned when its p-value is back above this
+    /// (hysteresis: no alarm storm around the threshold).
     pub back: f64,
+    /// Firings (of any transition) per batch of the places' time averages.
+    pub batch_firings: u64,
+    /// Batches in the places' sliding window; places are tested once it is full.
+    pub batches: usize,
 }
 
 impl Default for MonitorOptions {
     /// A window of 200 firings, tested from 50 on, at the 10⁻⁵ level; back below drift
-    /// once p ≥ 0.05.
+    /// once p ≥ 0.05; places over the last 10 batches of 100 firings.
     fn default() -> Self {
         MonitorOptions {
             window: 200,
             min_firings: 50,
             alpha: 1e-5,
             back: 0.05,
+            batch_firings: 100,
+            batches: 10,
         }
     }
 }
 
-/// A transition whose recent rate left the net's.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Drift {
-    /// The transition.
-    pub transition: String,
-    /// When it was found (model time).
-    pub time: f64,
-    /// Firings per unit of enabled time over the window.
-    pub observed: f64,
-    /// The net's rate.
-    pub predicted: f64,
-    /// The 95% score interval of the observed rate.
-    pub interval: [f64; 2],
-    /// Firings in the window.
-    pub n: u64,
-    /// The test's p-value.
-    pub p_value: f64,
+/// The places' batches: token-time integrals per place and batch lengths, the last
+/// [`MonitorOptions::batches`] of them.
+#[derive(Clone, Debug)]
+struct PlaceBatches {
+    predicted: Vec<f64>,
+    open: Vec<f64>,
+    opened: f64,
+    firings: u64,
+    closed: Vec<VecDeque<f64>>,
+    lengths: VecDeque<f64>,
+    drifting: Vec<bool>,
 }
 
 /// Follows one run (see the module).
@@ -67,10 +74,12 @@ pub struct Monitor {
     open_gap: Vec<f64>,
     window: Vec<VecDeque<f64>>,
     drifting: Vec<bool>,
+    places: Option<PlaceBatches>,
 }
 
 impl Monitor {
-    /// A monitor of a run of `net` from `initial`.
+    /// A monitor of a run of `net` from `initial` (transitions only; see
+    /// [`Monitor::with_mean_tokens`]).
     pub fn new(net: &Net, initial: Vec<u32>, opts: MonitorOptions) -> Monitor {
         let nt = net.transition_count();
         Monitor {
@@ -81,37 +90,83 @@ impl Monitor {
             open_gap: vec![0.0; nt],
             window: vec![VecDeque::new(); nt],
             drifting: vec![false; nt],
+            places: None,
         }
+    }
+
+    /// The same monitor, also watching every place's mean tokens against `predicted` (per
+    /// place, in net order: the steady state, [`super::steady_predictions`]).
+    pub fn with_mean_tokens(mut self, predicted: Vec<f64>) -> Monitor {
+        let np = self.net.place_count();
+        self.places = (predicted.len() == np).then(|| PlaceBatches {
+            predicted,
+            open: vec![0.0; np],
+            opened: self.now,
+            firings: 0,
+            closed: vec![VecDeque::new(); np],
+            lengths: VecDeque::new(),
+            drifting: vec![false; np],
+        });
+        self
     }
 
     /// The same monitor started at model time `time` (a run joined midway).
     pub fn at(mut self, time: f64) -> Monitor {
         self.now = time;
+        if let Some(b) = &mut self.places {
+            b.opened = time;
+        }
         self
     }
 
-    /// Transitions drifting now.
-    pub fn drifting(&self) -> impl Iterator<Item = TransitionId> + '_ {
-        self.drifting
+    /// Transitions and places drifting now.
+    pub fn drifting(&self) -> impl Iterator<Item = Monitored> + '_ {
+        let ts = self
+            .drifting
             .iter()
             .enumerate()
             .filter(|(_, d)| **d)
-            .map(|(i, _)| TransitionId(i as u32))
+            .map(|(i, _)| Monitored::Transition(TransitionId(i as u32)));
+        let ps = self.places.iter().flat_map(|b| {
+            b.drifting
+                .iter()
+                .enumerate()
+                .filter(|(_, d)| **d)
+                .map(|(i, _)| Monitored::Place(PlaceId(i as u32)))
+        });
+        ts.chain(ps)
     }
 
-    /// `t` fired at `time`, leaving `marking`: a [`Drift`] when `t`'s rate over the window
-    /// has just left the net's.
-    pub fn fired(&mut self, time: f64, t: TransitionId, marking: &[u32]) -> Option<Drift> {
+    /// `t` fired at `time`, leaving `marking`: the drifts that have just begun — `t`'s rate
+    /// over the window, then (when a batch closes) places' mean tokens.
+    pub fn fired(&mut self, time: f64, t: TransitionId, marking: &[u32]) -> Vec<Drift> {
+        let mut out = Vec::new();
         let dt = time - self.now;
         if dt > 0.0 {
             for u in self.net.transition_ids() {
                 let a = active_servers(&self.net, &self.marking, u);
                 self.open_gap[u.index()] += a as f64 * dt;
             }
+            if let Some(b) = &mut self.places {
+                for (x, &k) in b.open.iter_mut().zip(&self.marking) {
+                    *x += k as f64 * dt;
+                }
+            }
             self.now = time;
         }
         self.marking.clear();
         self.marking.extend_from_slice(marking);
+        out.extend(self.transition_drift(t));
+        if let Some(b) = &mut self.places {
+            b.firings += 1;
+            if b.firings >= self.opts.batch_firings {
+                out.extend(place_drifts(b, &self.opts, time));
+            }
+        }
+        out
+    }
+
+    fn transition_drift(&mut self, t: TransitionId) -> Option<Drift> {
         let Timing::Exponential { rate, .. } = self.net.transition(t).timing else {
             return None;
         };
@@ -135,8 +190,7 @@ impl Monitor {
         (self.drifting[i] && !was).then(|| {
             let (lo, hi) = stats::rate_interval(n, e);
             Drift {
-                transition: self.net.transition(t).name.clone(),
-                time,
+                of: Monitored::Transition(t),
                 observed: n as f64 / e,
                 predicted: rate,
                 interval: [lo, hi],
@@ -144,5 +198,55 @@ impl Monitor {
                 p_value: p,
             }
         })
+    }
+}
+
+/// Closes the open batch at `time` and tests every place over the window.
+fn place_drifts(b: &mut PlaceBatches, opts: &MonitorOptions, time: f64) -> Vec<Drift> {
+    let length = time - b.opened;
+    b.firings = 0;
+    b.opened = time;
+    if length <= 0.0 {
+        return Vec::new();
+    }
+    b.lengths.push_back(length);
+    for (w, x) in b.closed.iter_mut().zip(&mut b.open) {
+        w.push_back(std::mem::take(x));
+        if w.len() > opts.batches {
+            w.pop_front();
+        }
+    }
+    if b.lengths.len() > opts.batches {
+        b.lengths.pop_front();
+    }
+    if b.lengths.len() < opts.batches.max(2) {
+        return Vec::new();
+    }
+    let lengths: Vec<f64> = b.lengths.iter().copied().collect();
+    let mut out = Vec::new();
+    for (p, w) in b.closed.iter().enumerate() {
+        let ints: Vec<f64> = w.iter().copied().collect();
+        let est = stats::ratio_estimate(&ints, &lengths);
+        let predicted = b.predicted[p];
+        let pv = stats::t_test(&est, predicted, lengths.len() as u64 - 1);
+        let was = b.drifting[p];
+        b.drifting[p] = if was { pv < opts.back } else { pv < opts.alpha };
+        if b.drifting[p] && !was {
+            out.push(Drift {
+                of: Monitored::Place(PlaceId(p as u32)),
+                observed: est.mean,
+                predicted,
+                interval: [est.lo(), est.hi()],
+                n: lengths.len() as u64,
+                p_value: pv,
+            });
+        }
+    }
+    out
+}
+
+impl Watcher for Monitor {
+    fn fired(&mut self, time: f64, t: TransitionId, marking: &[u32]) -> Vec<Drift> {
+        Monitor::fired(self, time, t, marking)
     }
 }

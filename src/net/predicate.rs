@@ -262,7 +262,7 @@ mod tests {
     }
 
     #[test]
-    fn comparisons_and_connectives() {
+    fn comparisons_connectives_sums_and_scaled_terms() {
         assert!(holds("P1 > 0 && P2 == 0", &[1, 0, 0, 0]));
         assert!(!holds("P1 > 0 && P2 == 0", &[1, 1, 0, 0]));
         assert!(holds("P1 > 0 || P2 == 0", &[0, 0, 0, 0]));
@@ -270,6 +270,12 @@ mod tests {
         assert!(holds("P1 <= 1 && P1 >= 1 && P1 != 2", &[1, 0, 0, 0]));
         assert!(holds("3 > P1", &[2, 0, 0, 0]));
         assert!(!holds("3 > P1", &[3, 0, 0, 0]));
+        // Sums and scaled terms.
+        assert!(holds("P1 + P2 >= 2", &[1, 1, 0, 0]));
+        assert!(!holds("P1 + P2 >= 2", &[1, 0, 0, 0]));
+        assert!(holds("2*P1 - P2 == 3", &[2, 1, 0, 0]));
+        assert!(holds("(P1 + P2) * 2 > 3", &[1, 1, 0, 0]));
+        assert!(holds("-P1 + 2 == 0", &[2, 0, 0, 0]));
     }
 
     #[test]
@@ -278,15 +284,6 @@ mod tests {
         // so use a case that tells them apart: true || (false && false) = true.
         assert!(holds("P1 == 1 || P2 == 1 && P2 == 2", &[1, 0, 0, 0]));
         assert!(!holds("(P1 == 1 || P2 == 1) && P2 == 2", &[1, 0, 0, 0]));
-    }
-
-    #[test]
-    fn sums_and_scaled_terms() {
-        assert!(holds("P1 + P2 >= 2", &[1, 1, 0, 0]));
-        assert!(!holds("P1 + P2 >= 2", &[1, 0, 0, 0]));
-        assert!(holds("2*P1 - P2 == 3", &[2, 1, 0, 0]));
-        assert!(holds("(P1 + P2) * 2 > 3", &[1, 1, 0, 0]));
-        assert!(holds("-P1 + 2 == 0", &[2, 0, 0, 0]));
     }
 
     #[test]

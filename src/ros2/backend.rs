@@ -8,8 +8,8 @@
 //! attach    registers the `ros2` action (RemotePlaces) on the runtime builder
 //!           then says the run is `running` on /gspn/run
 //! publish   a task that publishes every firing and the marking from the run's events
-//! finish    waits for the publisher, says the run is `over` (robots leave), lingers so
-//!           reliable samples reach the subscribers
+//! finish    waits for the publisher and the subscribers' acknowledgements, says the run
+//!           is `over` (robots leave), waits for that to be acknowledged (≤ linger in all)
 //! ```
 
 use std::collections::HashMap;
@@ -40,7 +40,7 @@ pub struct Ros2Backend {
     spin: JoinHandle<()>,
     /// The supervisor's heartbeat.
     beat: AbortOnDrop,
-    publisher: Option<FiringPublisher>,
+    publisher: Arc<FiringPublisher>,
     task: Option<JoinHandle<Published>>,
     places: RemotePlaces,
     watch: RobotWatch,
@@ -166,7 +166,7 @@ impl Ros2Backend {
             node,
             spin,
             beat,
-            publisher: Some(publisher),
+            publisher: Arc::new(publisher),
             task: None,
             places: RemotePlaces::new(servers, links),
             watch,
@@ -181,8 +181,9 @@ impl Ros2Backend {
     /// Starts publishing the run's firings and marking from `events` (take them before the
     /// first firing: `handle.events()` right after `spawn`).
     pub fn publish(&mut self, events: Events) {
-        if let Some(p) = self.publisher.take() {
-            self.task = Some(tokio::spawn(p.run(events)));
+        if self.task.is_none() {
+            let p = Arc::clone(&self.publisher);
+            self.task = Some(tokio::spawn(async move { p.run(events).await }));
         }
     }
 
@@ -196,14 +197,22 @@ impl Ros2Backend {
         &mut self.node
     }
 
-    /// Waits for the publisher to have sent every firing (the run must be over), says the
-    /// run is over (`stopped`: why) so robots leave, then keeps the participant alive for
-    /// `linger` so reliable samples reach slow subscribers.
+    /// Waits for the publisher to have sent every firing (the run must be over) and for
+    /// every subscriber to acknowledge them, says the run is over (`stopped`: why) so robots
+    /// leave, and waits for that to be acknowledged too; the two waits together take at most
+    /// `linger` (a lost sample is repaired in that time; a subscriber that never answers
+    /// costs the whole of it).
     pub async fn finish(mut self, linger: Duration, stopped: &str) -> Published {
+        let deadline = tokio::time::Instant::now() + linger;
         let mut published = match self.task.take() {
             Some(t) => t.await.unwrap_or_default(),
             None => Published::default(),
         };
+        if !self.publisher.acknowledged(linger).await {
+            tracing::warn!(
+                "not every subscriber acknowledged every firing within {linger:?} (--ros2-linger)"
+            );
+        }
         let over = RunState {
             state: RUN_OVER.into(),
             stopped: stopped.to_string(),
@@ -213,7 +222,8 @@ impl Ros2Backend {
             tracing::warn!("publishing the end of the run: {e}");
             published.errors += 1;
         }
-        tokio::time::sleep(linger).await;
+        let left = deadline.saturating_duration_since(tokio::time::Instant::now());
+        self.run_state.acknowledged(left).await;
         self.beat.0.abort();
         self.spin.abort();
         published

@@ -1,6 +1,8 @@
 //! The supervisor's publications: every firing on `/gspn/firings` (reliable, keep-all), the
 //! current marking on `/gspn/marking` (reliable, transient-local, depth 1) and the run's
-//! state on `/gspn/run` ([`RunStatePublisher`], same QoS as the marking); and
+//! state on `/gspn/run` ([`RunStatePublisher`], same QoS as the marking); the live
+//! monitor's drifts (`run --monitor`) on `/gspn/drift` as JSON in a `std_msgs/String` (same
+//! QoS as the firings, [`drift_message`]); and
 //! [`FiringListener`], a subscriber to them for robots, tests and tools.
 
 use std::sync::Arc;
@@ -11,11 +13,11 @@ use ros2_client::{Name, Node, Publisher, QosProfile, Subscription};
 
 use super::Ros2Error;
 use super::msgs::{
-    FIRINGS_TOPIC, Firing, MARKING_TOPIC, Marking, RUN_TOPIC, RunState, Time, firing_type,
-    marking_type, run_state_type,
+    DRIFT_TOPIC, FIRINGS_TOPIC, Firing, MARKING_TOPIC, Marking, RUN_TOPIC, RunState, StringMsg,
+    Time, firing_type, marking_type, run_state_type, string_type,
 };
 use crate::net::Net;
-use crate::runtime::{EventKind, Events, Received};
+use crate::runtime::{Drift, EventKind, Events, Monitored, Received};
 
 /// QoS of `/gspn/firings`: reliable, keep-all, volatile.
 pub fn firings_qos() -> QosProfile {
@@ -48,7 +50,29 @@ fn topic(
 pub struct FiringPublisher {
     firings: Publisher<Firing>,
     marking: Publisher<Marking>,
+    drift: Publisher<StringMsg>,
     net: Arc<Net>,
+}
+
+/// The `/gspn/drift` message of a drift found at model time `time`: `{"time", "transition"
+/// or "place" (by name), "observed", "predicted", "interval", "n", "p_value", "text"}`.
+pub fn drift_message(net: &Net, time: f64, d: &Drift) -> StringMsg {
+    let mut v = serde_json::json!({
+        "time": time,
+        "observed": d.observed,
+        "predicted": d.predicted,
+        "interval": d.interval,
+        "n": d.n,
+        "p_value": d.p_value,
+        "text": d.describe(net),
+    });
+    match d.of {
+        Monitored::Transition(t) => v["transition"] = net.transition(t).name.clone().into(),
+        Monitored::Place(p) => v["place"] = net.place(p).name.clone().into(),
+    }
+    StringMsg {
+        data: v.to_string(),
+    }
 }
 
 impl std::fmt::Debug for FiringPublisher {
@@ -77,7 +101,11 @@ impl FiringPublisher {
         let mq = marking_qos();
         let ft = topic(node, FIRINGS_TOPIC, firing_type(), &fq)?;
         let mt = topic(node, MARKING_TOPIC, marking_type(), &mq)?;
+        let dt = topic(node, DRIFT_TOPIC, string_type(), &fq)?;
         Ok(FiringPublisher {
+            drift: node
+                .create_publisher(&dt, Some(fq.clone()))
+                .map_err(Ros2Error::dds)?,
             firings: node
                 .create_publisher(&ft, Some(fq))
                 .map_err(Ros2Error::dds)?,
@@ -101,8 +129,19 @@ impl FiringPublisher {
         }
     }
 
+    /// Waits (at most `limit`) until every matched subscriber has acknowledged every firing
+    /// and marking published; false if some had not by then.
+    pub async fn acknowledged(&self, limit: std::time::Duration) -> bool {
+        let both = async {
+            let f = self.firings.async_wait_for_acknowledgments().await;
+            let m = self.marking.async_wait_for_acknowledgments().await;
+            matches!((f, m), (Ok(true), Ok(true)))
+        };
+        tokio::time::timeout(limit, both).await.unwrap_or(false)
+    }
+
     /// Publishes the initial marking, then every firing of `events` until the run is over.
-    pub async fn run(self, mut events: Events) -> Published {
+    pub async fn run(&self, mut events: Events) -> Published {
         let mut out = Published::default();
         let initial = self.net.initial_marking();
         if self
@@ -122,6 +161,13 @@ impl FiringPublisher {
                     continue;
                 }
             };
+            if let EventKind::Drift(d) = &e.kind {
+                let msg = drift_message(&self.net, e.time, d);
+                if self.drift.async_publish(msg).await.is_err() {
+                    out.errors += 1;
+                }
+                continue;
+            }
             let EventKind::Fired {
                 transition,
                 marking,
@@ -180,6 +226,13 @@ impl RunStatePublisher {
     pub async fn publish(&self, state: RunState) -> Result<(), Ros2Error> {
         self.run.async_publish(state).await.map_err(Ros2Error::dds)
     }
+
+    /// Waits (at most `limit`) until every matched subscriber has acknowledged the states
+    /// published; false if some had not by then.
+    pub async fn acknowledged(&self, limit: std::time::Duration) -> bool {
+        let acked = self.run.async_wait_for_acknowledgments();
+        matches!(tokio::time::timeout(limit, acked).await, Ok(Ok(true)))
+    }
 }
 
 /// A subscriber to `/gspn/firings`, `/gspn/marking` and `/gspn/run`.
@@ -235,5 +288,49 @@ impl FiringListener {
         self.marking
             .async_stream()
             .filter_map(|r| async move { r.ok().map(|(m, _)| m) })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::net::{NetBuilder, Servers};
+
+    #[test]
+    fn a_drift_is_published_as_json_naming_the_transition_or_place() {
+        let mut b = NetBuilder::new("n");
+        let p = b.place("Check", 1);
+        let t = b.exponential("Done", 1.0, Servers::Single);
+        b.input(p, t, 1);
+        let net = b.build().unwrap();
+        let d = Drift {
+            of: Monitored::Transition(t),
+            observed: 0.25,
+            predicted: 1.0,
+            interval: [0.2, 0.3],
+            n: 60,
+            p_value: 1e-9,
+        };
+        let v: serde_json::Value =
+            serde_json::from_str(&drift_message(&net, 12.5, &d).data).unwrap();
+        assert_eq!(v["transition"], "Done");
+        assert_eq!(v["time"], 12.5);
+        assert_eq!(v["observed"], 0.25);
+        assert_eq!(v["interval"], serde_json::json!([0.2, 0.3]));
+        assert_eq!(v["n"], 60);
+        assert!(v.get("place").is_none());
+        let d = Drift {
+            of: Monitored::Place(p),
+            ..d
+        };
+        let v: serde_json::Value =
+            serde_json::from_str(&drift_message(&net, 1.0, &d).data).unwrap();
+        assert_eq!(v["place"], "Check");
+        assert!(
+            v["text"]
+                .as_str()
+                .unwrap()
+                .starts_with("Check: 0.2500 mean tokens")
+        );
     }
 }

@@ -18,6 +18,8 @@ pub const HEARTBEAT_TOPIC: &str = "/gspn/heartbeat";
 pub const SUPERVISOR_HEARTBEAT_TOPIC: &str = "/gspn/supervisor_heartbeat";
 /// Topic of the supervisor's [`RunState`].
 pub const RUN_TOPIC: &str = "/gspn/run";
+/// Topic of the live monitor's drifts (`run --monitor`), as JSON in a [`StringMsg`].
+pub const DRIFT_TOPIC: &str = "/gspn/drift";
 
 /// `builtin_interfaces/Time`: seconds and nanoseconds since the Unix epoch.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -96,6 +98,19 @@ pub struct RunState {
     pub firings: u64,
 }
 impl Message for RunState {}
+
+/// `std_msgs/msg/String`: one JSON document, on [`DRIFT_TOPIC`].
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StringMsg {
+    /// The text.
+    pub data: String,
+}
+impl Message for StringMsg {}
+
+/// DDS type of [`StringMsg`]: `std_msgs::msg::dds_::String_`.
+pub fn string_type() -> MessageTypeName {
+    MessageTypeName::new("std_msgs", "String")
+}
 
 /// [`RunState::state`] of a run that has started.
 pub const RUN_RUNNING: &str = "running";

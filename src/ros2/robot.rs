@@ -163,6 +163,8 @@ struct Shared {
     running: Mutex<Running>,
     /// The tasks of the goals received (finished ones pruned as new ones come).
     goal_tasks: Mutex<Vec<tokio::task::JoinHandle<()>>>,
+    /// Notified at each goal: a supervisor exists, heard or not.
+    goal_seen: tokio::sync::Notify,
 }
 
 /// Running goals and how to cancel them; once `closed` (the robot is leaving) a new goal is
@@ -172,6 +174,10 @@ struct Running {
     goals: BTreeMap<GoalId, oneshot::Sender<()>>,
     closed: bool,
 }
+
+/// A robot that got goals from a supervisor whose heartbeat it never heard leaves after this
+/// many times `lost_after` (it cannot tell a supervisor killed early from a slow discovery).
+const UNHEARD_GRACE: u32 = 5;
 
 /// How long a leaving robot waits for its cancelled goals to send their results.
 const LEAVE_WAIT: Duration = Duration::from_secs(1);
@@ -200,6 +206,7 @@ pub async fn serve(
         stats: Mutex::new(RobotStats::default()),
         running: Mutex::new(Running::default()),
         goal_tasks: Mutex::new(Vec::new()),
+        goal_seen: tokio::sync::Notify::new(),
     });
     let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
     servers.sort_unstable();
@@ -221,7 +228,7 @@ pub async fn serve(
     let listener = FiringListener::new(&mut node)?;
     let listen = listen(&listener, opts.latency_log.clone(), Arc::clone(&shared));
     let over = run_over(&listener, &opts);
-    let lost = supervisor_lost(&supervisor, &opts, cfg.lost_after);
+    let lost = supervisor_lost(&supervisor, &shared.goal_seen, &opts, cfg.lost_after);
     let mut left = None;
     tokio::select! {
         _ = stop => {}
@@ -269,26 +276,68 @@ fn cancel_running(shared: &Shared) {
     }
 }
 
-/// Completes when the supervisor's heartbeat, once heard, stops for `after` (never with
-/// `opts.stay`, which says so and keeps serving).
-async fn supervisor_lost(watch: &RobotWatch, opts: &RobotOptions, after: Duration) -> Leave {
+/// Completes when the supervisor's heartbeat stops for `after` — once heard, or once a goal
+/// came while none had been heard yet (a supervisor killed before its heartbeat reached this
+/// robot) — never with `opts.stay`, which says so and keeps serving.
+async fn supervisor_lost(
+    watch: &RobotWatch,
+    goal_seen: &tokio::sync::Notify,
+    opts: &RobotOptions,
+    after: Duration,
+) -> Leave {
     let Some(mut live) = watch.liveness(SUPERVISOR) else {
         return std::future::pending().await;
     };
-    while live.changed().await.is_ok() {
-        let now = *live.borrow_and_update();
-        match now {
-            Liveness::Lost if !opts.stay => return Leave::SupervisorLost(after),
-            Liveness::Lost => tracing::info!(
-                "robot {}: {}; idle, serving until stopped (--stay)",
-                opts.id,
-                Leave::SupervisorLost(after)
-            ),
-            Liveness::Alive => tracing::info!("robot {}: a supervisor is here", opts.id),
-            Liveness::Unknown => {}
+    let lost = || {
+        tracing::info!(
+            "robot {}: {}; idle, serving until stopped (--stay)",
+            opts.id,
+            Leave::SupervisorLost(after)
+        );
+    };
+    // Set while goals came from a supervisor whose heartbeat was never heard.
+    let mut unheard: Option<tokio::time::Instant> = None;
+    loop {
+        let timer = async {
+            match unheard {
+                Some(t) => tokio::time::sleep_until(t).await,
+                None => std::future::pending().await,
+            }
+        };
+        tokio::select! {
+            c = live.changed() => {
+                if c.is_err() {
+                    return std::future::pending().await;
+                }
+                let now = *live.borrow_and_update();
+                match now {
+                    Liveness::Lost if !opts.stay => return Leave::SupervisorLost(after),
+                    Liveness::Lost => lost(),
+                    Liveness::Alive => {
+                        unheard = None;
+                        tracing::info!("robot {}: a supervisor is here", opts.id);
+                    }
+                    Liveness::Unknown => {}
+                }
+            }
+            _ = goal_seen.notified() => {
+                // Discovery of the heartbeat topic may lag the goals' on a loaded host:
+                // a supervisor never heard gets UNHEARD_GRACE × lost_after.
+                if *live.borrow() == Liveness::Unknown && unheard.is_none() {
+                    unheard = Some(tokio::time::Instant::now() + after * UNHEARD_GRACE);
+                }
+            }
+            _ = timer => {
+                unheard = None;
+                if *live.borrow() == Liveness::Unknown {
+                    if !opts.stay {
+                        return Leave::SupervisorLost(after * UNHEARD_GRACE);
+                    }
+                    lost();
+                }
+            }
         }
     }
-    std::future::pending().await
 }
 
 /// Completes when the supervisor says its run is over (never with `opts.stay`, which says
@@ -395,6 +444,7 @@ async fn run_goal(server: Arc<Server>, handle: NewGoalHandle<ExecPlaceGoal>, sha
     if let Ok(mut s) = shared.stats.lock() {
         s.goals += 1;
     }
+    shared.goal_seen.notify_one();
     let Some(place) = shared.net.place_by_name(&goal.place) else {
         tracing::warn!("goal for unknown place `{}`: rejected", goal.place);
         let _ = server.reject_goal(handle).await;

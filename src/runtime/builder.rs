@@ -13,7 +13,7 @@ use super::action::Action;
 use super::agent::AgentMode;
 use super::builtin::Builtin;
 use super::engine::Engine;
-use super::event::Events;
+use super::event::{Events, Watcher};
 use super::handle::{Progress, RuntimeHandle};
 use super::journal::Journal;
 use super::supervisor::{PlaceSetup, Supervisor, SupervisorArgs};
@@ -40,6 +40,7 @@ pub struct RuntimeBuilder {
     grace: Duration,
     subscribe: bool,
     robots: Vec<Arc<str>>,
+    watcher: Option<Box<dyn Watcher>>,
 }
 
 impl std::fmt::Debug for RuntimeBuilder {
@@ -72,12 +73,18 @@ impl RuntimeBuilder {
             grace: Duration::from_secs(5),
             subscribe: true,
             robots: Vec::new(),
+            watcher: None,
         }
     }
 
     /// The net this run will execute.
     pub fn net(&self) -> &Net {
         &self.net
+    }
+
+    /// The policy this run will follow.
+    pub fn policy_value(&self) -> &Policy {
+        &self.policy
     }
 
     /// The role of place `p`, when it has one.
@@ -185,6 +192,13 @@ impl RuntimeBuilder {
     /// Stops as soon as the marking satisfies `p`.
     pub fn stop_when(mut self, p: Predicate) -> Self {
         self.stop.when = Some(p);
+        self
+    }
+
+    /// Follows every firing with `watcher` and emits the drifts it reports (see
+    /// [`Watcher`]).
+    pub fn watch(mut self, watcher: impl Watcher) -> Self {
+        self.watcher = Some(Box::new(watcher));
         self
     }
 
@@ -382,6 +396,7 @@ impl RuntimeBuilder {
             agent_mode: self.agent_mode,
             robots: self.robots,
             seed,
+            watcher: self.watcher,
         });
         Ok(RuntimeHandle {
             sup,

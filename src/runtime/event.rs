@@ -105,6 +105,66 @@ pub enum EventKind {
         /// Why.
         reason: StopReason,
     },
+    /// A monitored statistic left the model's prediction (emitted right after the firing
+    /// that showed it, by the run's [`Watcher`]: `plan-runner run --monitor`).
+    Drift(Drift),
+}
+
+/// What a [`Drift`] is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Monitored {
+    /// A transition's rate: firings per unit of enabled time.
+    Transition(TransitionId),
+    /// A place's time-average tokens.
+    Place(PlaceId),
+}
+
+/// A transition's recent rate, or a place's recent mean tokens, outside the model's
+/// prediction (see `gspn::conform::Monitor`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Drift {
+    /// The transition or place.
+    pub of: Monitored,
+    /// The observation over the monitor's window.
+    pub observed: f64,
+    /// The model's value.
+    pub predicted: f64,
+    /// The 95% interval of the observation.
+    pub interval: [f64; 2],
+    /// Its sample size: firings (a rate) or batches (mean tokens) in the window.
+    pub n: u64,
+    /// The test's p-value.
+    pub p_value: f64,
+}
+
+impl Drift {
+    /// One line for people: what drifted, by how much, and the model's value.
+    pub fn describe(&self, net: &crate::net::Net) -> String {
+        let (what, unit) = match self.of {
+            Monitored::Transition(t) => (
+                net.transition(t).name.as_str(),
+                "firings per unit of enabled time over the last",
+            ),
+            Monitored::Place(p) => (net.place(p).name.as_str(), "mean tokens over the last"),
+        };
+        let window = match self.of {
+            Monitored::Transition(_) => "firings",
+            Monitored::Place(_) => "batches",
+        };
+        format!(
+            "{what}: {:.4} {unit} {} {window}, 95% [{:.4}, {:.4}]; the net says {:.4} (p {:.1e})",
+            self.observed, self.n, self.interval[0], self.interval[1], self.predicted, self.p_value
+        )
+    }
+}
+
+/// Follows every firing as the supervisor makes it and reports drifts, which the supervisor
+/// emits as [`EventKind::Drift`] events right after the firing, into the journal and onto the
+/// bus (`gspn::conform::Monitor` is one). It runs inside the supervisor's turn: keep it cheap.
+pub trait Watcher: Send + 'static {
+    /// `t` fired at model time `time`, leaving `marking`: the drifts found now.
+    fn fired(&mut self, time: f64, t: TransitionId, marking: &[u32]) -> Vec<Drift>;
 }
 
 /// What a subscriber receives.

@@ -131,6 +131,10 @@ impl Names {
             EventKind::AgentSpawned { place, .. }
             | EventKind::ActionStarted { place, .. }
             | EventKind::ActionOutput { place, .. } => (Some(*place), None),
+            EventKind::Drift(d) => match d.of {
+                super::event::Monitored::Transition(t) => (None, Some(t)),
+                super::event::Monitored::Place(p) => (Some(p), None),
+            },
             EventKind::ActionEnded { place, outcome, .. } => (
                 Some(*place),
                 match outcome {

@@ -24,7 +24,7 @@ use super::action::{ActionContext, ActionDone, CancelSource, CancelToken, Output
 use super::agent::{Agent, AgentMode, AgentState, Run, Update};
 use super::clock::Clock;
 use super::engine::{Engine, Firing, Ready};
-use super::event::{Event, EventKind};
+use super::event::{Event, EventKind, Watcher};
 use super::handle::{Progress, Summary};
 use super::id::AgentId;
 use super::journal::Journal;
@@ -84,6 +84,7 @@ pub struct Supervisor {
     output_rx: Option<mpsc::UnboundedReceiver<OutputLine>>,
     robots: Vec<Arc<str>>,
     seed: u64,
+    watcher: Option<Box<dyn Watcher>>,
 }
 
 impl std::fmt::Debug for Supervisor {
@@ -112,6 +113,8 @@ pub(crate) struct SupervisorArgs {
     pub(crate) robots: Vec<Arc<str>>,
     /// The seed of the run (actions see it).
     pub(crate) seed: u64,
+    /// Follows every firing (the live monitor).
+    pub(crate) watcher: Option<Box<dyn Watcher>>,
 }
 
 impl Supervisor {
@@ -148,6 +151,7 @@ impl Supervisor {
             output_rx: Some(output_rx),
             robots: args.robots,
             seed: args.seed,
+            watcher: args.watcher,
         };
         Supervisor::spawn_with_mailbox(sup, mailbox::unbounded())
     }
@@ -325,6 +329,12 @@ impl Supervisor {
                 marking: self.eng.marking().clone(),
                 robots: buf.robots.clone(),
             });
+        }
+        if let Some(w) = &mut self.watcher {
+            let now = self.clock.now();
+            for d in w.fired(now, t, self.eng.marking().as_slice()) {
+                self.sink.emit(now, EventKind::Drift(d));
+            }
         }
         for &id in &buf.spawned {
             let place = self.eng.agent(id).expect("a live agent").place;

@@ -118,6 +118,27 @@ pub(crate) async fn sim_state(
     Json(state.sim_json(q.trace.unwrap_or(200)))
 }
 
+/// Query of `GET /api/sim/wait`.
+#[derive(Debug, Deserialize)]
+pub(crate) struct WaitQuery {
+    /// The version the page shows.
+    after: u64,
+}
+
+/// Longest a `/api/sim/wait` request is held open.
+const WAIT_HELD: std::time::Duration = std::time::Duration::from_secs(20);
+
+/// `GET /api/sim/wait?after=V`: the state once its version is not `V` (or after
+/// [`WAIT_HELD`] unchanged).
+pub(crate) async fn sim_wait(
+    State(state): State<WebState>,
+    Query(q): Query<WaitQuery>,
+) -> Json<Value> {
+    let mut rx = state.inner.sim_version.subscribe();
+    let _ = tokio::time::timeout(WAIT_HELD, rx.wait_for(|&v| v != q.after)).await;
+    Json(state.sim_json(200))
+}
+
 /// Body of `POST /api/sim/reset`.
 #[derive(Debug, Default, Deserialize)]
 pub(crate) struct ResetBody {
@@ -132,6 +153,7 @@ pub(crate) async fn sim_reset(
 ) -> Json<Value> {
     let seed = body.and_then(|Json(b)| b.seed);
     state.session().reset(seed);
+    state.sim_changed();
     Json(state.sim_json(200))
 }
 
@@ -158,6 +180,7 @@ pub(crate) async fn sim_step(
         );
     }
     let result = state.session().step(n);
+    state.sim_changed();
     match result {
         Ok(fired) => {
             let mut v = state.sim_json(200);
@@ -178,6 +201,7 @@ pub(crate) struct FireBody {
 /// `POST /api/sim/fire {transition}`.
 pub(crate) async fn sim_fire(State(state): State<WebState>, Json(b): Json<FireBody>) -> Response {
     let result = state.session().fire(&b.transition);
+    state.sim_changed();
     match result {
         Ok(()) => Json(state.sim_json(200)).into_response(),
         Err(e) => session_error(e),

@@ -195,25 +195,18 @@ mod tests {
                 "{bad}"
             );
         }
-        // Bound to every interface (`--allow-remote`): IP literals, never names.
+        // Bound to every interface (`--allow-remote`): IP literals, never names. Unknown
+        // address: loopback names on any port.
         let any = Bound::At("0.0.0.0:8080".parse().unwrap());
-        assert_eq!(
-            status(any, Method::GET, &[("host", "192.168.1.5:8080")]),
-            None
-        );
-        assert_eq!(
-            status(any, Method::GET, &[("host", "rebind.example:8080")]),
-            Some(421)
-        );
-        // Unknown address: loopback names on any port.
-        assert_eq!(
-            status(Bound::Unknown, Method::GET, &[("host", "localhost:3000")]),
-            None
-        );
-        assert_eq!(
-            status(Bound::Unknown, Method::GET, &[("host", "example.org")]),
-            Some(421)
-        );
+        for (bound, host, want) in [
+            (any, "192.168.1.5:8080", None),
+            (any, "rebind.example:8080", Some(421)),
+            (Bound::Unknown, "localhost:3000", None),
+            (Bound::Unknown, "example.org", Some(421)),
+        ] {
+            let got = status(bound, Method::GET, &[("host", host)]);
+            assert_eq!(got, want, "{bound:?} {host}");
+        }
     }
 
     #[test]
@@ -236,14 +229,13 @@ mod tests {
             );
         }
         // Without a Host, the origin itself must pass the Host check.
-        assert_eq!(
-            status(lo, Method::GET, &[("origin", "http://localhost:8080")]),
-            None
-        );
-        assert_eq!(
-            status(lo, Method::GET, &[("origin", "http://evil.example:8080")]),
-            Some(403)
-        );
+        for (origin, want) in [
+            ("http://localhost:8080", None),
+            ("http://evil.example:8080", Some(403)),
+        ] {
+            let got = status(lo, Method::GET, &[("origin", origin)]);
+            assert_eq!(got, want, "{origin}");
+        }
     }
 
     #[test]

@@ -313,6 +313,7 @@ fn describe(net: &Net, kind: &EventKind) -> String {
         EventKind::Error { message } => format!("error: {message}"),
         EventKind::Warning { message } => format!("warning: {message}"),
         EventKind::Stopped { reason } => format!("stopped: {reason}"),
+        EventKind::Drift(d) => format!("drift: {}", d.describe(net)),
     }
 }
 

@@ -14,13 +14,16 @@
 
 use std::sync::Arc;
 
+use kameo::actor::ActorRef;
+use kameo::message::Message;
 use tokio::sync::oneshot;
 
 use super::WorldHandle;
+use super::actor::World;
 use super::actor::messages::{Goto, Hold, Turn};
 use super::map::Map;
 use super::program::{ProgramError, Step};
-use crate::net::Timing;
+use crate::net::{Timing, TransitionId};
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
 /// A built-in robot program bound to a world.
@@ -45,11 +48,35 @@ impl SimAction {
     }
 }
 
-/// Awaits `rx` unless the run is being stopped first.
-async fn or_cancel<T>(ctx: &ActionContext, rx: oneshot::Receiver<T>) -> Option<T> {
+/// The place's exponential outputs with their rates: what a `measure` or `wait` draws from.
+fn exponential_outputs(ctx: &ActionContext) -> Vec<(TransitionId, f64)> {
+    ctx.outputs()
+        .into_iter()
+        .filter_map(|t| match ctx.net.transition(t).timing {
+            Timing::Exponential { rate, .. } => Some((t, rate)),
+            Timing::Immediate { .. } => None,
+        })
+        .collect()
+}
+
+/// Sends the world `make(reply)` and awaits the reply; `Err` is the action's outcome when the
+/// world is gone or the run is being stopped first.
+async fn ask<M, T>(
+    world: &ActorRef<World>,
+    ctx: &ActionContext,
+    make: impl FnOnce(oneshot::Sender<T>) -> M,
+) -> Result<T, Outcome>
+where
+    World: Message<M>,
+    M: Send + 'static,
+{
+    let (reply, rx) = oneshot::channel();
+    if world.tell(make(reply)).try_send().is_err() {
+        return Err(Outcome::Failed("the world is gone".into()));
+    }
     tokio::select! {
-        r = rx => r.ok(),
-        _ = ctx.cancel.cancelled() => None,
+        r = rx => r.map_err(|_| Outcome::Cancelled),
+        _ = ctx.cancel.cancelled() => Err(Outcome::Cancelled),
     }
 }
 
@@ -69,44 +96,31 @@ impl Action for SimAction {
             for step in steps.iter() {
                 outcome = match *step {
                     Step::Goto(location) => {
-                        let (reply, rx) = oneshot::channel();
-                        let msg = Goto {
-                            robot: Arc::clone(&robot),
-                            agent: ctx.agent.0,
+                        let (robot, agent) = (Arc::clone(&robot), ctx.agent.0);
+                        let goto = |reply| Goto {
+                            robot,
+                            agent,
                             location,
                             reply,
                         };
-                        if actor.tell(msg).try_send().is_err() {
-                            return Outcome::Failed("the world is gone".into());
-                        }
-                        match or_cancel(&ctx, rx).await {
-                            None => return Outcome::Cancelled,
-                            Some(Err(e)) => return Outcome::Failed(e.to_string()),
-                            Some(Ok(())) => Outcome::Decide,
+                        match ask(actor, &ctx, goto).await {
+                            Err(outcome) => return outcome,
+                            Ok(Err(e)) => return Outcome::Failed(e.to_string()),
+                            Ok(Ok(())) => Outcome::Decide,
                         }
                     }
                     Step::Measure(seconds) | Step::Wait(seconds) => {
-                        let outputs = ctx
-                            .outputs()
-                            .into_iter()
-                            .filter_map(|t| match ctx.net.transition(t).timing {
-                                Timing::Exponential { rate, .. } => Some((t, rate)),
-                                Timing::Immediate { .. } => None,
-                            })
-                            .collect();
-                        let (reply, rx) = oneshot::channel();
-                        let msg = Hold {
-                            robot: Arc::clone(&robot),
-                            agent: ctx.agent.0,
+                        let (robot, agent) = (Arc::clone(&robot), ctx.agent.0);
+                        let hold = |reply| Hold {
+                            robot,
+                            agent,
                             seconds,
-                            outputs,
+                            outputs: exponential_outputs(&ctx),
                             reply,
                         };
-                        if actor.tell(msg).try_send().is_err() {
-                            return Outcome::Failed("the world is gone".into());
-                        }
-                        let Some((secs, pick)) = or_cancel(&ctx, rx).await else {
-                            return Outcome::Cancelled;
+                        let (secs, pick) = match ask(actor, &ctx, hold).await {
+                            Ok(r) => r,
+                            Err(outcome) => return outcome,
                         };
                         let sleep =
                             tokio::time::sleep(crate::limits::duration(secs * world.scale()));
@@ -117,17 +131,10 @@ impl Action for SimAction {
                         pick.map_or(Outcome::Decide, Outcome::Fire)
                     }
                     Step::Decide => {
-                        let (reply, rx) = oneshot::channel();
-                        let msg = Turn {
-                            robot: Arc::clone(&robot),
-                            reply,
-                        };
-                        if actor.tell(msg).try_send().is_err() {
-                            return Outcome::Failed("the world is gone".into());
-                        }
-                        match or_cancel(&ctx, rx).await {
-                            None => return Outcome::Cancelled,
-                            Some(()) => Outcome::Decide,
+                        let robot = Arc::clone(&robot);
+                        match ask(actor, &ctx, |reply| Turn { robot, reply }).await {
+                            Err(outcome) => return outcome,
+                            Ok(()) => Outcome::Decide,
                         }
                     }
                 };

@@ -480,10 +480,7 @@ impl Actor for World {
         _: WeakActorRef<Self>,
         mailbox_rx: &mut MailboxReceiver<Self>,
     ) -> Result<Option<Signal<Self>>, Self::Error> {
-        loop {
-            if !self.active {
-                return Ok(mailbox_rx.recv().await);
-            }
+        while self.active {
             tokio::select! {
                 biased;
                 sig = mailbox_rx.recv() => return Ok(sig),
@@ -493,5 +490,6 @@ impl Actor for World {
                 }
             }
         }
+        Ok(mailbox_rx.recv().await)
     }
 }

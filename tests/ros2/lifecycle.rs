@@ -150,7 +150,15 @@ async fn robots_leave_when_the_supervisor_dies_and_cancel_their_running_goals() 
     let r2 = robot_env(dir.path(), "r2", plan, d, &slow, &[GOAL_LOG]);
     let r3 = robot_env(dir.path(), "r3", plan, d, &stay, &[GOAL_LOG]);
     let mut sup = supervisor(dir.path(), d, &[]);
+    // Each robot runs a goal and has heard the supervisor's heartbeat (a robot that never
+    // heard it, e.g. on a loaded host, waits 5 × lost_after instead).
     for r in [&r1, &r2, &r3] {
+        assert!(
+            wait_for_log(r, "a supervisor is here", Duration::from_secs(60)).await,
+            "{}: {}",
+            r.name,
+            r.log()
+        );
         assert!(
             wait_for_log(r, ") started: ", Duration::from_secs(60)).await,
             "{}: {}\nsupervisor: {}",

@@ -10,6 +10,9 @@ mod ros2_support;
 #[path = "rtps.rs"]
 mod ros2_rtps;
 
+#[path = "hub.rs"]
+mod ros2_hub;
+
 mod concurrent_goals;
 mod ctrl_c_while_waiting_for_robots;
 mod interop;

@@ -21,6 +21,7 @@ use std::path::{Path, PathBuf};
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 
+use crate::ros2_hub::{Hub, Impairment, open_tap};
 use gspn::io::{Format, write_net};
 use gspn::net::{NetBuilder, Servers};
 use support::{Proc, finish, terminate, udp_sockets, wait_for_log};
@@ -47,33 +48,40 @@ pub struct Host {
     pub addr: Ipv4Addr,
 }
 
-/// Network namespaces for one test: a bridge namespace and `hosts` host namespaces, each
-/// with a veth pair to the bridge; deleted (with their interfaces) when dropped.
+/// Network namespaces for one test: `hosts` host namespaces joined by a bridge (in a
+/// namespace of its own, through veth pairs) or by the user-space [`Hub`] (through TAP
+/// devices); deleted, with their interfaces, when dropped.
 pub struct Lab {
-    bridge: String,
+    bridge: Option<String>,
     pub hosts: Vec<Host>,
+    pub hub: Option<Hub>,
+}
+
+/// Deletes namespace `ns` if it exists (left over from a killed run of the same pid).
+fn del_ns(ns: &str) {
+    let _ = std::process::Command::new("ip")
+        .args(["netns", "del", ns])
+        .output();
 }
 
 impl Lab {
-    /// Hosts `h0 … h{n-1}` at 10.77.0.10, .11, …; `tag` keeps namespaces of tests in
-    /// parallel (and of other test processes) apart.
+    /// Hosts `h0 … h{n-1}` at 10.77.0.10, .11, … on a bridge; `tag` keeps namespaces of
+    /// tests in parallel (and of other test processes) apart.
     pub fn new(tag: &str, n: usize) -> Lab {
         let base = format!("gspn{}{tag}", std::process::id());
         let bridge = format!("{base}-br");
-        // Left over from a killed run of the same pid: remove first.
-        let _ = std::process::Command::new("ip")
-            .args(["netns", "del", &bridge])
-            .output();
+        del_ns(&bridge);
         ip(&["netns", "add", &bridge]);
         let mut lab = Lab {
-            bridge,
+            bridge: Some(bridge.clone()),
             hosts: Vec::new(),
+            hub: None,
         };
-        ip(&["-n", &lab.bridge, "link", "add", "br0", "type", "bridge"]);
+        ip(&["-n", &bridge, "link", "add", "br0", "type", "bridge"]);
         // No IGMP snooping: the bridge floods multicast (DDS discovery) to every port.
         ip(&[
             "-n",
-            &lab.bridge,
+            &bridge,
             "link",
             "set",
             "br0",
@@ -82,47 +90,43 @@ impl Lab {
             "mcast_snooping",
             "0",
         ]);
-        ip(&["-n", &lab.bridge, "link", "set", "br0", "up"]);
+        ip(&["-n", &bridge, "link", "set", "br0", "up"]);
         for k in 0..n {
             let ns = format!("{base}-h{k}");
-            let _ = std::process::Command::new("ip")
-                .args(["netns", "del", &ns])
-                .output();
+            del_ns(&ns);
             ip(&["netns", "add", &ns]);
-            let addr = Ipv4Addr::new(10, 77, 0, 10 + k as u8);
             let port = format!("p{k}");
             ip(&[
-                "link",
-                "add",
-                "eth0",
-                "netns",
-                &ns,
-                "type",
-                "veth",
-                "peer",
-                "name",
-                &port,
-                "netns",
-                &lab.bridge,
+                "link", "add", "eth0", "netns", &ns, "type", "veth", "peer", "name", &port,
+                "netns", &bridge,
             ]);
-            ip(&[
-                "-n",
-                &lab.bridge,
-                "link",
-                "set",
-                &port,
-                "master",
-                "br0",
-                "up",
-            ]);
-            let cidr = format!("{addr}/24");
-            ip(&["-n", &ns, "addr", "add", &cidr, "dev", "eth0"]);
-            ip(&["-n", &ns, "link", "set", "eth0", "up"]);
-            ip(&["-n", &ns, "link", "set", "lo", "up"]);
-            // Multicast (SPDP discovery to 239.255.0.1) leaves through eth0.
-            ip(&["-n", &ns, "route", "add", "224.0.0.0/4", "dev", "eth0"]);
-            lab.hosts.push(Host { ns, addr });
+            ip(&["-n", &bridge, "link", "set", &port, "master", "br0", "up"]);
+            lab.hosts.push(configure_host(ns, k));
         }
+        lab
+    }
+
+    /// Hosts `h0 … h{n-1}` at 10.77.0.10, .11, … joined by a [`Hub`] that impairs every
+    /// frame with `imp`.
+    pub fn with_hub(tag: &str, n: usize, imp: Impairment) -> Lab {
+        let base = format!("gspn{}{tag}", std::process::id());
+        let mut lab = Lab {
+            bridge: None,
+            hosts: Vec::new(),
+            hub: None,
+        };
+        let mut taps = Vec::new();
+        for k in 0..n {
+            let ns = format!("{base}-h{k}");
+            del_ns(&ns);
+            ip(&["netns", "add", &ns]);
+            let tap = format!("g{}{tag}t{k}", std::process::id() % 100_000);
+            taps.push(open_tap(&tap));
+            ip(&["link", "set", &tap, "netns", &ns]);
+            ip(&["-n", &ns, "link", "set", &tap, "name", "eth0"]);
+            lab.hosts.push(configure_host(ns, k));
+        }
+        lab.hub = Some(Hub::start(taps, imp));
         lab
     }
 
@@ -132,31 +136,40 @@ impl Lab {
         ip(&["-n", &self.hosts[k].ns, "link", "set", "eth0", state]);
         if up {
             // Bringing the link up again drops its routes: put the multicast one back.
-            let _ = std::process::Command::new("ip")
-                .args([
-                    "-n",
-                    &self.hosts[k].ns,
-                    "route",
-                    "replace",
-                    "224.0.0.0/4",
-                    "dev",
-                    "eth0",
-                ])
-                .output();
+            ip(&[
+                "-n",
+                &self.hosts[k].ns,
+                "route",
+                "replace",
+                "224.0.0.0/4",
+                "dev",
+                "eth0",
+            ]);
         }
     }
 }
 
+/// Host `k` in namespace `ns`, whose interface `eth0` exists: its address 10.77.0.(10+k),
+/// the link up, and multicast (SPDP discovery to 239.255.0.1) routed through it.
+fn configure_host(ns: String, k: usize) -> Host {
+    let addr = Ipv4Addr::new(10, 77, 0, 10 + k as u8);
+    let cidr = format!("{addr}/24");
+    ip(&["-n", &ns, "addr", "add", &cidr, "dev", "eth0"]);
+    ip(&["-n", &ns, "link", "set", "eth0", "up"]);
+    ip(&["-n", &ns, "link", "set", "lo", "up"]);
+    ip(&["-n", &ns, "route", "add", "224.0.0.0/4", "dev", "eth0"]);
+    Host { ns, addr }
+}
+
 impl Drop for Lab {
     fn drop(&mut self) {
+        self.hub = None;
         for h in &self.hosts {
-            let _ = std::process::Command::new("ip")
-                .args(["netns", "del", &h.ns])
-                .output();
+            del_ns(&h.ns);
         }
-        let _ = std::process::Command::new("ip")
-            .args(["netns", "del", &self.bridge])
-            .output();
+        if let Some(b) = &self.bridge {
+            del_ns(b);
+        }
     }
 }
 
@@ -231,6 +244,13 @@ fn args(v: &[&str]) -> Vec<String> {
     v.iter().map(|s| s.to_string()).collect()
 }
 
+/// `plan-runner robot --id ID --plan PLAN --ros2-domain 0 EXTRA…` on `host`.
+fn robot_on(host: &Host, dir: &Path, id: &str, plan: &str, extra: &[&str]) -> Proc {
+    let mut a = args(&["robot", "--id", id, "--plan", plan, "--ros2-domain", "0"]);
+    a.extend(args(extra));
+    spawn_in(host, dir, id, &a, &[])
+}
+
 /// The journal's firings: (transition, robots).
 fn firings(journal: &Path) -> Vec<(String, Vec<String>)> {
     std::fs::read_to_string(journal)
@@ -268,8 +288,10 @@ async fn sixteen_robots_on_four_hosts_run_the_fleet_plan() {
     for k in 1..=16 {
         let host = &lab.hosts[1 + (k - 1) % 4];
         let id = format!("r{k}");
-        let a = args(&["robot", "--id", &id, "--plan", &plan_s, "--ros2-domain", d]);
-        robots.push((1 + (k - 1) % 4, spawn_in(host, dir.path(), &id, &a, &[])));
+        robots.push((
+            1 + (k - 1) % 4,
+            robot_on(host, dir.path(), &id, &plan_s, &[]),
+        ));
     }
     let journal = dir.path().join("journal.jsonl");
     let a = args(&[
@@ -339,17 +361,13 @@ async fn a_host_cut_off_for_5_s_is_lost_repaired_and_serves_again() {
     for k in 1..=4 {
         let id = format!("r{k}");
         // --stay: a robot cut off from its supervisor keeps serving for when it is back.
-        let a = args(&[
-            "robot",
-            "--id",
+        robots.push(robot_on(
+            &lab.hosts[k],
+            dir.path(),
             &id,
-            "--plan",
             &plan_s,
-            "--ros2-domain",
-            "0",
-            "--stay",
-        ]);
-        robots.push(spawn_in(&lab.hosts[k], dir.path(), &id, &a, &[]));
+            &["--stay"],
+        ));
     }
     let journal = dir.path().join("journal.jsonl");
     let a = args(&[
@@ -393,7 +411,9 @@ async fn a_host_cut_off_for_5_s_is_lost_repaired_and_serves_again() {
     assert_eq!(code, Some(0), "{out}\n{log}");
     let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
     assert_eq!(summary["stopped"], "time_limit", "{summary}");
-    assert!(lost >= Duration::from_secs(1), "lost after {lost:?}");
+    // Lost `lost_after` (1 s) after its last heartbeat, which came at most one heartbeat
+    // period (0.1 s) before the link went down.
+    assert!(lost >= Duration::from_millis(900), "lost after {lost:?}");
 
     let names = transition_names(dir.path());
     let fired: Vec<(String, Vec<String>)> = firings(&journal)
@@ -435,4 +455,97 @@ async fn a_host_cut_off_for_5_s_is_lost_repaired_and_serves_again() {
         of_r2.len(),
         of_r2.len() - lose - 2
     );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn over_lossy_slow_links_every_firing_reaches_every_robot_once_in_order() {
+    const N: usize = 100;
+    let dir = tempfile::tempdir().unwrap();
+    let plan = write_fleet_plan(dir.path(), 4, 0.02, &format!("max_firings = {N}"));
+    // 10% of the frames lost and 50 ms of delay on every delivery, on every link.
+    let imp = Impairment {
+        loss: 0.10,
+        delay: Duration::from_millis(50),
+        seed: 17,
+    };
+    let lab = Lab::with_hub("c", 5, imp);
+    let plan_s = plan.to_string_lossy().into_owned();
+    let mut robots = Vec::new();
+    for k in 1..=4 {
+        let id = format!("r{k}");
+        let lat = dir.path().join(format!("latency_{id}.txt"));
+        // --stay: a robot that hears "over" before the last firings' repairs keeps
+        // receiving them.
+        let extra = ["--stay", "--latency-log", lat.to_str().unwrap()];
+        let r = robot_on(&lab.hosts[k], dir.path(), &id, &plan_s, &extra);
+        robots.push((lat, r));
+    }
+    // The 4 robots subscribe to /gspn/firings: no firing before they are all matched.
+    let a = args(&[
+        "run",
+        &plan_s,
+        "--json",
+        "--ros2-domain",
+        "0",
+        "--ros2-wait-subscribers",
+        "4",
+        "--ros2-linger",
+        "20",
+    ]);
+    let sup = spawn_in(&lab.hosts[0], dir.path(), "supervisor", &a, &[]);
+    let started = Instant::now();
+    let log = sup.log.clone();
+    let (code, out) = finish(sup, Duration::from_secs(240)).await;
+    let took = started.elapsed();
+    let log = std::fs::read_to_string(log).unwrap();
+    assert_eq!(code, Some(0), "{out}\n{log}");
+    let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
+    assert_eq!(summary["firings"], N as u64);
+
+    let mut latencies = Vec::new();
+    for (lat, r) in robots {
+        // Every firing, once, in order: seq 1..=N (waiting, bounded, for late repairs).
+        let end = Instant::now() + Duration::from_secs(30);
+        let lines = loop {
+            let text = std::fs::read_to_string(&lat).unwrap_or_default();
+            let lines: Vec<(u64, i128, i128)> = text
+                .lines()
+                .map(|l| {
+                    let f: Vec<&str> = l.split_whitespace().collect();
+                    (
+                        f[0].parse().unwrap(),
+                        f[1].parse().unwrap(),
+                        f[2].parse().unwrap(),
+                    )
+                })
+                .collect();
+            if lines.len() >= N || Instant::now() > end {
+                break lines;
+            }
+            tokio::time::sleep(Duration::from_millis(100)).await;
+        };
+        let seqs: Vec<u64> = lines.iter().map(|l| l.0).collect();
+        assert_eq!(seqs, (1..=N as u64).collect::<Vec<_>>(), "{}", r.name);
+        latencies.extend(lines.iter().map(|&(_, sent, got)| got - sent));
+        terminate(r, Duration::from_secs(10)).await;
+    }
+    latencies.sort_unstable();
+    let ms = |q: f64| latencies[((latencies.len() - 1) as f64 * q) as usize] as f64 / 1e6;
+    let hub = lab.hub.as_ref().unwrap();
+    let (sent, lost) = (
+        hub.stats
+            .delivered
+            .load(std::sync::atomic::Ordering::Relaxed),
+        hub.stats.dropped.load(std::sync::atomic::Ordering::Relaxed),
+    );
+    println!(
+        "netns (c): 4 robots on 4 hosts, 10% loss + 50 ms delay per delivered frame ({lost} of {} frames dropped): {N} firings in {took:?}; firing → robot latency p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms",
+        sent + lost,
+        ms(0.5),
+        ms(0.99),
+        ms(1.0)
+    );
+    // The impairment was in force: no firing reached a robot in less than the delay.
+    assert!(ms(0.0) >= 50.0, "fastest firing {:.1} ms", ms(0.0));
+    assert!(lost > 0);
 }

@@ -9,6 +9,7 @@ mod actor_agents_at_scale;
 mod agent_identity;
 mod agents_match_tokens;
 mod builtin_actions;
+mod conformance;
 mod failures;
 mod golden_trace;
 mod matches_analysis;

@@ -5,6 +5,8 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use gspn::conform::Monitored;
+
 use gspn::conform::{
     Options, Predictions, Report, RowKind, Trace, Verdict, compare, fit, observe,
     steady_predictions,
@@ -181,13 +183,20 @@ fn transient_from_a_trace_point_matches_monte_carlo_from_that_marking() {
     }
 }
 
-/// Drifts a monitor reports on a trace.
-fn drifts(model: &Net, trace: &Trace) -> Vec<gspn::conform::Drift> {
-    let mut m = gspn::conform::Monitor::new(model, trace.initial.clone(), Default::default());
+/// Drifts a monitor (of transitions and, against the steady state, places) reports on a
+/// trace, with their times.
+fn drifts(model: &Net, trace: &Trace) -> Vec<(f64, gspn::conform::Drift)> {
+    let steady = gspn::conform::steady_predictions(model, None, 10_000).unwrap();
+    let mut m = gspn::conform::Monitor::new(model, trace.initial.clone(), Default::default())
+        .with_mean_tokens(steady.mean_tokens.unwrap());
     trace
         .steps
         .iter()
-        .filter_map(|s| m.fired(s.time, s.transition, &s.marking))
+        .flat_map(|s| {
+            m.fired(s.time, s.transition, &s.marking)
+                .into_iter()
+                .map(|d| (s.time, d))
+        })
         .collect()
 }
 
@@ -220,12 +229,28 @@ fn the_monitor_raises_drift_when_a_duration_changes_half_way_and_not_otherwise()
             initial: first.initial,
             steps,
             end: 1500.0,
+            holdings: Vec::new(),
         }
     };
-    let d = drifts(&model, &trace);
-    assert_eq!(d.len(), 1, "{d:?}");
-    assert_eq!(d[0].transition, "T3");
-    assert!(d[0].time > 750.0 && d[0].time < 900.0, "{:?}", d[0]);
+    let all = drifts(&model, &trace);
+    let of = |m: Monitored| all.iter().filter(|(_, d)| d.of == m).collect::<Vec<_>>();
+    let t3 = of(Monitored::Transition(
+        model.transition_by_name("T3").unwrap(),
+    ));
+    assert_eq!(t3.len(), 1, "{all:?}");
+    let (time, d) = t3[0];
+    assert!(*time > 750.0 && *time < 900.0, "{all:?}");
     // The window still holds firings from before the change: the rate is between 2/3 and 2.
-    assert!(d[0].observed < 1.6 && d[0].interval[1] < 2.0, "{:?}", d[0]);
+    assert!(d.observed < 1.6 && d.interval[1] < 2.0, "{d:?}");
+    // The places follow: tokens pile up before the slower T3 (P3: 4/7 -> 24/19, P1 down).
+    let p3 = of(Monitored::Place(model.place_by_name("P3").unwrap()));
+    assert_eq!(p3.len(), 1, "{all:?}");
+    assert!(p3[0].0 > 750.0 && p3[0].1.observed > 4.0 / 7.0, "{all:?}");
+    assert!((p3[0].1.predicted - 4.0 / 7.0).abs() < 1e-9, "{all:?}");
+    // Nothing else drifts but P1 (the other side of the same shift), and nothing before 750.
+    for (time, d) in &all {
+        assert!(*time > 750.0, "{all:?}");
+        let is_p1 = d.of == Monitored::Place(model.place_by_name("P1").unwrap());
+        assert!(is_p1 || d.of == t3[0].1.of || d.of == p3[0].1.of, "{all:?}");
+    }
 }

@@ -66,6 +66,17 @@ pub(crate) async fn http_get(addr: SocketAddr, path: &str) -> Value {
     serde_json::from_str(&body).unwrap()
 }
 
+/// Clicks `analyse` and waits for the panel's result.
+pub(crate) async fn analyse_on_page(b: &Browser) {
+    b.click("#analyze").await;
+    b.wait_js(
+        "return document.getElementById('analysis').textContent.includes('reachable markings');",
+        WAIT,
+        "the analysis",
+    )
+    .await;
+}
+
 /// Opens the page and waits until its first drawing is on the screen.
 pub(crate) async fn open(b: &Browser, addr: SocketAddr) {
     b.client.goto(&format!("http://{addr}/")).await.unwrap();
@@ -217,13 +228,7 @@ async fn five_steps_in_the_browser_give_the_marking_of_plan_runner_simulate() {
     b.screenshot(&screenshot_path("token-game.png")).await;
 
     // The analysis panel: the library's counts, of the bare net (no plan).
-    b.click("#analyze").await;
-    b.wait_js(
-        "return document.getElementById('analysis').textContent.includes('reachable markings');",
-        WAIT,
-        "the analysis",
-    )
-    .await;
+    analyse_on_page(&b).await;
     let ss = StateSpace::build(&net, &Options::default()).unwrap();
     let text = b.text("#analysis").await;
     assert!(
@@ -279,6 +284,8 @@ async fn the_page_loads_everything_from_its_own_server() {
         "analysis.js",
         "live.js",
         "follow.js",
+        "share.js",
+        "navigate.js",
         "app.js",
         "api/net",
     ] {
@@ -475,6 +482,62 @@ async fn a_journal_plays_back_on_the_time_slider() {
         marking_of(&net, &page_marking(&b).await),
         summary.marking.as_slice()
     );
+    // The slider is in model seconds: its end is the last firing's time, a time between two
+    // firings shows the earlier one.
+    let max = b
+        .js(
+            "return Number(document.getElementById('slider').max);",
+            vec![],
+        )
+        .await;
+    assert_eq!(max.as_f64().unwrap(), frames[12].time);
+    let between = (frames[3].time + frames[4].time) / 2.0;
+    b.js(
+        "const s = document.getElementById('slider'); s.value = String(arguments[0]);\
+         s.dispatchEvent(new Event('input'));",
+        vec![json!(between)],
+    )
+    .await;
+    assert_eq!(b.text("#frame").await, "3/12");
+    assert_eq!(
+        b.text("#timeline-time").await,
+        format!("t = {} s", frames[3].time)
+    );
+    // Keys: → and ← step one firing; the trace marks the current one.
+    let key = |k: &'static str| {
+        format!(
+            "document.body.dispatchEvent(new KeyboardEvent('keydown', {{key: '{k}', bubbles: true}}));"
+        )
+    };
+    b.js(&(key("ArrowRight") + &key("ArrowRight")), vec![])
+        .await;
+    assert_eq!(b.text("#frame").await, "5/12");
+    b.js(&key("ArrowLeft"), vec![]).await;
+    assert_eq!(b.text("#frame").await, "4/12");
+    assert_eq!(b.text("#trace li.current .seq").await, "4");
+    // Play at 1 firing a second, then at 60: the new speed applies while playing; with
+    // `loop` it starts again after the end.
+    b.js(
+        "const s = document.getElementById('speed'); s.value = '1'; s.dispatchEvent(new Event('input'));\
+         document.getElementById('loop').checked = true;",
+        vec![],
+    )
+    .await;
+    b.js(&key(" "), vec![]).await;
+    b.js(
+        "const s = document.getElementById('speed'); s.value = '60'; s.dispatchEvent(new Event('input'));",
+        vec![],
+    )
+    .await;
+    b.wait_js(
+        "return window.gspnReplay.at() < 4 && window.gspnReplay.playing();",
+        Duration::from_secs(10),
+        "the replay to loop round at the new speed",
+    )
+    .await;
+    b.js(&key(" "), vec![]).await;
+    let playing = b.js("return window.gspnReplay.playing();", vec![]).await;
+    assert_eq!(playing, json!(false));
     b.screenshot(&screenshot_path("replay.png")).await;
     b.close().await;
     server.abort();

@@ -11,4 +11,6 @@ mod follow;
 mod layout;
 mod live;
 mod look;
+mod navigate;
 mod security;
+mod share;

@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use gspn::conform::{
-    Fitted, Monitor, Options, Predictions, Report, Trace, Verdict, compare, fit, marking_before,
-    observe, steady_predictions,
+    Fitted, Monitor, Options, Predictions, Report, RowKind, Trace, Verdict, compare, fit,
+    marking_before, observe, steady_predictions,
 };
 use gspn::io::{Format, write_net};
 use gspn::net::Net;
@@ -186,7 +186,7 @@ fn print_report(r: &Report) {
         .unwrap_or(4)
         .max(4);
     println!(
-        "{:<11} {:<width$} {:>10} {:>23} {:>10} {:>7} {:>9}  verdict",
+        "{:<13} {:<width$} {:>10} {:>23} {:>10} {:>7} {:>9}  verdict",
         "row", "item", "observed", "95% interval", "predicted", "n", "p"
     );
     for x in &r.rows {
@@ -199,7 +199,7 @@ fn print_report(r: &Report) {
             .map_or("-".into(), |[lo, hi]| format!("[{}, {}]", num(lo), num(hi)));
         let verdict = match x.verdict {
             Verdict::Consistent => "consistent",
-            Verdict::Diverges if x.kind == gspn::conform::RowKind::Shape => {
+            Verdict::Diverges if matches!(x.kind, RowKind::Shape | RowKind::HoldingShape) => {
                 "diverges: not exponential"
             }
             Verdict::Diverges => "diverges",
@@ -207,7 +207,7 @@ fn print_report(r: &Report) {
             Verdict::NoPrediction => "no prediction",
         };
         println!(
-            "{:<11} {:<width$} {:>10} {:>23} {:>10} {:>7} {:>9}  {verdict}{}",
+            "{:<13} {:<width$} {:>10} {:>23} {:>10} {:>7} {:>9}  {verdict}{}",
             kind,
             x.item,
             num(x.observed),
@@ -283,49 +283,45 @@ pub(crate) fn start_from(spec: &str, net: &Net) -> anyhow::Result<Net> {
     Ok(started)
 }
 
-/// `run --monitor`: feeds the run's firings to a [`gspn::conform::Monitor`] and prints each
-/// drift on stderr; the number of drifts. When the monitor falls behind the event bus it
-/// starts over from the next firing (a warning says so).
-pub(crate) async fn monitor(net: std::sync::Arc<Net>, mut events: Events) -> u64 {
-    let mut mon: Option<Monitor> = Some(Monitor::new(
-        &net,
-        net.initial_marking().into_vec(),
-        Default::default(),
-    ));
+/// `run --monitor`: the watcher the run's supervisor feeds every firing — transitions'
+/// rates against the net's, places' mean tokens against the steady state (of the net under
+/// `policy`) when it can be computed within `max_states` markings (else a warning says the
+/// places are not watched).
+pub(crate) fn monitor_for(net: &Net, policy: &Policy, max_states: usize) -> Monitor {
+    let mon = Monitor::new(net, net.initial_marking().into_vec(), Default::default());
+    let policy = (!policy.is_empty()).then_some(policy);
+    match steady_predictions(net, policy, max_states) {
+        Ok(Predictions {
+            mean_tokens: Some(m),
+            ..
+        }) => mon.with_mean_tokens(m),
+        Ok(_) => mon,
+        Err(e) => {
+            eprintln!("warning: --monitor watches transitions only: {e}");
+            mon
+        }
+    }
+}
+
+/// `run --monitor`: prints each `drift` event of the run on stderr; the number of drifts.
+/// (The journal holds every one; a line missed because this reader fell behind the event
+/// bus is reported.)
+pub(crate) async fn print_drifts(net: std::sync::Arc<Net>, mut events: Events) -> u64 {
     let mut drifts = 0;
     while let Some(r) = events.recv().await {
         match r {
             Received::Event(Event {
                 time,
-                kind:
-                    EventKind::Fired {
-                        transition,
-                        marking,
-                        ..
-                    },
+                kind: EventKind::Drift(d),
                 ..
             }) => {
-                let m = mon.get_or_insert_with(|| {
-                    Monitor::new(&net, marking.to_vec(), Default::default()).at(time)
-                });
-                if let Some(d) = m.fired(time, transition, &marking) {
-                    drifts += 1;
-                    eprintln!(
-                        "drift: {} at time {:.3}: {:.4} firings per unit of enabled time over the last {}, 95% [{:.4}, {:.4}]; the net says {} (p {:.1e})",
-                        d.transition,
-                        d.time,
-                        d.observed,
-                        d.n,
-                        d.interval[0],
-                        d.interval[1],
-                        d.predicted,
-                        d.p_value
-                    );
-                }
+                drifts += 1;
+                eprintln!("drift: {} (at time {time:.3})", d.describe(&net));
             }
             Received::Lagged(n) => {
-                eprintln!("warning: --monitor fell {n} events behind: it starts over");
-                mon = None;
+                eprintln!(
+                    "warning: --monitor fell {n} events behind: drifts among them are in the journal only"
+                );
             }
             Received::Event(_) => {}
         }

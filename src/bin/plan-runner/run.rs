@@ -52,8 +52,9 @@ pub(crate) struct Args {
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
-    /// Check every exponential transition's rate while running (gspn::conform::Monitor) and
-    /// report each drift on stderr.
+    /// Check every exponential transition's rate and every place's mean tokens while running
+    /// (gspn::conform::Monitor): each drift is a `drift` event (journal, viewer, ROS 2) and a
+    /// line on stderr.
     #[arg(long)]
     monitor: bool,
     /// No progress lines on stderr (printed every few seconds when stderr is not a
@@ -160,11 +161,18 @@ async fn execute(
     if let Some(j) = &args.journal {
         b = b.journal(j);
     }
+    if args.monitor {
+        let m = crate::conform::monitor_for(b.net(), b.policy_value(), 1_000_000);
+        b = b.watch(m);
+    }
     let mut handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;
     let monitor = args.monitor.then(|| {
         // Subscribed before the backends start, so it sees the run from its first event.
         let events = handle.events();
-        tokio::spawn(crate::conform::monitor(Arc::clone(handle.net()), events))
+        tokio::spawn(crate::conform::print_drifts(
+            Arc::clone(handle.net()),
+            events,
+        ))
     });
     let handle = match backends.start(handle).await {
         Ok(h) => h,

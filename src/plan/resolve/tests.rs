@@ -33,6 +33,14 @@ fn err_at(text: &str) -> (u32, u32, String) {
     (s.line, s.column, e.kind.to_string())
 }
 
+/// `text` is refused at `(line, column)` with a message containing `says`.
+#[track_caller]
+fn refused(text: &str, at: (u32, u32), says: &str) {
+    let (l, c, m) = err_at(text);
+    assert_eq!((l, c), at, "{m}");
+    assert!(m.contains(says), "{m}");
+}
+
 #[test]
 fn a_full_plan_resolves_to_ids() {
     let plan = load(
@@ -98,58 +106,69 @@ max_firings = 500
 
 #[test]
 fn unknown_keys_are_refused_with_line_and_column() {
-    let (l, c, m) = err_at("net = \"n.xml\"\nsede = 3\n");
-    assert_eq!((l, c), (2, 1));
-    assert!(m.contains("sede"), "{m}");
-    let (l, c, m) = err_at("net = \"n.xml\"\n[places.P2]\naction = \"a\"\ntimeot = 3\n");
-    assert_eq!((l, c), (4, 1));
-    assert!(m.contains("timeot"), "{m}");
+    refused("net = \"n.xml\"\nsede = 3\n", (2, 1), "sede");
+    refused(
+        "net = \"n.xml\"\n[places.P2]\naction = \"a\"\ntimeot = 3\n",
+        (4, 1),
+        "timeot",
+    );
 }
 
 #[test]
 fn unknown_names_are_load_errors_at_their_position() {
-    let (l, c, m) = err_at("net = \"n.xml\"\n[places.P9]\naction = \"a\"\n");
-    assert_eq!((l, c), (2, 9));
-    assert_eq!(m, "place `P9` does not exist");
-    let (l, c, m) =
-        err_at("net = \"n.xml\"\n[[policy]]\nmarking = { P2 = 1, Q = 0 }\nchoose = { t2 = 1 }\n");
-    assert_eq!((l, c), (3, 21));
-    assert_eq!(m, "place `Q` does not exist");
-    let (l, c, m) =
-        err_at("net = \"n.xml\"\n[[policy]]\nmarking = { P2 = 1 }\nchoose = { t9 = 1 }\n");
-    assert_eq!((l, c), (4, 12));
-    assert_eq!(m, "transition `t9` does not exist");
-    let (l, c, m) =
-        err_at("net = \"n.xml\"\n[places.P2]\naction = \"a\"\non_failure = \"fire t9\"\n");
-    assert_eq!((l, c), (4, 14));
-    assert_eq!(m, "transition `t9` does not exist");
+    refused(
+        "net = \"n.xml\"\n[places.P9]\naction = \"a\"\n",
+        (2, 9),
+        "place `P9` does not exist",
+    );
+    refused(
+        "net = \"n.xml\"\n[[policy]]\nmarking = { P2 = 1, Q = 0 }\nchoose = { t2 = 1 }\n",
+        (3, 21),
+        "place `Q` does not exist",
+    );
+    refused(
+        "net = \"n.xml\"\n[[policy]]\nmarking = { P2 = 1 }\nchoose = { t9 = 1 }\n",
+        (4, 12),
+        "transition `t9` does not exist",
+    );
+    refused(
+        "net = \"n.xml\"\n[places.P2]\naction = \"a\"\non_failure = \"fire t9\"\n",
+        (4, 14),
+        "transition `t9` does not exist",
+    );
 }
 
 #[test]
 fn predicate_errors_point_inside_the_string() {
-    let (l, c, m) = err_at("net = \"n.xml\"\n[stop]\nwhen = \"P2 > 0 && Nope == 1\"\n");
-    assert_eq!((l, c), (3, 19));
-    assert_eq!(m, "place `Nope` does not exist");
-    let (l, c, m) = err_at("net = \"n.xml\"\n[stop]\nwhen = \"P2 = 0\"\n");
-    assert_eq!((l, c), (3, 12));
-    assert!(m.starts_with("stop.when:"), "{m}");
+    refused(
+        "net = \"n.xml\"\n[stop]\nwhen = \"P2 > 0 && Nope == 1\"\n",
+        (3, 19),
+        "place `Nope` does not exist",
+    );
+    refused(
+        "net = \"n.xml\"\n[stop]\nwhen = \"P2 = 0\"\n",
+        (3, 12),
+        "stop.when:",
+    );
 }
 
 #[test]
 fn bad_probabilities_and_exponential_choices_are_refused() {
-    let (l, c, m) = err_at(
+    refused(
         "net = \"n.xml\"\n[[policy]]\nmarking = {}\npartial = true\nchoose = { t2 = 0.5, t3 = 0.6 }\n",
+        (2, 1),
+        "sum to 1.1",
     );
-    assert_eq!((l, c), (2, 1));
-    assert!(m.contains("sum to 1.1"), "{m}");
-    let (l, c, m) = err_at(
+    refused(
         "net = \"n.xml\"\n[[policy]]\nmarking = {}\npartial = true\nchoose = { t2 = 1.5 }\n",
+        (5, 17),
+        "must be in [0, 1]",
     );
-    assert_eq!((l, c), (5, 17));
-    assert!(m.contains("must be in [0, 1]"), "{m}");
-    let (l, c, m) = err_at("net = \"n.xml\"\n[[policy]]\nmarking = {}\nchoose = { T1 = 1 }\n");
-    assert_eq!((l, c), (4, 12));
-    assert!(m.contains("exponential"), "{m}");
+    refused(
+        "net = \"n.xml\"\n[[policy]]\nmarking = {}\nchoose = { T1 = 1 }\n",
+        (4, 12),
+        "exponential",
+    );
 }
 
 #[test]
@@ -157,9 +176,11 @@ fn role_mistakes_are_refused() {
     let (l, _, m) = err_at("net = \"n.xml\"\n[places.P2]\ntimeout = 3.0\n");
     assert_eq!(l, 2);
     assert!(m.contains("`action`"), "{m}");
-    let (l, c, m) = err_at("net = \"n.xml\"\n[places.P2]\nrole = \"resource\"\ntimeout = 3.0\n");
-    assert_eq!((l, c), (4, 11));
-    assert!(m.contains("resource"), "{m}");
+    refused(
+        "net = \"n.xml\"\n[places.P2]\nrole = \"resource\"\ntimeout = 3.0\n",
+        (4, 11),
+        "resource",
+    );
     let (l, c, _) = err_at("net = \"n.xml\"\n[places.P2]\naction = \"a\"\ntimeout = -1.0\n");
     assert_eq!((l, c), (4, 11));
     let (_, _, m) =
@@ -206,31 +227,33 @@ fn ros2_places_and_settings_resolve() {
 
 #[test]
 fn ros2_mistakes_are_refused_at_their_position() {
-    let (l, c, m) = err_at("net = \"n.xml\"\n[places.P2]\naction = \"a\"\nserver = \"s\"\n");
-    assert_eq!((l, c), (4, 10));
-    assert!(
-        m.contains("`server` applies to places with action = \"ros2\""),
-        "{m}"
+    refused(
+        "net = \"n.xml\"\n[places.P2]\naction = \"a\"\nserver = \"s\"\n",
+        (4, 10),
+        "`server` applies to places with action = \"ros2\"",
     );
-    let (l, c, m) = err_at("net = \"n.xml\"\n[places.P2]\naction = \"ros2\"\nserver = \"a b\"\n");
-    assert_eq!((l, c), (4, 10));
-    assert!(m.contains("server `a b` is not a ROS 2 name"), "{m}");
-    let (l, c, m) = err_at("net = \"n.xml\"\n[ros2]\nnetworks = [\"127.0.0.1\", \"lo\"]\n");
-    assert_eq!((l, c), (3, 26));
-    assert!(m.contains("`lo` is not an IP address"), "{m}");
-    let (l, c, _) = err_at("net = \"n.xml\"\n[ros2]\ndomain_id = 300\n");
-    assert_eq!((l, c), (3, 13));
-    let (l, c, _) = err_at("net = \"n.xml\"\n[ros2]\nlost_after = 0.0\n");
-    assert_eq!((l, c), (3, 14));
-    let (l, c, m) = err_at("net = \"n.xml\"\n[ros2]\nservice_mapping = \"basic\"\n");
-    assert_eq!((l, c), (3, 19));
-    assert!(
-        m.contains("ros2.service_mapping: `basic` is not \"enhanced\" or \"cyclone\""),
-        "{m}"
+    refused(
+        "net = \"n.xml\"\n[places.P2]\naction = \"ros2\"\nserver = \"a b\"\n",
+        (4, 10),
+        "server `a b` is not a ROS 2 name",
     );
-    let (l, c, m) = err_at("net = \"n.xml\"\n[ros2]\ndomian_id = 3\n");
-    assert_eq!((l, c), (3, 1));
-    assert!(m.contains("domian_id"), "{m}");
+    refused(
+        "net = \"n.xml\"\n[ros2]\nnetworks = [\"127.0.0.1\", \"lo\"]\n",
+        (3, 26),
+        "`lo` is not an IP address",
+    );
+    refused("net = \"n.xml\"\n[ros2]\ndomain_id = 300\n", (3, 13), "");
+    refused("net = \"n.xml\"\n[ros2]\nlost_after = 0.0\n", (3, 14), "");
+    refused(
+        "net = \"n.xml\"\n[ros2]\nservice_mapping = \"basic\"\n",
+        (3, 19),
+        "ros2.service_mapping: `basic` is not \"enhanced\" or \"cyclone\"",
+    );
+    refused(
+        "net = \"n.xml\"\n[ros2]\ndomian_id = 3\n",
+        (3, 1),
+        "domian_id",
+    );
 }
 
 #[test]

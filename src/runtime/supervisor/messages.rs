@@ -146,11 +146,11 @@ impl Message<Timer> for Supervisor {
         self.clock.jump_to(msg.at.max(self.now()));
         if msg.limit {
             self.begin_stop(StopReason::TimeLimit);
-        } else if let Some(t) = self.eng.pick_race() {
-            self.fire_one(t);
-            self.settle();
-            self.schedule();
         } else {
+            if let Some(t) = self.eng.pick_race() {
+                self.fire_one(t);
+                self.settle();
+            }
             self.schedule();
         }
         finish_turn!(self, ctx)

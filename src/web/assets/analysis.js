@@ -49,7 +49,8 @@ async function analyse() {
   if (analysing) return;
   analysing = true;
   const out = $('analysis');
-  out.textContent = '';
+  // The last results stay until new ones replace them (or the server cannot be reached).
+  out.classList.add('stale');
   $('analysis-cancel').classList.remove('hidden');
   let a;
   try {
@@ -70,10 +71,16 @@ async function analyse() {
     const res = await fetch('/api/analysis');
     a = await res.json();
   } catch (e) {
-    out.innerHTML = '<p class="error">' + escapeHtml(e.message) + '</p>';
+    if (unreachable(e)) {
+      offline(e);
+      $('analysis-progress').textContent = 'the server cannot be reached';
+    } else {
+      out.innerHTML = '<p class="error">' + escapeHtml(e.message) + '</p>';
+    }
     return;
   } finally {
     analysing = false;
+    out.classList.remove('stale');
     $('analysis-cancel').classList.add('hidden');
   }
   const analysed = a.analysed ? '<p class="analysed" data-analysed="' + escapeHtml(a.analysed) +

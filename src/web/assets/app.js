@@ -205,6 +205,8 @@ function drawNet() {
     arcsOfPlace[a.place].push(i);
     arcsOfTransition[a.transition].push(i);
   });
+  fillNames();
+  drawMinimap();
   if (canvasInit()) {
     const hooks = canvasHooks();
     placeEls.push(...hooks.places);
@@ -472,6 +474,7 @@ function applyState(s) {
 function applyView() {
   $('viewport').setAttribute('transform', 'translate(' + view.x + ',' + view.y + ') scale(' + view.k + ')');
   canvasDirty();
+  viewChanged();
 }
 
 // Whether the view is the fitted one (a resize then fits again); panning or zooming by hand
@@ -500,6 +503,7 @@ function fit() {
   const w = xb + 90 - x0;
   const h = yb + 60 - y0;
   const k = Math.min(box.clientWidth / w, box.clientHeight / h, 2);
+  nav.fitK = k;
   view = { k, x: -x0 * k + (box.clientWidth - w * k) / 2, y: -y0 * k + (box.clientHeight - h * k) / 2 };
   applyView();
 }
@@ -522,10 +526,7 @@ function setupInteraction() {
     const rect = box.getBoundingClientRect();
     const mx = ev.clientX - rect.left;
     const my = ev.clientY - rect.top;
-    const f = Math.exp(-ev.deltaY * 0.001);
-    view.x = mx - (mx - view.x) * f;
-    view.y = my - (my - view.y) * f;
-    view.k *= f;
+    zoomAbout(mx, my, Math.exp(-ev.deltaY * 0.001));
     fitted = false;
     applyView();
   }, { passive: false });
@@ -597,8 +598,10 @@ async function act(method, path, body) {
   try {
     applyState(await api(method, path, body));
     status('');
+    online();
   } catch (e) {
     status(e.message);
+    offline(e);
     stopRun();
   } finally {
     busy = false;
@@ -657,6 +660,10 @@ const KEYS = [
   ['0', 'reset', () => $('reset').click()],
   ['f', 'fit the net in the view', () => fit()],
   ['a', 'analyse', () => $('analyze').click()],
+  ['g', 'find a place or transition by name', () => $('search').focus()],
+  [' ', 'replay: play / pause', () => $('play').click()],
+  ['ArrowLeft', 'replay: one firing back', () => $('step-back').click()],
+  ['ArrowRight', 'replay: one firing on', () => $('step-forward').click()],
   ['/', 'filter the trace / events', () => {
     const box = $('log-panel').classList.contains('hidden') ? $('trace-filter') : $('log-filter');
     box.focus();
@@ -669,7 +676,7 @@ function setupKeys() {
   const list = $('help-keys');
   for (const [key, what] of KEYS) {
     const dt = document.createElement('dt');
-    dt.textContent = key === 'Escape' ? 'Esc' : key;
+    dt.textContent = { Escape: 'Esc', ' ': 'space', ArrowLeft: '←', ArrowRight: '→' }[key] || key;
     const dd = document.createElement('dd');
     dd.textContent = what;
     list.append(dt, dd);
@@ -717,6 +724,8 @@ async function main() {
   setupKeys();
   setupResize();
   setupPanes();
+  setupExport();
+  setupNavigate();
   for (const [list, box] of [['trace', 'trace-filter'], ['log', 'log-filter']]) {
     $(box).addEventListener('input', () => applyFilter($(list), $(box)));
   }
@@ -734,14 +743,17 @@ async function main() {
     fit();
     if (mode.replay) {
       await startReplay();
+      initMaxStates();
       markDrawn();
       return;
     }
     applyState(await api('GET', '/api/sim/state'));
     initMaxStates();
     markDrawn();
+    followSession();
   } catch (e) {
     status(e.message);
+    offline(e);
   }
 }
 

@@ -64,8 +64,6 @@ function followLive(s) {
     setAgents(i, agents ? Object.entries(agents).map(([k, n]) => k + ' ' + n).join(', ') : '');
   });
   for (const e of s.log) if (e.event === 'fired') flashFired(e);
-  $('map-panel').classList.toggle('stopped', !!s.stopped);
-  if (s.stopped) $('map-time').dataset.stopped = 'true';
   scheduleFollowDraw();
 }
 
@@ -169,7 +167,8 @@ function drawPlot() {
   const svg = $('plot');
   svg.textContent = '';
   const i = follow.place;
-  $('plot-place').textContent = i >= 0 ? net.places[i].name : '(select a place)';
+  $('plot-place').textContent = i >= 0 ? net.places[i].name : '(click a place)';
+  svg.classList.toggle('hidden', i < 0);
   if (i < 0 || !follow.times.length) return;
   const W = 300;
   const H = 110;

@@ -46,9 +46,13 @@ function connectLive() {
       markDrawn();
     }
   };
-  socket.onopen = () => status('');
+  socket.onopen = () => {
+    status('');
+    online();
+  };
   socket.onclose = () => {
     status('connection lost, reconnecting…');
+    offline();
     setTimeout(connectLive, 1000);
   };
 }
@@ -56,6 +60,8 @@ function connectLive() {
 function applyLive(s) {
   s.tokens.forEach((k, i) => setTokens(i, k));
   setAllEnabled(s.firable);
+  // Before the map is drawn: its clock line says when the run (and so the world) stopped.
+  $('map-panel').classList.toggle('stopped', !!s.stopped);
   if (s.world) drawWorld(s.world);
   followLive(s);
   $('clock').textContent = 'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
@@ -80,57 +86,104 @@ function applyLive(s) {
 
 // ---- replay ----------------------------------------------------------------------------
 
-// Plays a journal back: the slider picks a frame (the marking after each firing); `run`
-// plays the frames at the chosen speed.
+// Plays a journal back on a full-width timeline in model seconds: the slider picks a time
+// (the marking after the last firing up to it), ◀ and ▶ (keys ← →) step one firing, play
+// (space) plays the firings at the speed set now (changed while playing, it applies at
+// once), `loop` starts again at the end; the trace follows.
 async function startReplay() {
   for (const id of ['step', 'step-n', 'reset', 'n', 'seed']) {
     const e = $(id);
     (e.closest('label') || e).classList.add('hidden');
   }
   const { frames } = await api('GET', '/api/replay');
+  const times = frames.map((f) => f.time);
+  const end = times[times.length - 1] || 0;
   const slider = $('slider');
-  slider.max = String(frames.length - 1);
-  $('slider-label').classList.remove('hidden');
+  slider.min = '0';
+  slider.max = String(end);
+  slider.step = 'any';
+  $('timeline').classList.remove('hidden');
+  $('timeline-end').textContent = fmtTime(end) + ' s';
+  let at = 0;
   const show = (i) => {
+    at = i;
     const f = frames[i];
-    slider.value = String(i);
+    slider.value = String(f.time);
     f.tokens.forEach((k, p) => setTokens(p, k));
     setFired(f.transition ? transitionIndex(f.transition) : -1);
-    const items = $('trace').children;
+    recordTokens(f.time, f.tokens);
     for (const li of $('trace').querySelectorAll('li.current')) li.classList.remove('current');
-    if (i > 0 && items[i - 1]) items[i - 1].classList.add('current');
+    const li = i > 0 ? $('trace').children[i - 1] : null;
+    if (li) {
+      li.classList.add('current');
+      li.scrollIntoView({ block: 'nearest' });
+    }
     $('frame').textContent = i + '/' + (frames.length - 1);
-    $('clock').textContent = 'time ' + fmt(f.time) + ', ' + i + ' firings' +
+    $('timeline-time').textContent = 't = ' + fmtTime(f.time) + ' s';
+    $('clock').textContent = 'time ' + fmtTime(f.time) + ', ' + i + ' firings' +
       (f.transition ? ' — ' + f.transition + ' fired' : '');
   };
-  slider.addEventListener('input', () => show(Number(slider.value)));
+  // The frame shown at model time t: the last firing at or before it (the range input
+  // keeps its value to about 15 digits: a hair's tolerance).
+  const frameAt = (t0) => {
+    const t = t0 + 1e-12 * Math.max(1, end);
+    let lo = 0;
+    let hi = times.length - 1;
+    while (lo < hi) {
+      const mid = (lo + hi + 1) >> 1;
+      if (times[mid] <= t) lo = mid;
+      else hi = mid - 1;
+    }
+    return lo;
+  };
+  slider.addEventListener('input', () => show(frameAt(Number(slider.value))));
   const ol = $('trace');
   ol.textContent = '';
   frames.slice(1).forEach((f, i) => {
-    const li = document.createElement('li');
-    li.textContent = fmt(f.time) + '  ' + f.transition;
+    const li = listItem(i + 1, fmtTime(f.time) + '  ' + f.transition);
     li.addEventListener('click', () => show(i + 1));
     ol.appendChild(li);
   });
+  $('trace-count').textContent = (frames.length - 1) + ' firings';
   let timer = null;
-  $('run').addEventListener('click', () => {
-    if (timer !== null) {
-      clearInterval(timer);
-      timer = null;
-      $('run').textContent = 'run';
-      return;
-    }
-    $('run').textContent = 'pause';
-    timer = setInterval(() => {
-      const i = Number(slider.value) + 1;
-      if (i >= frames.length) {
-        clearInterval(timer);
-        timer = null;
-        $('run').textContent = 'run';
+  const playing = () => timer !== null;
+  const pause = () => {
+    clearTimeout(timer);
+    timer = null;
+    $('run').textContent = 'run';
+    $('play').textContent = '▶ play';
+  };
+  const tick = () => {
+    let i = at + 1;
+    if (i >= frames.length) {
+      if (!$('loop').checked) {
+        pause();
         return;
       }
-      show(i);
-    }, 1000 / (Number($('speed').value) || 1));
-  });
+      i = 0;
+    }
+    show(i);
+    // The speed as it is now: a change while playing applies from the next firing.
+    timer = setTimeout(tick, 1000 / (Number($('speed').value) || 1));
+  };
+  const play = () => {
+    if (playing()) {
+      pause();
+      return;
+    }
+    if (at >= frames.length - 1) show(0);
+    $('run').textContent = 'pause';
+    $('play').textContent = '❚❚ pause';
+    timer = setTimeout(tick, 1000 / (Number($('speed').value) || 1));
+  };
+  const stepBy = (d) => {
+    pause();
+    show(Math.min(frames.length - 1, Math.max(0, at + d)));
+  };
+  $('run').addEventListener('click', play);
+  $('play').addEventListener('click', play);
+  $('step-back').addEventListener('click', () => stepBy(-1));
+  $('step-forward').addEventListener('click', () => stepBy(1));
+  window.gspnReplay = { playing, at: () => at };
   show(0);
 }

@@ -66,6 +66,17 @@ impl<M: Serialize> Publisher<M> {
     my_node.wait_for_reader(self.guid())
   }
 
+  /// Waits until every matched subscription has acknowledged every sample
+  /// published so far (reliable QoS): a publisher about to leave knows its last
+  /// samples arrived (or were repaired) first. Wrap it in a timeout.
+  pub async fn async_wait_for_acknowledgments(&self) -> WriteResult<bool, ()> {
+    self
+      .datawriter
+      .async_wait_for_acknowledgments()
+      .await
+      .map_err(Into::into)
+  }
+
   pub async fn async_publish(&self, message: M) -> WriteResult<(), M> {
     self
       .datawriter
