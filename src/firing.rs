@@ -207,6 +207,8 @@ pub(crate) struct Firable {
     has_capacity: bool,
     candidates: Vec<TransitionId>,
     dist: Vec<(TransitionId, f64)>,
+    /// The last [`Firable::choose_immediate`] decided outside the policy's table.
+    outside_policy: bool,
 }
 
 impl Firable {
@@ -260,7 +262,16 @@ impl Firable {
             has_capacity: net.places().iter().any(|p| p.capacity.is_some()),
             candidates: Vec::new(),
             dist: Vec::new(),
+            outside_policy: false,
         }
+    }
+
+    /// Whether the last [`Firable::choose_immediate`] had a non-empty policy without a rule
+    /// for its marking, among candidates that all have weight 0 (a decision the policy's
+    /// table should have made; taken uniformly). Weighted races are not decisions and never
+    /// count.
+    pub(crate) fn outside_policy(&self) -> bool {
+        self.outside_policy
     }
 
     /// Re-evaluates `t` in `m` by the net's own rules (the token game).
@@ -356,6 +367,7 @@ impl Firable {
             .position(|l| l.on > 0)
             .unwrap_or_default();
         let u = sample::uniform(rng);
+        self.outside_policy = false;
         if let Some(policy) = policy {
             let lv = &self.levels[level];
             self.candidates.clear();
@@ -373,6 +385,9 @@ impl Firable {
         }
         let lv = &self.levels[level];
         let total = lv.weights.total();
+        // A policy was given but has no rule here, and every candidate has weight 0: a
+        // decision outside the policy's table, taken uniformly ([`Firable::outside_policy`]).
+        self.outside_policy = total <= 0.0 && policy.is_some_and(|p| !p.is_empty());
         if total > 0.0 {
             return lv.members[lv.weights.find(u * total)];
         }

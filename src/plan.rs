@@ -156,12 +156,13 @@ impl Plan {
         self.roles.get(p.index()).and_then(Option::as_ref)
     }
 
-    /// A runtime builder for this plan: its net, roles, policy, stop conditions, seed, time
-    /// scale and robots. Register actions on it, then spawn.
+    /// A runtime builder for this plan: its net, roles, policy, rewards, stop conditions,
+    /// seed, time scale and robots. Register actions on it, then spawn.
     pub fn runtime_builder(self) -> RuntimeBuilder {
         let places: Vec<PlaceId> = self.net.place_ids().collect();
         let mut b = Runtime::builder(self.net)
             .policy(self.policy)
+            .rewards(self.rewards)
             .stop_conditions(self.stop)
             .robots(self.robots);
         for (p, role) in places.into_iter().zip(self.roles) {

@@ -58,6 +58,7 @@ mod handle;
 mod id;
 pub mod journal;
 pub mod place;
+pub mod reward;
 mod role;
 mod sink;
 mod snapshot;
@@ -81,6 +82,7 @@ pub use builtin::{BUILTIN_WORDS, Builtin};
 pub use event::{Drift, Event, EventKind, Events, Monitored, Received, Watcher};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};
 pub use id::AgentId;
+pub use reward::Earned;
 pub use role::{FailurePolicy, Role};
 pub use stop::StopConditions;
 

@@ -18,6 +18,7 @@ use super::handle::{Progress, RuntimeHandle};
 use super::journal::Journal;
 use super::supervisor::{PlaceSetup, Supervisor, SupervisorArgs};
 use super::{FailurePolicy, Role, RuntimeError, StopConditions, conservation};
+use crate::analysis::decision::RewardSpec;
 use crate::net::predicate::Predicate;
 use crate::net::{Net, NetError, PlaceId};
 use crate::policy::Policy;
@@ -28,6 +29,7 @@ pub struct RuntimeBuilder {
     roles: Vec<Option<Role>>,
     binds: Vec<(String, String)>,
     policy: Policy,
+    rewards: Vec<RewardSpec>,
     actions: HashMap<String, Arc<dyn Action>>,
     seed: Option<u64>,
     time_scale: f64,
@@ -60,6 +62,7 @@ impl RuntimeBuilder {
             roles: vec![None; n],
             binds: Vec::new(),
             policy: Policy::empty(),
+            rewards: Vec::new(),
             actions: HashMap::new(),
             seed: None,
             time_scale: 0.0,
@@ -120,6 +123,13 @@ impl RuntimeBuilder {
     /// The policy over immediate transitions (checked against the net by [`Policy::new`]).
     pub fn policy(mut self, policy: Policy) -> Self {
         self.policy = policy;
+        self
+    }
+
+    /// Reward structures to count (a plan's `[rewards.NAME]`): the summary gives what each
+    /// earned ([`Summary::rewards`](super::Summary::rewards)).
+    pub fn rewards(mut self, rewards: Vec<RewardSpec>) -> Self {
+        self.rewards = rewards;
         self
     }
 
@@ -360,6 +370,7 @@ impl RuntimeBuilder {
             Arc::clone(&net),
             &places,
             self.policy,
+            self.rewards,
             ChaCha8Rng::seed_from_u64(seed),
         );
         let (bus, rx) = broadcast::channel(self.event_capacity);

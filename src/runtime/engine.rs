@@ -7,13 +7,15 @@
 //! the engine draws exactly what the token game draws from the same seed. The supervisor
 //! actor drives it; keeping it synchronous keeps firing cheap.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
 
 use rustc_hash::FxHashMap;
 
 use super::agent::AgentState;
 use super::id::AgentId;
+use super::reward::{Earned, Meter};
+use crate::analysis::decision::RewardSpec;
 use crate::firing::{Firable, Statistics, Tally};
 use crate::net::{Marking, Net, PlaceId, TokenOverflow, TransitionId};
 use crate::policy::Policy;
@@ -94,6 +96,12 @@ pub(crate) struct Engine {
     agents_ended: u64,
     /// Some agent is bound to a robot (firings then report the robots they moved).
     has_robots: bool,
+    /// The plan's rewards earned so far.
+    meter: Meter,
+    /// Decisions taken by the net's weights because no policy rule applied, and the first
+    /// marking where that happened (not yet reported).
+    policy_misses: u64,
+    first_miss: Option<Marking>,
 }
 
 impl Engine {
@@ -153,6 +161,7 @@ impl Engine {
         net: Arc<Net>,
         action_places: &[PlaceId],
         policy: Policy,
+        rewards: Vec<RewardSpec>,
         rng: Rng,
     ) -> Engine {
         let mut action_of = vec![None; net.place_count()];
@@ -185,6 +194,9 @@ impl Engine {
             agents_spawned: 0,
             agents_ended: 0,
             has_robots: false,
+            meter: Meter::new(&net, rewards, &net.initial_marking()),
+            policy_misses: 0,
+            first_miss: None,
             net,
         };
         for t in e.net.transition_ids() {
@@ -326,10 +338,16 @@ impl Engine {
     /// one in arrival order.
     pub(crate) fn next_ready(&mut self) -> Option<TransitionId> {
         if self.firable.is_vanishing() {
-            return Some(
-                self.firable
-                    .choose_immediate(&self.m, Some(&self.policy), &mut self.rng),
-            );
+            let t = self
+                .firable
+                .choose_immediate(&self.m, Some(&self.policy), &mut self.rng);
+            if self.firable.outside_policy() {
+                self.policy_misses += 1;
+                if self.policy_misses == 1 {
+                    self.first_miss = Some(self.m.clone());
+                }
+            }
+            return Some(t);
         }
         let mut i = 0;
         while i < self.pending.len() {
@@ -418,6 +436,7 @@ impl Engine {
             }
         }
         self.tally.fire(&net, &mut self.m, t, now)?;
+        self.meter.fired(t, now, &self.m);
         self.firings += 1;
         let mut next = 0;
         for &(p, w) in net.outputs(t) {
@@ -475,5 +494,20 @@ impl Engine {
     /// transition.
     pub(crate) fn statistics(&self, now: f64) -> Statistics {
         self.tally.read(&self.m, now)
+    }
+
+    /// The rewards earned over `[0, now]`, by name.
+    pub(crate) fn rewards(&self, now: f64) -> BTreeMap<String, Earned> {
+        self.meter.read(now)
+    }
+
+    /// Decisions the net's weights took because no policy rule applied.
+    pub(crate) fn policy_misses(&self) -> u64 {
+        self.policy_misses
+    }
+
+    /// The first marking where no policy rule applied, once (then `None`).
+    pub(crate) fn take_first_miss(&mut self) -> Option<Marking> {
+        self.first_miss.take()
     }
 }

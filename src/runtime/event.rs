@@ -94,6 +94,12 @@ pub enum EventKind {
         /// What, with names.
         message: String,
     },
+    /// Something the user should know that is not an error: a decision outside the policy's
+    /// table (taken by the net's weights), reported once per run.
+    Warning {
+        /// What, with names.
+        message: String,
+    },
     /// The run stopped.
     Stopped {
         /// Why.

@@ -13,6 +13,7 @@ use super::agent::AgentState;
 use super::engine::Engine;
 use super::event::{Event, Events};
 use super::id::AgentId;
+use super::reward::Earned;
 use super::supervisor::{GetAgents, GetMarking, StopRequest, Supervisor};
 use crate::net::{Marking, Net, PlaceId};
 
@@ -54,7 +55,8 @@ pub struct AgentInfo {
 
 /// How a run ended, with its statistics. The JSON form (`plan-runner run --json`) has exactly
 /// the keys `stopped, firings, time, agents_spawned, agents_ended, final_marking, mean_tokens,
-/// throughput, errors`.
+/// throughput, errors`, plus `rewards` when the plan has `[rewards.NAME]` and `warnings` when
+/// there are some.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
     /// Why the run stopped.
@@ -75,13 +77,26 @@ pub struct Summary {
     pub throughput: BTreeMap<String, f64>,
     /// Errors seen during the run, in order.
     pub errors: Vec<String>,
+    /// What each reward structure earned, by name (with a 95% interval of its rate).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub rewards: BTreeMap<String, Earned>,
+    /// Warnings of the run (each also a [`EventKind::Warning`](super::EventKind::Warning)
+    /// event), in order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// The final marking, by place id.
     #[serde(skip)]
     pub marking: Marking,
 }
 
 impl Summary {
-    pub(crate) fn new(eng: &Engine, stopped: StopReason, now: f64, errors: Vec<String>) -> Self {
+    pub(crate) fn new(
+        eng: &Engine,
+        stopped: StopReason,
+        now: f64,
+        errors: Vec<String>,
+        warnings: Vec<String>,
+    ) -> Self {
         let net = eng.net();
         let (agents_spawned, agents_ended) = eng.agent_counts();
         let stats = eng.statistics(now);
@@ -110,6 +125,8 @@ impl Summary {
                 .map(|(t, x)| (t.name.clone(), x))
                 .collect(),
             errors,
+            rewards: eng.rewards(now),
+            warnings,
             marking: eng.marking().clone(),
         }
     }
@@ -228,6 +245,8 @@ impl RuntimeHandle {
                     mean_tokens: BTreeMap::new(),
                     throughput: BTreeMap::new(),
                     errors: vec!["the supervisor ended without a summary".into()],
+                    rewards: BTreeMap::new(),
+                    warnings: Vec::new(),
                     marking: self.net.initial_marking(),
                 })
             }

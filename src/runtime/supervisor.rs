@@ -68,6 +68,7 @@ pub struct Supervisor {
     continue_pending: bool,
     sink: EventSink,
     errors: Vec<String>,
+    warnings: Vec<String>,
     done: watch::Sender<Option<Arc<Summary>>>,
     progress: Arc<Progress>,
     cancel: CancelSource,
@@ -134,6 +135,7 @@ impl Supervisor {
             continue_pending: false,
             sink: EventSink::new(args.bus, args.journal),
             errors: Vec::new(),
+            warnings: Vec::new(),
             done: args.done,
             progress: args.progress,
             cancel,
@@ -372,10 +374,30 @@ impl Supervisor {
     fn settle(&mut self) {
         while self.stopping.is_none() {
             match self.eng.next_ready() {
-                Some(t) => self.fire_one(t),
+                Some(t) => {
+                    if let Some(m) = self.eng.take_first_miss() {
+                        self.warn_outside_policy(&m, t);
+                    }
+                    self.fire_one(t)
+                }
                 None => break,
             }
         }
+    }
+
+    /// The first decision outside the policy's table: a warning event (and a summary
+    /// warning, which the end of the run completes with the count).
+    fn warn_outside_policy(&mut self, m: &[u32], t: TransitionId) {
+        let net = self.eng.net();
+        let message = format!(
+            "no [[policy]] rule applies in marking {}: the net's weights decide (all 0 there: \
+             uniformly among the enabled immediate transitions), `{}` fired; later decisions \
+             outside the policy are counted, not reported",
+            net.format_marking(m),
+            net.transition(t).name
+        );
+        self.warnings.push(message.clone());
+        self.emit(EventKind::Warning { message });
     }
 
     fn kick(&mut self) {
@@ -514,7 +536,14 @@ impl Supervisor {
         if let Some(err) = self.sink.flush() {
             self.errors.push(format!("journal: {err}"));
         }
-        let summary = Summary::new(&self.eng, reason, self.now(), self.errors.clone());
+        let mut warnings = self.warnings.clone();
+        let misses = self.eng.policy_misses();
+        if misses > 0 {
+            warnings.push(format!(
+                "{misses} decision(s) in all were taken outside the policy, by the net's weights"
+            ));
+        }
+        let summary = Summary::new(&self.eng, reason, self.now(), self.errors.clone(), warnings);
         let _ = self.done.send(Some(Arc::new(summary)));
         for (_, a) in self.agent_actors.drain() {
             a.kill();

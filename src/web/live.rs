@@ -311,6 +311,7 @@ fn describe(net: &Net, kind: &EventKind) -> String {
         },
         EventKind::AgentEnded { agent } => format!("agent {} ended", agent.0),
         EventKind::Error { message } => format!("error: {message}"),
+        EventKind::Warning { message } => format!("warning: {message}"),
         EventKind::Stopped { reason } => format!("stopped: {reason}"),
         EventKind::Drift(d) => format!("drift: {}", d.describe(net)),
     }

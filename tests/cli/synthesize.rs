@@ -313,3 +313,114 @@ fn ctrl_c_stops_the_solver_with_exit_code_130() {
     // About a second on an idle machine; generous for a loaded one.
     assert!(took < Duration::from_secs(10), "{took:?}");
 }
+
+/// Runs `plan-runner run PLAN --json` with `extra` arguments: (exit code, summary, stderr).
+fn run_json(plan: &std::path::Path, extra: &[&str]) -> (i32, Value, String) {
+    let out = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .arg("run")
+        .arg(plan)
+        .args(["--json", "--quiet"])
+        .args(extra)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let v = serde_json::from_slice(&out.stdout).unwrap_or(Value::Null);
+    (out.status.code().unwrap_or(-1), v, err)
+}
+
+/// The whole loop: `synthesize --out policy.toml`, then `run policy.toml` in virtual time
+/// (20,000 time units, the plan's `[stop]`): the run's summary counts the plan's reward,
+/// and its measured rate holds the optimal long-run average within its own 95% interval
+/// (batch means); every decision the run met was in the written table (no warning).
+#[test]
+fn a_run_with_the_synthesised_policy_earns_the_optimal_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("policy.toml");
+    let (code, stdout, err) = synthesize(&[&home_plan(), "--json", "--out", out.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let optimum = serde_json::from_str::<Value>(&stdout).unwrap()["value"]
+        .as_f64()
+        .unwrap();
+    let (code, summary, err) = run_json(&out, &["--seed", "11"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(summary["time"].as_f64().unwrap(), 20000.0, "{summary}");
+    let r = &summary["rewards"]["cleaning"];
+    let (rate, half, total) = (
+        r["rate"].as_f64().unwrap(),
+        r["half_width"].as_f64().unwrap(),
+        r["total"].as_f64().unwrap(),
+    );
+    assert!((total / 20000.0 - rate).abs() <= 1e-9 * rate, "{r}");
+    assert!(r["batches"].as_u64().unwrap() >= 32, "{r}");
+    assert!(half > 0.0 && half < 0.05 * optimum, "{r}");
+    assert!(
+        (rate - optimum).abs() <= half,
+        "measured {rate} ± {half} vs optimum {optimum}"
+    );
+    assert!(summary.get("warnings").is_none(), "{summary}");
+    assert!(!err.contains("warning: no [[policy]] rule"), "{err}");
+}
+
+/// A policy that misses decision markings: the run goes on by the net's weights (all 0
+/// there: uniformly), says so once — a `warning` event in the journal, one line on stderr —
+/// and counts the decisions taken outside the table in the summary's `warnings`.
+#[test]
+fn a_marking_outside_the_policy_table_falls_back_to_the_weights_with_one_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("policy.toml");
+    let (code, _, err) = synthesize(&[&home_plan(), "--out", full.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    // Keep the plan and its first rule only.
+    let text = std::fs::read_to_string(&full).unwrap();
+    let mut parts = text.split("[[policy]]");
+    let head = parts.next().unwrap();
+    let first = parts.next().unwrap();
+    assert!(parts.next().is_some(), "more than one rule written");
+    let partial = dir.path().join("partial.toml");
+    std::fs::write(&partial, format!("{head}[[policy]]{first}")).unwrap();
+    let journal = dir.path().join("run.jsonl");
+    let (code, summary, err) = run_json(
+        &partial,
+        &[
+            "--seed",
+            "3",
+            "--max-firings",
+            "500",
+            "--journal",
+            journal.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(summary["firings"], 500, "{summary}");
+    assert_eq!(
+        err.matches("warning: no [[policy]] rule applies in marking")
+            .count(),
+        1,
+        "{err}"
+    );
+    let warnings = summary["warnings"].as_array().unwrap();
+    assert_eq!(warnings.len(), 2, "{summary}");
+    assert!(
+        warnings[0]
+            .as_str()
+            .unwrap()
+            .contains("the net's weights decide")
+    );
+    let misses: u64 = warnings[1]
+        .as_str()
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(misses > 1, "{summary}");
+    let events = std::fs::read_to_string(&journal).unwrap();
+    let warning_events: Vec<&str> = events
+        .lines()
+        .filter(|l| l.contains("\"event\":\"warning\""))
+        .collect();
+    assert_eq!(warning_events.len(), 1, "{events}");
+    assert!(warning_events[0].contains("no [[policy]] rule applies"));
+}

@@ -5,7 +5,11 @@
 //! progress line on stderr every few seconds (`--quiet`: none); a warning before a run in
 //! virtual time that has no stop condition and cannot end on its own; a summary at the end
 //! (`--json`: `stopped, firings, time, agents_spawned, agents_ended, final_marking,
-//! mean_tokens, throughput, errors`). Ctrl-C (SIGINT), SIGTERM and SIGHUP stop the run cleanly (actions
+//! mean_tokens, throughput, errors`, plus `rewards` for a plan with `[rewards.NAME]`: each
+//! one's `total`, `rate`, the 95% `half_width` of the rate from batch means and `batches`, and
+//! `warnings` when there are some: a decision outside the plan's `[[policy]]` table, taken by
+//! the net's weights, is a `warning` event and a line on stderr). Ctrl-C (SIGINT), SIGTERM and
+//! SIGHUP stop the run cleanly (actions
 //! cancelled, a final `stopped` event, journal flushed) with exit code 130, 143 and 129.
 //!
 //! The backends (simulated robots for a plan with a `[map]`, ROS 2 for `ros2` places, the
@@ -220,6 +224,10 @@ async fn execute(
         let drifts = m.await.unwrap_or(0);
         eprintln!("monitor: {drifts} drift(s)");
     }
+    // A decision outside the policy's table (also a `warning` event in the journal).
+    for w in &summary.warnings {
+        eprintln!("warning: {w}");
+    }
     eprintln!("seed {}", handle.seed());
     let sections = backends.finish(&summary).await;
     backends.stop();
@@ -256,6 +264,16 @@ fn print_summary(s: &Summary, order: &NetOrder) -> anyhow::Result<()> {
         if let Some(x) = s.throughput.get(t) {
             println!("  {t:<28} {x:>12.6}");
         }
+    }
+    for (name, r) in &s.rewards {
+        let interval = match r.half_width {
+            Some(h) => format!(" ± {h:.6} (95%, {} batches)", r.batches),
+            None => String::new(),
+        };
+        println!(
+            "reward {name}: {:.6} per unit of time{interval}, {:.6} in all",
+            r.rate, r.total
+        );
     }
     for e in &s.errors {
         println!("error: {e}");
