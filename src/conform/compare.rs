@@ -132,23 +132,13 @@ pub fn compare(net: &Net, obs: &Observations, pred: &Predictions, opts: &Options
     let mut rows = Vec::new();
     for (p, e) in obs.mean_tokens.iter().enumerate() {
         let x = pred.mean_tokens.as_ref().map(|v| v[p]);
-        rows.push(batch_row(
-            RowKind::MeanTokens,
-            net.places()[p].name.clone(),
-            e,
-            x,
-            obs.batches,
-        ));
+        let name = net.places()[p].name.clone();
+        rows.push(batch_row(RowKind::MeanTokens, name, e, x, obs.batches));
     }
     for (t, e) in obs.throughput.iter().enumerate() {
         let x = pred.throughput.as_ref().map(|v| v[t]);
-        rows.push(batch_row(
-            RowKind::Throughput,
-            net.transitions()[t].name.clone(),
-            e,
-            x,
-            obs.batches,
-        ));
+        let name = net.transitions()[t].name.clone();
+        rows.push(batch_row(RowKind::Throughput, name, e, x, obs.batches));
     }
     for (t, x) in obs.exposure.iter().enumerate() {
         let (Some(x), Timing::Exponential { rate, .. }) = (x, net.transitions()[t].timing) else {

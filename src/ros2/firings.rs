@@ -211,12 +211,6 @@ pub struct RunStatePublisher {
     run: Publisher<RunState>,
 }
 
-impl std::fmt::Debug for RunStatePublisher {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("RunStatePublisher")
-    }
-}
-
 impl RunStatePublisher {
     /// Creates the publisher on `node`.
     pub fn new(node: &mut Node) -> Result<RunStatePublisher, Ros2Error> {
@@ -238,17 +232,24 @@ impl RunStatePublisher {
     }
 }
 
+/// `Debug` naming the type only: its DDS handles have none.
+macro_rules! debug_by_name {
+    ($($t:ident),*) => {$(
+        impl std::fmt::Debug for $t {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(stringify!($t))
+            }
+        }
+    )*};
+}
+
+debug_by_name!(RunStatePublisher, FiringListener);
+
 /// A subscriber to `/gspn/firings`, `/gspn/marking` and `/gspn/run`.
 pub struct FiringListener {
     firings: Subscription<Firing>,
     marking: Subscription<Marking>,
     run: Subscription<RunState>,
-}
-
-impl std::fmt::Debug for FiringListener {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("FiringListener")
-    }
 }
 
 impl FiringListener {

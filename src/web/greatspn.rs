@@ -49,28 +49,17 @@ impl Source {
         let bytes = std::fs::read(path).ok()?;
         let text = String::from_utf8(to_utf8(path, &bytes).ok()?.into_owned()).ok()?;
         for page in pages(path, &text)? {
-            let (mut places, mut transitions) = (Vec::new(), Vec::new());
-            let ok = net
-                .places()
+            // Every place and transition of the net has its look on this page.
+            let look = |place: bool, name: &str| page.get(&(place, name.to_string())).cloned();
+            let places: Option<Vec<_>> = net.places().iter().map(|p| look(true, &p.name)).collect();
+            let transitions: Option<Vec<_>> = net
+                .transitions()
                 .iter()
-                .all(|p| match page.get(&(true, p.name.clone())) {
-                    Some(look) => {
-                        places.push(look.clone());
-                        true
-                    }
-                    None => false,
-                })
-                && net
-                    .transitions()
-                    .iter()
-                    .all(|t| match page.get(&(false, t.name.clone())) {
-                        Some(look) => {
-                            transitions.push(look.clone());
-                            true
-                        }
-                        None => false,
-                    });
-            if ok && page.len() == net.place_count() + net.transition_count() {
+                .map(|t| look(false, &t.name))
+                .collect();
+            if let (Some(places), Some(transitions)) = (places, transitions)
+                && page.len() == net.place_count() + net.transition_count()
+            {
                 return Some(Source {
                     path: path.to_path_buf(),
                     text,
