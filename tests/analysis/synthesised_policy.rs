@@ -36,6 +36,21 @@ fn home(name: &str) -> (Net, Controls, RewardSpec) {
     (net, controls, spec)
 }
 
+/// [`home`]'s net and reward, its decision model (no WAIT) and the model's rewards.
+fn home_model(
+    name: &str,
+) -> (
+    Net,
+    RewardSpec,
+    DecisionModel,
+    gspn::analysis::decision::Rewards,
+) {
+    let (net, controls, spec) = home(name);
+    let model = DecisionModel::build(&net, &controls, &Default::default()).unwrap();
+    let rewards = model.rewards(&spec);
+    (net, spec, model, rewards)
+}
+
 /// The exact table of a solution: (decision marking, transition fired).
 fn table(model: &DecisionModel, policy: &[u32]) -> Vec<(Vec<u32>, TransitionId)> {
     (0..model.state_count())
@@ -77,9 +92,7 @@ fn lookup(model: &DecisionModel, net: &Net, policy: &Policy, s: usize) -> Vec<(u
 
 #[test]
 fn the_written_policy_is_worth_the_optimum_exactly() {
-    let (net, controls, spec) = home("home_n03");
-    let model = DecisionModel::build(&net, &controls, &Default::default()).unwrap();
-    let rewards = model.rewards(&spec);
+    let (net, _, model, rewards) = home_model("home_n03");
     let sol = solve(
         &model,
         &rewards,
@@ -115,9 +128,7 @@ fn the_written_policy_is_worth_the_optimum_exactly() {
 /// net (its weights: a uniform choice among zero-weight transitions) earns less.
 #[test]
 fn the_net_under_the_written_policy_earns_the_optimum() {
-    let (net, controls, spec) = home("home_n03");
-    let model = DecisionModel::build(&net, &controls, &Default::default()).unwrap();
-    let rewards = model.rewards(&spec);
+    let (net, spec, model, rewards) = home_model("home_n03");
     let sol = solve(
         &model,
         &rewards,
@@ -167,9 +178,7 @@ fn the_net_under_the_written_policy_earns_the_optimum() {
 #[test]
 fn compressed_rules_choose_like_the_exact_table_everywhere() {
     for name in ["home_n03", "home_n05"] {
-        let (net, controls, spec) = home(name);
-        let model = DecisionModel::build(&net, &controls, &Default::default()).unwrap();
-        let rewards = model.rewards(&spec);
+        let (net, _, model, rewards) = home_model(name);
         let sol = solve(
             &model,
             &rewards,
@@ -195,9 +204,7 @@ fn compressed_rules_choose_like_the_exact_table_everywhere() {
 
 #[test]
 fn a_long_token_game_under_the_policy_earns_the_optimal_rate() {
-    let (net, controls, spec) = home("home_n02");
-    let model = DecisionModel::build(&net, &controls, &Default::default()).unwrap();
-    let rewards = model.rewards(&spec);
+    let (net, spec, model, rewards) = home_model("home_n02");
     let sol = solve(
         &model,
         &rewards,
