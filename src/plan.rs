@@ -164,7 +164,8 @@ impl Plan {
             .policy(self.policy)
             .rewards(self.rewards)
             .stop_conditions(self.stop)
-            .robots(self.robots);
+            .robots(self.robots)
+            .source(self.path);
         for (p, role) in places.into_iter().zip(self.roles) {
             if let Some(role) = role {
                 b = b.role(p, role);
