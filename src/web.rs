@@ -56,6 +56,7 @@
 
 mod analysis_job;
 mod api;
+mod conform;
 mod greatspn;
 mod guard;
 pub mod layout;
@@ -126,6 +127,11 @@ pub const ASSETS: &[Asset] = &[
         path: "/analysis.js",
         mime: "text/javascript; charset=utf-8",
         body: include_str!("web/assets/analysis.js"),
+    },
+    Asset {
+        path: "/conform.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/conform.js"),
     },
     Asset {
         path: "/live.js",

@@ -30,6 +30,10 @@ pub(crate) struct BackendArgs {
     #[cfg(feature = "sim")]
     #[arg(long, value_name = "N")]
     robots: Option<usize>,
+    /// The run's monitor (`run --monitor`), set once it is made, for the viewer's table.
+    #[cfg(feature = "web")]
+    #[arg(skip)]
+    pub(crate) monitor: crate::serve::MonitorSlot,
     /// ROS 2 flags, used when the plan has `ros2` places (feature `ros2`).
     #[cfg(feature = "ros2")]
     #[command(flatten)]
@@ -110,7 +114,11 @@ pub(crate) async fn setup(
         if let Some(addr) = args.web {
             let feed = world_feed(fleet.world.view());
             backends.push(gspn::world::WorldBackend::new(fleet.world));
-            backends.push(crate::serve::LiveViewer::new(addr, Some(feed)));
+            backends.push(crate::serve::LiveViewer::new(
+                addr,
+                Some(feed),
+                args.monitor.clone(),
+            ));
             return Ok((fleet.builder, backends));
         }
         backends.push(gspn::world::WorldBackend::new(fleet.world));
@@ -141,7 +149,11 @@ pub(crate) async fn setup(
     }
     #[cfg(feature = "web")]
     if let Some(addr) = args.web {
-        backends.push(crate::serve::LiveViewer::new(addr, None));
+        backends.push(crate::serve::LiveViewer::new(
+            addr,
+            None,
+            args.monitor.clone(),
+        ));
     }
     let _ = args;
     Ok((plan.runtime_builder(), backends))

@@ -63,6 +63,7 @@ function applyLive(s) {
   // Before the map is drawn: its clock line says when the run (and so the world) stopped.
   $('map-panel').classList.toggle('stopped', !!s.stopped);
   if (s.world) drawWorld(s.world);
+  if (s.conform) showConform(s.conform);
   followLive(s);
   $('clock').textContent = 'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
     (s.stopped ? ' — stopped: ' + s.stopped : '') +
