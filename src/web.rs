@@ -245,11 +245,9 @@ impl WebState {
     /// A viewer of a recorded run ([`crate::runtime::journal::read_journal`]): the page shows a time slider
     /// over `frames` instead of playing its own token game.
     pub fn for_replay(net: Net, frames: Vec<Frame>) -> WebState {
+        let replay = replay::Replay::of_frames(&net, frames);
         let state = WebState::new(net, None, 0);
-        let _ = state
-            .inner
-            .replay
-            .set(Arc::new(replay::Replay::of_frames(frames)));
+        let _ = state.inner.replay.set(Arc::new(replay));
         state
     }
 

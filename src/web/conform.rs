@@ -30,3 +30,40 @@ fn row(net: &Net, s: &Statistic) -> Value {
         "drifting": s.drifting,
     })
 }
+
+/// Most snapshots of a replay's table (a long journal is sampled evenly).
+const REPLAY_SNAPSHOTS: usize = 400;
+
+/// The table along a recorded run: a [`crate::conform::Monitor`] of `net` (its transitions'
+/// rates: a journal does not say which policy ran it, so places, whose prediction depends on
+/// it, are left out) fed the recorded firings; `[{time, rows}]` after every firing — at most
+/// [`REPLAY_SNAPSHOTS`], evenly spread, and always the last one — from the first firing that
+/// has statistics on. `None` when no transition ever has enough firings.
+pub(crate) fn replay_rows(net: &Net, frames: &[crate::runtime::journal::Frame]) -> Option<Value> {
+    let first = frames.first()?;
+    let monitor = SharedMonitor::new(crate::conform::Monitor::new(
+        net,
+        first.tokens.clone(),
+        Default::default(),
+    ));
+    let mut watcher = monitor.clone();
+    let every = frames.len().div_ceil(REPLAY_SNAPSHOTS).max(1);
+    let mut out = Vec::new();
+    for (i, f) in frames.iter().enumerate().skip(1) {
+        let Some(t) = f
+            .transition
+            .as_deref()
+            .and_then(|n| net.transition_by_name(n))
+        else {
+            continue;
+        };
+        crate::runtime::Watcher::fired(&mut watcher, f.time, t, &f.tokens);
+        if i % every == 0 || i + 1 == frames.len() {
+            let rows = rows(net, &monitor);
+            if rows.as_array().is_some_and(|r| !r.is_empty()) {
+                out.push(json!({ "time": f.time, "rows": rows }));
+            }
+        }
+    }
+    (!out.is_empty()).then_some(Value::Array(out))
+}

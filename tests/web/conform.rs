@@ -159,3 +159,75 @@ async fn the_live_page_shows_observed_beside_predicted_and_highlights_drifting_i
     b.close().await;
     server.abort();
 }
+
+/// A journal played back: the table follows the slider — the monitor's rows after the last
+/// firing at the slider's time (transitions' rates only: a journal does not say which policy
+/// ran it), the same as a monitor fed the journal's firings; none before enough firings.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_replay_shows_the_monitors_table_at_the_sliders_time() {
+    let _one = BROWSER.lock().await;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.jsonl");
+    Runtime::builder(cyc3_with(2.0))
+        .seed(9)
+        .time_scale(0.001)
+        .until(400.0)
+        .journal(&path)
+        .spawn()
+        .unwrap()
+        .wait()
+        .await;
+    let text = std::fs::read_to_string(&path).unwrap();
+    let frames = gspn::runtime::journal::read_journal(&text, &cyc3_with(2.0)).unwrap();
+    // The same firings through a monitor of the model (T3 at 0.5).
+    let model = cyc3_with(0.5);
+    let mut monitor = Monitor::new(&model, frames[0].tokens.clone(), Default::default());
+    for f in &frames[1..] {
+        let t = model
+            .transition_by_name(f.transition.as_deref().unwrap())
+            .unwrap();
+        monitor.fired(f.time, t, &f.tokens);
+    }
+    let expected = monitor.statistics();
+    assert_eq!(expected.len(), 2, "{expected:?}");
+    let t3 = expected[1].clone();
+    assert!(t3.drifting && t3.n == 200, "{t3:?}");
+
+    let (addr, server) = start_server(WebState::for_replay(model, frames.clone())).await;
+    let snapshots = http_get(addr, "/api/replay").await["conform"].clone();
+    let last = snapshots.as_array().unwrap().last().unwrap();
+    assert_eq!(last["time"], frames.last().unwrap().time);
+    let served = row(&last["rows"], "rate", "T3");
+    assert_eq!(served["observed"].as_f64().unwrap(), t3.observed);
+    assert_eq!(served["drifting"], true);
+    assert_eq!(row(&last["rows"], "rate", "T1")["drifting"], false);
+
+    let b = Browser::start(1200, 800).await;
+    open(&b, addr).await;
+    let rows_shown = "return document.querySelectorAll('#conform tbody tr').length;";
+    // At time 0 nothing has fired: an empty table.
+    assert_eq!(b.js(rows_shown, vec![]).await, 0);
+    b.js(
+        "const s = document.getElementById('slider'); s.value = s.max;\
+         s.dispatchEvent(new Event('input'));",
+        vec![],
+    )
+    .await;
+    assert_eq!(b.js(rows_shown, vec![]).await, 2);
+    assert_eq!(
+        cell(&b, "T3", "observed").await,
+        format!("{:.4}", t3.observed)
+    );
+    assert_eq!(cell(&b, "T3", "predicted").await, "0.5000");
+    let classes = b
+        .js(
+            "return [...document.querySelectorAll('#conform tbody tr')]\
+               .map(r => r.dataset.item + ':' + r.classList.contains('drifting'));",
+            vec![],
+        )
+        .await;
+    assert_eq!(classes, serde_json::json!(["T1:false", "T3:true"]));
+    b.screenshot(&screenshot_path("conform-replay.png")).await;
+    b.close().await;
+    server.abort();
+}

@@ -73,3 +73,16 @@ function showConform(rows) {
   }
   $('conform-count').textContent = rows.length + ' items, ' + drifting + ' drifting';
 }
+
+// A replay's table at model time t: the last snapshot (`[{time, rows}]`, sorted by time) at
+// or before t; an empty table before the first.
+function showConformAt(snapshots, t) {
+  let lo = -1;
+  let hi = snapshots.length - 1;
+  while (lo < hi) {
+    const mid = (lo + hi + 1) >> 1;
+    if (snapshots[mid].time <= t + 1e-9) lo = mid;
+    else hi = mid - 1;
+  }
+  showConform(lo >= 0 ? snapshots[lo].rows : []);
+}
