@@ -166,6 +166,11 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/navigate.js"),
     },
     Asset {
+        path: "/edit.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/edit.js"),
+    },
+    Asset {
         path: "/style.css",
         mime: "text/css; charset=utf-8",
         body: include_str!("web/assets/style.css"),

@@ -578,3 +578,236 @@ async fn nets_that_cannot_be_edited_or_saved_say_so() {
         "{err}"
     );
 }
+
+// ---- in the browser ------------------------------------------------------------------------
+
+use crate::browser::{BROWSER, WAIT, analyse_on_page, http_get, open, screenshot_path};
+use crate::support::browser::Browser;
+use crate::support::start_server;
+use fantoccini::Locator;
+
+/// A click at the page's point `(x, y)` (window pixels) on whatever is drawn there, as the
+/// net's handlers see a real one: `mousedown` on the element, `mouseup` on the window.
+async fn click_at(b: &Browser, x: f64, y: f64) {
+    b.js(
+        "const [x, y] = [arguments[0], arguments[1]];\
+         const o = {clientX: x, clientY: y, bubbles: true, button: 0};\
+         document.elementFromPoint(x, y).dispatchEvent(new MouseEvent('mousedown', o));\
+         window.dispatchEvent(new MouseEvent('mouseup', o));",
+        vec![json!(x), json!(y)],
+    )
+    .await;
+}
+
+/// The window point at the centre of the node drawn for `name` (`place` or `transition`).
+async fn node_centre(b: &Browser, what: &str, name: &str) -> (f64, f64) {
+    let v = b
+        .js(
+            &format!(
+                "const r = document.querySelector('[data-{what}=\"' + arguments[0] + '\"]')\
+                   .getBoundingClientRect(); return [r.left + r.width / 2, r.top + r.height / 2];"
+            ),
+            vec![json!(name)],
+        )
+        .await;
+    (v[0].as_f64().unwrap(), v[1].as_f64().unwrap())
+}
+
+async fn click_node(b: &Browser, what: &str, name: &str) {
+    let (x, y) = node_centre(b, what, name).await;
+    click_at(b, x, y).await;
+}
+
+/// Waits until `script` (an expression) is true on the page; a timeout says what the
+/// editor last said.
+async fn wait_for(b: &Browser, script: &str, what: &str) {
+    let start = std::time::Instant::now();
+    while b.js(&format!("return !!({script});"), vec![]).await != json!(true) {
+        if start.elapsed() > WAIT {
+            let said = b.text("#edit-msg").await;
+            let props = b
+                .js("return document.getElementById('props').outerHTML;", vec![])
+                .await;
+            panic!("timed out waiting for {what}; the editor said {said:?}; {props}");
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+    }
+}
+
+/// Types `text` into the properties field `name` (clearing it first), as a user does.
+async fn type_field(b: &Browser, name: &str, text: &str) {
+    let f = b
+        .client
+        .find(Locator::Css(&format!("#props [name=\"{name}\"]")))
+        .await
+        .unwrap();
+    f.clear().await.unwrap();
+    f.send_keys(text).await.unwrap();
+}
+
+fn t1_rate(net: &Net) -> f64 {
+    match timing(net, "T1") {
+        Timing::Exponential { rate, .. } => rate,
+        t => panic!("T1 is {t:?}"),
+    }
+}
+
+async fn keys(b: &Browser, key: &str, ctrl: bool, shift: bool) {
+    b.js(
+        "document.body.dispatchEvent(new KeyboardEvent('keydown', \
+           {key: arguments[0], ctrlKey: arguments[1], shiftKey: arguments[2], bubbles: true}));",
+        vec![json!(key), json!(ctrl), json!(shift)],
+    )
+    .await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_edit_in_the_browser_saved_and_reloaded_analyses_as_plan_runner_analyze() {
+    let _one = BROWSER.lock().await;
+    let dir = tempfile::tempdir().unwrap();
+    let saved = dir.path().join("cyc3-edited.PNPRO");
+    let state = cyc3_state().saving_to(saved.clone()).unwrap();
+    let (addr, server) = start_server(state.clone()).await;
+    let b = Browser::start(1400, 900).await;
+    open(&b, addr).await;
+
+    // The editor's tool bar (key e), then a place where nothing is drawn: under P1.
+    wait_for(
+        &b,
+        "!document.getElementById('edit-mode').classList.contains('hidden')",
+        "the edit button",
+    )
+    .await;
+    keys(&b, "e", false, false).await;
+    wait_for(
+        &b,
+        "!document.getElementById('edit-bar').classList.contains('hidden')",
+        "the tool bar",
+    )
+    .await;
+    b.click("[data-tool=place]").await;
+    let (x, y) = node_centre(&b, "place", "P1").await;
+    click_at(&b, x, y + 110.0).await;
+    wait_for(
+        &b,
+        "document.querySelector('[data-place=\"P4\"]') !== null",
+        "the new place P4",
+    )
+    .await;
+
+    // Two arcs with the arc tool: T1 → P4 and P4 → t2.
+    b.click("[data-tool=arc]").await;
+    for (from, to) in [
+        (("transition", "T1"), ("place", "P4")),
+        (("place", "P4"), ("transition", "t2")),
+    ] {
+        click_node(&b, from.0, from.1).await;
+        click_node(&b, to.0, to.1).await;
+    }
+    wait_for(&b, "net.arcs.length === 8", "the two new arcs").await;
+
+    // T1's rate in the properties panel.
+    b.click("[data-tool=select]").await;
+    click_node(&b, "transition", "T1").await;
+    wait_for(
+        &b,
+        "document.querySelector('#props [name=rate]') !== null",
+        "T1's properties",
+    )
+    .await;
+    type_field(&b, "rate", "3").await;
+    b.click("#props-apply").await;
+    wait_for(&b, "net.transitions[0].rate === 3", "the new rate").await;
+    b.screenshot(&screenshot_path("editor.png")).await;
+
+    // A negative rate is refused with the reader's words, and nothing changes.
+    click_node(&b, "transition", "T1").await;
+    type_field(&b, "rate", "-2").await;
+    b.click("#props-apply").await;
+    wait_for(
+        &b,
+        "document.getElementById('edit-msg').classList.contains('error')",
+        "the refusal",
+    )
+    .await;
+    assert_eq!(
+        b.text("#edit-msg").await,
+        "rate of `T1` is -2: must be a finite number > 0"
+    );
+    assert_eq!(t1_rate(&state.current_net()), 3.0);
+    b.screenshot(&screenshot_path("editor-refused.png")).await;
+
+    // Ctrl-Z takes the rate back, Ctrl-Shift-Z does it again.
+    keys(&b, "z", true, false).await;
+    wait_for(&b, "net.transitions[0].rate === 1", "the undone rate").await;
+    assert_eq!(t1_rate(&state.current_net()), 1.0);
+    keys(&b, "Z", true, true).await;
+    wait_for(&b, "net.transitions[0].rate === 3", "the redone rate").await;
+
+    // Another page's edit shows here too.
+    let (status, _) = edit(
+        &state,
+        json!({"op": "add_place", "name": "elsewhere", "x": 20, "y": 8}),
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK);
+    wait_for(
+        &b,
+        "document.querySelector('[data-place=\"elsewhere\"]') !== null",
+        "the other page's place",
+    )
+    .await;
+    keys(&b, "z", true, false).await;
+    wait_for(
+        &b,
+        "document.querySelector('[data-place=\"elsewhere\"]') === null",
+        "its undo",
+    )
+    .await;
+
+    // The token game plays the edited net: P4 holds T1's tokens until t2 takes them.
+    b.click("#step").await;
+    wait_for(
+        &b,
+        "document.querySelector('[data-place=\"P4\"]').getAttribute('data-tokens') === '1'",
+        "a token in P4",
+    )
+    .await;
+
+    // Save: the file given to `serve --save-to`, read back as the net the page edited.
+    b.click("#edit-save").await;
+    wait_for(
+        &b,
+        "document.getElementById('edit-msg').textContent.startsWith('saved')",
+        "the save",
+    )
+    .await;
+    let back = read_net(&saved, &ReadOptions::default()).unwrap().net;
+    let edited = state.current_net();
+    assert!(back.diff(&edited).is_empty(), "{:?}", back.diff(&edited));
+    assert_eq!(back.place_count(), 4);
+    assert_eq!(t1_rate(&back), 3.0);
+
+    // The page's analysis of the edited net.
+    analyse_on_page(&b).await;
+    let page = http_get(addr, "/api/analysis").await;
+    let cli = analyze_json(&saved);
+    assert_same_analysis(&page, &cli);
+    b.screenshot(&screenshot_path("editor-analysed.png")).await;
+    server.abort();
+
+    // The saved file opened again, analysed in the page: the numbers of `analyze` on it.
+    let reopened = WebState::new(back, None, 0).with_source(&saved);
+    let (addr, server) = start_server(reopened).await;
+    open(&b, addr).await;
+    analyse_on_page(&b).await;
+    assert!(b.text("#analysis").await.contains("P4"));
+    let page = http_get(addr, "/api/analysis").await;
+    assert_same_analysis(&page, &cli);
+    // Mean tokens of P4 equal P2's: it holds each token that T1 moved until t2 fires.
+    let mean = &page["steady"]["mean_tokens"];
+    assert!((mean["P4"].as_f64().unwrap() - mean["P2"].as_f64().unwrap()).abs() < 1e-12);
+    b.screenshot(&screenshot_path("editor-reloaded.png")).await;
+    server.abort();
+    b.close().await;
+}
