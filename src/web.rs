@@ -28,7 +28,7 @@
 //! | `POST /api/edit/undo`, `POST /api/edit/redo` | back to the version before the last edit, on to the one after; as `POST /api/edit`; 409 when there is nothing to undo or redo |
 //! | `POST /api/edit/export {format: "pnpro"\|"pipe", places, transitions}` | `{text, file}`: the current net (with the page's positions) as a GreatSPN project or a PIPE net, to download |
 //! | `POST /api/edit/save {places, transitions}` | writes the current net to the file of `serve --save-to PATH` ([`WebState::saving_to`]) in its format; `{saved, format, bytes}`; 409 without one |
-//! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal |
+//! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal, and `world: {map, radius, robots, frames: [{time, robots: [{id, agent, x, y}]}]}` when it recorded a simulated world |
 //! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log`, and `world` with a world feed |
 //! | `GET /api/live/world` | the latest value of the run's simulated world ([`LiveRun::with_world`]: map and robots, metres, y up); 404 without a feed |
 //! | `POST /api/live/stop` | asks the live run to stop |
@@ -78,6 +78,7 @@ mod greatspn;
 mod guard;
 pub mod layout;
 mod live;
+mod replay;
 mod report;
 mod session;
 
@@ -94,8 +95,8 @@ use tokio::net::TcpListener;
 use crate::analysis::decision::RewardSpec;
 use crate::net::Net;
 use crate::policy::Policy;
-use crate::runtime::journal::Frame;
 pub use edit::routes::SaveFormatError;
+use crate::runtime::journal::{Frame, Recording};
 pub use live::{FRAME, LiveRun};
 use session::Session;
 
@@ -199,7 +200,7 @@ struct Inner {
     /// Where the editor saves (`serve --save-to`).
     save_to: OnceLock<std::path::PathBuf>,
     live: OnceLock<LiveRun>,
-    replay: OnceLock<Arc<Vec<Frame>>>,
+    replay: OnceLock<Arc<replay::Replay>>,
     source: OnceLock<greatspn::Source>,
     /// Bumped by every change of the token game: the pages waiting on `/api/sim/wait`
     /// (other tabs) fetch the new state.
@@ -280,8 +281,29 @@ impl WebState {
     /// over `frames` instead of playing its own token game.
     pub fn for_replay(net: Net, frames: Vec<Frame>) -> WebState {
         let state = WebState::new(net, None, 0);
-        let _ = state.inner.replay.set(Arc::new(frames));
+        let _ = state
+            .inner
+            .replay
+            .set(Arc::new(replay::Replay::of_frames(frames)));
         state
+    }
+
+    /// A viewer of a journal read back ([`crate::runtime::journal::read_recording`]): the
+    /// time slider over its firings on the net as it ran, and the map of its simulated world
+    /// when the journal recorded one.
+    pub fn for_recording(recording: Recording) -> WebState {
+        let replay = replay::Replay::of_recording(&recording);
+        let state = WebState::new(recording.net, None, 0);
+        let _ = state.inner.replay.set(Arc::new(replay));
+        state
+    }
+
+    /// The firings of the recorded run (0 unless this is a replay).
+    pub fn replay_firings(&self) -> usize {
+        self.inner
+            .replay
+            .get()
+            .map_or(0, |r| r.frames.len().saturating_sub(1))
     }
 
     /// The net came from `path`: when that is a GreatSPN project whose page is this net, the
@@ -489,7 +511,7 @@ fn routes(state: WebState, bound: guard::Bound) -> Router {
         .route("/api/edit/redo", post(edit::routes::redo))
         .route("/api/edit/export", post(edit::routes::export))
         .route("/api/edit/save", post(edit::routes::save))
-        .route("/api/replay", get(replay_frames))
+        .route("/api/replay", get(replay::frames))
         .route("/api/live/state", get(live::state))
         .route("/api/live/world", get(live::world))
         .route("/api/live/stop", post(live::stop))
@@ -507,14 +529,6 @@ async fn mode(axum::extract::State(state): axum::extract::State<WebState>) -> ax
         "live": state.live().is_some(),
         "replay": state.inner.replay.get().is_some(),
     }))
-}
-
-/// `GET /api/replay`: `{"frames": [{time, transition, tokens}]}` (404 without a recording).
-async fn replay_frames(axum::extract::State(state): axum::extract::State<WebState>) -> Response {
-    match state.inner.replay.get() {
-        Some(frames) => axum::Json(json!({ "frames": **frames })).into_response(),
-        None => api::error(StatusCode::NOT_FOUND, "no recorded run"),
-    }
 }
 
 async fn add_security_headers(mut res: Response) -> Response {

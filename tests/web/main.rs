@@ -13,5 +13,6 @@ mod layout;
 mod live;
 mod look;
 mod navigate;
+mod replay_world;
 mod security;
 mod share;

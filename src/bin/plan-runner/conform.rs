@@ -89,7 +89,7 @@ pub(crate) fn journal_trace(path: &Path, net: &Net) -> anyhow::Result<Trace> {
 /// `net` with the initial marking a run started from when it was not the net's (a plan run
 /// with `--robots N` scales it, and the journal's hash is of the scaled net): the marking
 /// before the journal's first firing.
-fn scaled_net(text: &str, net: &Net) -> Option<Net> {
+pub(crate) fn scaled_net(text: &str, net: &Net) -> Option<Net> {
     let (t, marking) = text.lines().skip(1).find_map(|l| {
         let e: Event = serde_json::from_str(l).ok()?;
         match e.kind {
