@@ -95,8 +95,8 @@ use tokio::net::TcpListener;
 use crate::analysis::decision::RewardSpec;
 use crate::net::Net;
 use crate::policy::Policy;
-pub use edit::routes::SaveFormatError;
 use crate::runtime::journal::{Frame, Recording};
+pub use edit::routes::SaveFormatError;
 pub use live::{FRAME, LiveRun};
 use session::Session;
 

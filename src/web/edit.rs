@@ -17,9 +17,9 @@
 //! | `move` | `places`, `transitions`: `{name: [x, y]}` |
 //!
 //! Numbers may come as JSON numbers or as the text of a field (`"2.5"`), and are checked as
-//! the GreatSPN reader checks them: a marking is a whole number ≥ 0, a rate a finite number
-//! > 0, a weight ≥ 0, a priority, a number of servers and an arc multiplicity whole numbers
-//! ≥ 1.
+//! the GreatSPN reader checks them: a marking is a whole number of at least 0, a rate a
+//! finite number above 0, a weight at least 0, a priority, a number of servers and an arc
+//! multiplicity whole numbers of at least 1.
 
 mod history;
 pub(crate) mod routes;

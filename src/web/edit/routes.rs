@@ -145,7 +145,7 @@ pub(crate) struct SaveBody {
 }
 
 /// The current net with the page's positions, when it sent them.
-fn to_save(state: &WebState, b: &SaveBody) -> Result<Net, Response> {
+fn to_save(state: &WebState, b: &SaveBody) -> Result<Net, (StatusCode, String)> {
     let net = state.current_net();
     let (Some(places), Some(transitions)) = (&b.places, &b.transitions) else {
         return Ok(Net::clone(&net));
@@ -153,7 +153,7 @@ fn to_save(state: &WebState, b: &SaveBody) -> Result<Net, Response> {
     let pos =
         |v: &[[f64; 2]]| -> Vec<Position> { v.iter().map(|&[x, y]| Position { x, y }).collect() };
     match crate::web::layout::with_positions(&net, &pos(places), &pos(transitions)) {
-        None => Err(error(
+        None => Err((
             StatusCode::BAD_REQUEST,
             format!(
                 "expected {} place and {} transition positions (the net changed: reload the page)",
@@ -161,7 +161,7 @@ fn to_save(state: &WebState, b: &SaveBody) -> Result<Net, Response> {
                 net.transition_count()
             ),
         )),
-        Some(Err(e)) => Err(error(StatusCode::UNPROCESSABLE_ENTITY, e.to_string())),
+        Some(Err(e)) => Err((StatusCode::UNPROCESSABLE_ENTITY, e.to_string())),
         Some(Ok(n)) => Ok(n),
     }
 }
@@ -185,7 +185,7 @@ pub(crate) async fn export(State(state): State<WebState>, body: Option<Json<Valu
     };
     let net = match to_save(&state, &b) {
         Ok(n) => n,
-        Err(r) => return r,
+        Err((status, message)) => return error(status, message),
     };
     let ext = if format == Format::Pipe {
         "xml"
@@ -225,7 +225,7 @@ pub(crate) async fn save(State(state): State<WebState>, body: Option<Json<Value>
     };
     let net = match to_save(&state, &b) {
         Ok(n) => n,
-        Err(r) => return r,
+        Err((status, message)) => return error(status, message),
     };
     let text = text_of(&net, format);
     let bytes = text.len();
