@@ -323,17 +323,8 @@ impl Num {
     /// A whole number ≥ `min`, checked as the GreatSPN reader checks one.
     fn whole(&self, what: &'static str, name: &str, min: u32) -> Result<u32, EditError> {
         let v = self.value(what, name)?;
-        if v.is_finite() && v.fract() == 0.0 && v >= min as f64 && v <= u32::MAX as f64 {
-            return Ok(v as u32);
-        }
-        let expected = if v.fract() == 0.0 && v > u32::MAX as f64 {
-            crate::net::TOO_MANY_TOKENS
-        } else if min == 0 {
-            "must be a whole number ≥ 0"
-        } else {
-            "must be a whole number ≥ 1"
-        };
-        Err(out_of_range(what, name, self.shown(v), expected))
+        crate::io::whole_number(v, min)
+            .map_err(|expected| out_of_range(what, name, self.shown(v), expected))
     }
 
     fn rate(&self, name: &str) -> Result<f64, EditError> {
@@ -477,6 +468,33 @@ impl Parts {
             });
         }
         Ok(found)
+    }
+
+    /// Removes place `i` (`place`) or transition `i` with its arcs, renumbering the arcs of
+    /// the later ones; how many arcs went.
+    fn remove(&mut self, place: bool, i: usize) -> usize {
+        if place {
+            self.places.remove(i);
+        } else {
+            self.transitions.remove(i);
+        }
+        let end = |a: &Arc| {
+            if place {
+                a.place.index()
+            } else {
+                a.transition.index()
+            }
+        };
+        let before = self.arcs.len();
+        self.arcs.retain(|a| end(a) != i);
+        for a in self.arcs.iter_mut().filter(|a| end(a) > i) {
+            if place {
+                a.place = PlaceId(a.place.0 - 1);
+            } else {
+                a.transition = TransitionId(a.transition.0 - 1);
+            }
+        }
+        before - self.arcs.len()
     }
 
     fn build(self) -> Result<Net, EditError> {
@@ -639,29 +657,9 @@ pub(crate) fn apply(net: &Net, edit: &Edit) -> Result<(Net, String), EditError> 
         }
         Edit::Delete { node } => {
             let (what, name, arcs) = match node {
-                NodeRef::Place(name) => {
-                    let i = n.place(name)?;
-                    n.places.remove(i);
-                    let before = n.arcs.len();
-                    n.arcs.retain(|a| a.place.index() != i);
-                    for a in &mut n.arcs {
-                        if a.place.index() > i {
-                            a.place = PlaceId(a.place.0 - 1);
-                        }
-                    }
-                    ("place", name, before - n.arcs.len())
-                }
+                NodeRef::Place(name) => ("place", name, n.remove(true, n.place(name)?)),
                 NodeRef::Transition(name) => {
-                    let i = n.transition(name)?;
-                    n.transitions.remove(i);
-                    let before = n.arcs.len();
-                    n.arcs.retain(|a| a.transition.index() != i);
-                    for a in &mut n.arcs {
-                        if a.transition.index() > i {
-                            a.transition = TransitionId(a.transition.0 - 1);
-                        }
-                    }
-                    ("transition", name, before - n.arcs.len())
+                    ("transition", name, n.remove(false, n.transition(name)?))
                 }
             };
             match arcs {

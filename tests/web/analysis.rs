@@ -41,7 +41,7 @@ fn plan_state(plan: Plan) -> WebState {
 }
 
 /// `plan-runner analyze FILE --json`.
-fn analyze_json(file: &std::path::Path) -> Value {
+pub(crate) fn analyze_json(file: &std::path::Path) -> Value {
     let out = Command::cargo_bin("plan-runner")
         .unwrap()
         .args(["analyze", file.to_str().unwrap(), "--json"])

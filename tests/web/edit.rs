@@ -5,6 +5,7 @@
 //! writes PNPRO or PIPE XML only to the file named on the command line.
 #![cfg(feature = "web")]
 
+use crate::analysis::analyze_json;
 use crate::api::call;
 use crate::support as common;
 
@@ -415,17 +416,6 @@ async fn undo_and_redo_step_through_the_versions() {
     assert_eq!(v["history"]["edits"], 3);
 }
 
-/// `plan-runner analyze FILE --json`.
-fn analyze_json(file: &Path) -> Value {
-    let out = Command::cargo_bin("plan-runner")
-        .unwrap()
-        .args(["analyze", file.to_str().unwrap(), "--json"])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{out:?}");
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
 /// The panel's steady-state numbers equal `analyze`'s to 1e-9, name by name.
 pub(crate) fn assert_same_analysis(page: &Value, cli: &Value) {
     assert_eq!(page["reachable"], cli["state_space"]["reachable"]);
@@ -634,6 +624,20 @@ async fn wait_for(b: &Browser, script: &str, what: &str) {
     }
 }
 
+/// Waits until the element `#id` is shown (or hidden).
+async fn wait_shown(b: &Browser, id: &str, shown: bool) {
+    let script =
+        format!("document.getElementById('{id}').classList.contains('hidden') !== {shown}");
+    wait_for(b, &script, &format!("#{id} shown: {shown}")).await;
+}
+
+/// Waits until the page draws a place called `name` (or none).
+async fn wait_place(b: &Browser, name: &str, drawn: bool) {
+    let script =
+        format!("(document.querySelector('[data-place=\"{name}\"]') !== null) === {drawn}");
+    wait_for(b, &script, &format!("place {name} drawn: {drawn}")).await;
+}
+
 /// Types `text` into the properties field `name` (clearing it first), as a user does.
 async fn type_field(b: &Browser, name: &str, text: &str) {
     let f = b
@@ -672,28 +676,13 @@ async fn an_edit_in_the_browser_saved_and_reloaded_analyses_as_plan_runner_analy
     open(&b, addr).await;
 
     // The editor's tool bar (key e), then a place where nothing is drawn: under P1.
-    wait_for(
-        &b,
-        "!document.getElementById('edit-mode').classList.contains('hidden')",
-        "the edit button",
-    )
-    .await;
+    wait_shown(&b, "edit-mode", true).await;
     keys(&b, "e", false, false).await;
-    wait_for(
-        &b,
-        "!document.getElementById('edit-bar').classList.contains('hidden')",
-        "the tool bar",
-    )
-    .await;
+    wait_shown(&b, "edit-bar", true).await;
     b.click("[data-tool=place]").await;
     let (x, y) = node_centre(&b, "place", "P1").await;
     click_at(&b, x, y + 110.0).await;
-    wait_for(
-        &b,
-        "document.querySelector('[data-place=\"P4\"]') !== null",
-        "the new place P4",
-    )
-    .await;
+    wait_place(&b, "P4", true).await;
 
     // Two arcs with the arc tool: T1 → P4 and P4 → t2.
     b.click("[data-tool=arc]").await;
@@ -751,19 +740,9 @@ async fn an_edit_in_the_browser_saved_and_reloaded_analyses_as_plan_runner_analy
     )
     .await;
     assert_eq!(status, StatusCode::OK);
-    wait_for(
-        &b,
-        "document.querySelector('[data-place=\"elsewhere\"]') !== null",
-        "the other page's place",
-    )
-    .await;
+    wait_place(&b, "elsewhere", true).await;
     keys(&b, "z", true, false).await;
-    wait_for(
-        &b,
-        "document.querySelector('[data-place=\"elsewhere\"]') === null",
-        "its undo",
-    )
-    .await;
+    wait_place(&b, "elsewhere", false).await;
 
     // The token game plays the edited net: P4 holds T1's tokens until t2 takes them.
     b.click("#step").await;
