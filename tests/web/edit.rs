@@ -726,6 +726,23 @@ async fn an_edit_in_the_browser_saved_and_reloaded_analyses_as_plan_runner_analy
     assert_eq!(t1_rate(&state.current_net()), 3.0);
     b.screenshot(&screenshot_path("editor-refused.png")).await;
 
+    // The editor's keys are listed under `?`.
+    keys(&b, "?", false, false).await;
+    wait_shown(&b, "help", true).await;
+    let help = b.text("#help-keys").await;
+    for k in [
+        "Ctrl-Z",
+        "Ctrl-Shift-Z",
+        "edit the net",
+        "add inhibitor arcs",
+        "Del",
+    ] {
+        assert!(help.contains(k), "{k} not in {help:?}");
+    }
+    b.screenshot(&screenshot_path("editor-keys.png")).await;
+    keys(&b, "Escape", false, false).await;
+    wait_shown(&b, "help", false).await;
+
     // Ctrl-Z takes the rate back, Ctrl-Shift-Z does it again.
     keys(&b, "z", true, false).await;
     wait_for(&b, "net.transitions[0].rate === 1", "the undone rate").await;

@@ -80,7 +80,17 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     )
     .with_source(&plan.net_path);
     let state = match args.save_to {
-        Some(path) => state.saving_to(path).map_err(|e| BadInput(e.to_string()))?,
+        Some(path) => {
+            let real = |p: &std::path::Path| std::fs::canonicalize(p).ok();
+            if real(&path).is_some() && real(&path) == real(&plan.net_path) {
+                eprintln!(
+                    "warning: `save` replaces {} itself: its constants, templates and \
+                     expressions are written as their values",
+                    path.display()
+                );
+            }
+            state.saving_to(path).map_err(|e| BadInput(e.to_string()))?
+        }
         None => state,
     };
     let rt = tokio::runtime::Builder::new_multi_thread()
