@@ -280,7 +280,7 @@ pub(crate) async fn analysis_query(
     State(state): State<WebState>,
     Json(b): Json<QueryBody>,
 ) -> Response {
-    let (net, kept) = match state.inner.analysis.kept() {
+    let (net, kept) = match state.analysis().kept() {
         None => {
             return error(
                 StatusCode::CONFLICT,
