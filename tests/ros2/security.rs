@@ -10,7 +10,8 @@ use std::net::{IpAddr, Ipv4Addr, UdpSocket};
 use std::time::Duration;
 
 use support::{
-    domain, finish, robot, robot_with_data_limit, rss, supervisor, udp_sockets, wait_for_log,
+    domain, finish, robot, robot_with_data_limit, rss, supervisor, try_rss, udp_sockets,
+    wait_for_log,
 };
 
 const LOOPBACK: IpAddr = IpAddr::V4(Ipv4Addr::LOCALHOST);
@@ -128,12 +129,16 @@ async fn malformed_rtps_packets_do_not_make_a_robot_grow() {
     let mut peak = baseline;
     for _ in 0..30 {
         tokio::time::sleep(Duration::from_millis(100)).await;
-        assert!(
-            r.child.try_wait().unwrap().is_none(),
-            "the robot died: {}",
-            r.log()
-        );
-        peak = peak.max(rss(pid));
+        let now = try_rss(pid).filter(|_| r.child.try_wait().unwrap().is_none());
+        let Some(now) = now else {
+            let status = r.child.wait().await.unwrap();
+            panic!(
+                "the robot died ({status}, peak RSS {} MB before): {}",
+                peak >> 20,
+                r.log()
+            );
+        };
+        peak = peak.max(now);
     }
     println!(
         "robot RSS: baseline {} MB, peak after the packets {} MB",

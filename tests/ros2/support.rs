@@ -310,14 +310,18 @@ pub fn udp_sockets(pid: u32) -> Vec<UdpSocket> {
 
 /// The resident set size of process `pid` in bytes (`VmRSS` of /proc/<pid>/status).
 pub fn rss(pid: u32) -> u64 {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).expect("process status");
+    try_rss(pid).expect("VmRSS of a running process")
+}
+
+/// [`rss`], or `None` when the process has ended (a zombie has no `VmRSS`).
+pub fn try_rss(pid: u32) -> Option<u64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
     let kb = status
         .lines()
         .find_map(|l| l.strip_prefix("VmRSS:"))
         .and_then(|v| v.split_whitespace().next())
-        .and_then(|v| v.parse::<u64>().ok())
-        .expect("VmRSS");
-    kb * 1024
+        .and_then(|v| v.parse::<u64>().ok())?;
+    Some(kb * 1024)
 }
 
 /// Waits (at most `limit`) until the process's log contains `what`; false if it never did.
