@@ -67,6 +67,9 @@ runner="${1:-target/debug/plan-runner}"
 if [ -x "$runner" ]; then
     mkdir -p "$corpus/journal"
     "$runner" run plans/cyc3.toml --max-firings 30 --journal "$corpus/journal/cyc3_run.jsonl" > /dev/null
+    # cyc3_run_with_records.jsonl (side records: a world's map and poses between the
+    # events, as a run with simulated robots writes them) was written by hand from such a
+    # journal; it is kept as it is.
 else
     echo "no $runner: the journal corpus is left as it is" >&2
 fi

@@ -164,7 +164,8 @@ impl Plan {
             .policy(self.policy)
             .rewards(self.rewards)
             .stop_conditions(self.stop)
-            .robots(self.robots);
+            .robots(self.robots)
+            .source(self.path);
         for (p, role) in places.into_iter().zip(self.roles) {
             if let Some(role) = role {
                 b = b.role(p, role);
@@ -192,6 +193,17 @@ impl From<Plan> for crate::world::fleet::FleetPlan {
 /// `--page`) overrides the plan's `page`; `opts.params` override the plan's `params` of the
 /// same name, and both go to the net reader.
 pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
+    read_plan_with(path, opts, None)
+}
+
+/// [`read_plan`], with the plan's net already read (`net`, read with default options from
+/// the file the plan names): a caller that has just written both, as `import-thesis` does,
+/// need not parse the net a second time.
+pub(crate) fn read_plan_with(
+    path: &Path,
+    opts: &ReadOptions,
+    net: Option<Loaded>,
+) -> Result<Plan, LoadError> {
     let bytes =
         std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
     let text = String::from_utf8(bytes).map_err(|e| {
@@ -223,29 +235,10 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
         page: page.clone(),
         params,
     };
-    if !net_path.is_file() {
-        return Err(LoadError::at(
-            path,
-            locate(&text, file.net.span()),
-            LoadErrorKind::Invalid(format!(
-                "net file `{}` not found (looked at {})",
-                file.net.get_ref(),
-                net_path.display()
-            )),
-        ));
-    }
-    let loaded = read_net(&net_path, &net_opts).map_err(|e| {
-        // A bad `[params]` entry is the plan's mistake: point at it, not at the net file.
-        let entry = e.template_parameter().and_then(|name| {
-            let from_cli = opts.params.iter().any(|(o, _)| o == name);
-            let key = file.params.keys().find(|k| k.get_ref() == name)?;
-            (!from_cli && e.span.is_none()).then(|| key.span())
-        });
-        match entry {
-            Some(span) => LoadError::at(path, locate(&text, span), e.kind),
-            None => e,
-        }
-    })?;
+    let loaded = match net {
+        Some(loaded) => loaded,
+        None => read_plan_net(path, opts, &text, &file, &net_path, &net_opts)?,
+    };
     let mut plan = file.resolve(path, &text, loaded.net)?;
     plan.net_path = net_path;
     plan.transition_at = loaded.transition_at;
@@ -254,6 +247,40 @@ pub fn read_plan(path: &Path, opts: &ReadOptions) -> Result<Plan, LoadError> {
     warnings.append(&mut plan.warnings);
     plan.warnings = warnings;
     Ok(plan)
+}
+
+/// Reads the net a plan names, with the plan's page and parameters.
+fn read_plan_net(
+    path: &Path,
+    opts: &ReadOptions,
+    text: &str,
+    file: &PlanFile,
+    net_path: &Path,
+    net_opts: &ReadOptions,
+) -> Result<Loaded, LoadError> {
+    if !net_path.is_file() {
+        return Err(LoadError::at(
+            path,
+            locate(text, file.net.span()),
+            LoadErrorKind::Invalid(format!(
+                "net file `{}` not found (looked at {})",
+                file.net.get_ref(),
+                net_path.display()
+            )),
+        ));
+    }
+    read_net(net_path, net_opts).map_err(|e| {
+        // A bad `[params]` entry is the plan's mistake: point at it, not at the net file.
+        let entry = e.template_parameter().and_then(|name| {
+            let from_cli = opts.params.iter().any(|(o, _)| o == name);
+            let key = file.params.keys().find(|k| k.get_ref() == name)?;
+            (!from_cli && e.span.is_none()).then(|| key.span())
+        });
+        match entry {
+            Some(span) => LoadError::at(path, locate(text, span), e.kind),
+            None => e,
+        }
+    })
 }
 
 /// A file opened by [`open`]: a plan, or a bare net.

@@ -21,9 +21,10 @@
 //! | `POST /api/analysis/start` | starts the analysis on a blocking thread (unless it is running or done); the progress |
 //! | `GET /api/analysis/progress` | `{state: idle\|running\|cancelling\|cancelled\|done, phase: "state space"\|"properties"\|"steady state", markings, seconds}`: markings found so far by the state-space search |
 //! | `POST /api/analysis/cancel` | stops a running analysis (the search within one block of ~1,000 markings, the steady-state solver at its next sweep, the properties before they start); the progress |
+//! | `POST /api/analysis/query {transient: [t], prob: [expr]}` | on the finished analysis's state space, as `plan-runner analyze --json --transient t,.. --prob expr ..`: `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens, throughput, probability}]}`; 409 before an analysis finished, 400 for a bad time or predicate |
 //! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`crate::runtime::journal::read_journal`]), or the token game |
 //! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
-//! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal |
+//! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal, and `world: {map, radius, robots, frames: [{time, robots: [{id, agent, x, y}]}]}` when it recorded a simulated world |
 //! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log`, and `world` with a world feed |
 //! | `GET /api/live/world` | the latest value of the run's simulated world ([`LiveRun::with_world`]: map and robots, metres, y up); 404 without a feed |
 //! | `POST /api/live/stop` | asks the live run to stop |
@@ -60,6 +61,7 @@ mod greatspn;
 mod guard;
 pub mod layout;
 mod live;
+mod replay;
 mod report;
 mod session;
 
@@ -76,7 +78,7 @@ use tokio::net::TcpListener;
 use crate::analysis::decision::RewardSpec;
 use crate::net::Net;
 use crate::policy::Policy;
-use crate::runtime::journal::Frame;
+use crate::runtime::journal::{Frame, Recording};
 pub use live::{FRAME, LiveRun};
 use session::Session;
 
@@ -166,7 +168,7 @@ struct Inner {
     session: Mutex<Session>,
     analysis: Arc<analysis_job::AnalysisJob>,
     live: OnceLock<LiveRun>,
-    replay: OnceLock<Arc<Vec<Frame>>>,
+    replay: OnceLock<Arc<replay::Replay>>,
     source: OnceLock<greatspn::Source>,
     /// Bumped by every change of the token game: the pages waiting on `/api/sim/wait`
     /// (other tabs) fetch the new state.
@@ -239,8 +241,29 @@ impl WebState {
     /// over `frames` instead of playing its own token game.
     pub fn for_replay(net: Net, frames: Vec<Frame>) -> WebState {
         let state = WebState::new(net, None, 0);
-        let _ = state.inner.replay.set(Arc::new(frames));
+        let _ = state
+            .inner
+            .replay
+            .set(Arc::new(replay::Replay::of_frames(frames)));
         state
+    }
+
+    /// A viewer of a journal read back ([`crate::runtime::journal::read_recording`]): the
+    /// time slider over its firings on the net as it ran, and the map of its simulated world
+    /// when the journal recorded one.
+    pub fn for_recording(recording: Recording) -> WebState {
+        let replay = replay::Replay::of_recording(&recording);
+        let state = WebState::new(recording.net, None, 0);
+        let _ = state.inner.replay.set(Arc::new(replay));
+        state
+    }
+
+    /// The firings of the recorded run (0 unless this is a replay).
+    pub fn replay_firings(&self) -> usize {
+        self.inner
+            .replay
+            .get()
+            .map_or(0, |r| r.frames.len().saturating_sub(1))
     }
 
     /// The net came from `path`: when that is a GreatSPN project whose page is this net, the
@@ -360,9 +383,10 @@ fn routes(state: WebState, bound: guard::Bound) -> Router {
         .route("/api/analysis/start", post(api::analysis_start))
         .route("/api/analysis/progress", get(api::analysis_progress))
         .route("/api/analysis/cancel", post(api::analysis_cancel))
+        .route("/api/analysis/query", post(api::analysis_query))
         .route("/api/mode", get(mode))
         .route("/api/layout", post(api::save_layout))
-        .route("/api/replay", get(replay_frames))
+        .route("/api/replay", get(replay::frames))
         .route("/api/live/state", get(live::state))
         .route("/api/live/world", get(live::world))
         .route("/api/live/stop", post(live::stop))
@@ -380,14 +404,6 @@ async fn mode(axum::extract::State(state): axum::extract::State<WebState>) -> ax
         "live": state.live().is_some(),
         "replay": state.inner.replay.get().is_some(),
     }))
-}
-
-/// `GET /api/replay`: `{"frames": [{time, transition, tokens}]}` (404 without a recording).
-async fn replay_frames(axum::extract::State(state): axum::extract::State<WebState>) -> Response {
-    match state.inner.replay.get() {
-        Some(frames) => axum::Json(json!({ "frames": **frames })).into_response(),
-        None => api::error(StatusCode::NOT_FOUND, "no recorded run"),
-    }
 }
 
 async fn add_security_headers(mut res: Response) -> Response {

@@ -39,7 +39,7 @@ mod pylit;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::{Plan, read_plan};
+use super::{Plan, read_plan_with};
 use crate::io::{LoadError, LoadErrorKind, ReadOptions, Span, read_net};
 use crate::net::{Net, Timing};
 use rustc_hash::{FxHashMap, FxHashSet};
@@ -205,7 +205,8 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, LoadError> 
     }
     let plan_path = opts.out.join("plan.toml");
     std::fs::write(&plan_path, text).map_err(|e| io_err(&plan_path, e))?;
-    let plan = read_plan(&plan_path, &ReadOptions::default())?;
+    // The copy is the file just read, byte for byte: its net need not be parsed again.
+    let plan = read_plan_with(&plan_path, &ReadOptions::default(), Some(loaded))?;
     let mut all = input.warnings;
     all.append(&mut warnings);
     all.extend(project_warning);

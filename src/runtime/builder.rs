@@ -15,7 +15,7 @@ use super::builtin::Builtin;
 use super::engine::Engine;
 use super::event::{Events, Watcher};
 use super::handle::{Progress, RuntimeHandle};
-use super::journal::Journal;
+use super::journal::{Journal, RunFacts};
 use super::supervisor::{PlaceSetup, Supervisor, SupervisorArgs};
 use super::{FailurePolicy, Role, RuntimeError, StopConditions, conservation};
 use crate::analysis::decision::RewardSpec;
@@ -35,6 +35,7 @@ pub struct RuntimeBuilder {
     time_scale: f64,
     stop: StopConditions,
     journal: Option<PathBuf>,
+    source: Option<PathBuf>,
     agent_mode: AgentMode,
     event_capacity: usize,
     grace: Duration,
@@ -68,6 +69,7 @@ impl RuntimeBuilder {
             time_scale: 0.0,
             stop: StopConditions::default(),
             journal: None,
+            source: None,
             agent_mode: AgentMode::default(),
             event_capacity: 1 << 14,
             grace: Duration::from_secs(5),
@@ -205,6 +207,13 @@ impl RuntimeBuilder {
     /// Writes every event to this file as JSON Lines.
     pub fn journal(mut self, path: impl Into<PathBuf>) -> Self {
         self.journal = Some(path.into());
+        self
+    }
+
+    /// The file the net (or plan) was read from: the journal's header names it, so a
+    /// journal that does not match a net file says which file it came from.
+    pub fn source(mut self, path: impl Into<PathBuf>) -> Self {
+        self.source = Some(path.into());
         self
     }
 
@@ -357,14 +366,25 @@ impl RuntimeBuilder {
                 .map_or(0, |d| d.as_nanos() as u64)
         });
         let journal = match &self.journal {
-            Some(path) => Some(Journal::create(path, &net, seed, self.time_scale).map_err(
-                |e| RuntimeError::Journal {
+            Some(path) => Some(
+                Journal::create(
+                    path,
+                    &net,
+                    RunFacts {
+                        seed,
+                        time_scale: self.time_scale,
+                        file: self.source.as_deref(),
+                        robots: &self.robots,
+                    },
+                )
+                .map_err(|e| RuntimeError::Journal {
                     path: path.clone(),
                     reason: e.to_string(),
-                },
-            )?),
+                })?,
+            ),
             None => None,
         };
+        let journal_tap = journal.as_ref().and_then(Journal::tap);
         let places: Vec<PlaceId> = setups.iter().map(|s| s.place).collect();
         let eng = Engine::new(
             Arc::clone(&net),
@@ -407,6 +427,7 @@ impl RuntimeBuilder {
             net,
             warnings,
             seed,
+            journal_tap,
         })
     }
 }

@@ -13,6 +13,7 @@ use super::agent::AgentState;
 use super::engine::Engine;
 use super::event::{Event, Events};
 use super::id::AgentId;
+use super::journal::JournalTap;
 use super::reward::Earned;
 use super::supervisor::{GetAgents, GetMarking, StopRequest, Supervisor};
 use crate::net::{Marking, Net, PlaceId};
@@ -148,9 +149,15 @@ pub struct RuntimeHandle {
     pub(crate) net: Arc<Net>,
     pub(crate) warnings: Vec<String>,
     pub(crate) seed: u64,
+    pub(crate) journal_tap: Option<JournalTap>,
 }
 
 impl RuntimeHandle {
+    /// A tap to add side records to the run's journal (`None` without a journal).
+    pub fn journal_tap(&self) -> Option<JournalTap> {
+        self.journal_tap.clone()
+    }
+
     /// The run's events. The first call gets every event since the start (as far as the
     /// bus's capacity reaches); later calls get the events from now on.
     pub fn events(&mut self) -> Events {

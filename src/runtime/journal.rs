@@ -7,11 +7,18 @@
 //! the file, and flushes (and syncs) when the run stops, whatever stopped it. After a
 //! `SIGKILL` the file holds every event up to the last write, with at most one line cut
 //! short at the end, which `replay` skips with a warning (see docs/reliability.md).
+//!
+//! Besides the events, a backend can add *side records* through a [`JournalTap`]
+//! ([`RuntimeHandle::journal_tap`](super::RuntimeHandle::journal_tap)): lines
+//! `{"record": KIND, "time": t, "data": …}` that are not events (the simulated world writes
+//! its map once and the robots' poses at the viewer's rate, so `replay --web` draws the
+//! map). [`read_recording`] gives them back apart from the events; a journal without them
+//! (every journal written before them) reads as before.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
-use std::sync::mpsc;
+use std::sync::{Arc, mpsc};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -90,6 +97,19 @@ pub struct JournalHeader<'a> {
     /// Transition names, by id.
     #[serde(borrow)]
     pub transitions: Vec<std::borrow::Cow<'a, str>>,
+    /// The file the run's net (or plan) was read from, when the run was told
+    /// ([`RuntimeBuilder::source`](super::RuntimeBuilder::source)).
+    #[serde(default, borrow, skip_serializing_if = "Option::is_none")]
+    pub file: Option<std::borrow::Cow<'a, str>>,
+    /// The robots bound to the initial agents, in agent order (their number is the run's
+    /// robot count; empty without robots).
+    #[serde(default, borrow, skip_serializing_if = "Vec::is_empty")]
+    pub robots: Vec<std::borrow::Cow<'a, str>>,
+    /// The marking the run started from. It is part of [`hash`](Self::hash); written so a
+    /// run whose initial marking was not its file's (`--robots N` scales the robots' tokens)
+    /// is still recognised as a run of that file's net.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial: Option<Vec<u32>>,
 }
 
 /// Most events the writer holds before it writes them to the file.
@@ -98,10 +118,47 @@ pub const FLUSH_EVENTS: usize = 100;
 /// Longest time an event waits in the writer before it is written to the file.
 pub const FLUSH_AFTER: Duration = Duration::from_millis(100);
 
-/// What the supervisor sends the writer thread.
+/// What the supervisor (and the taps) send the writer thread.
 enum Msg {
     /// One serialised line, newline included.
     Line(Vec<u8>),
+    /// The run is over: write out, sync and end (taps may still be held).
+    End,
+}
+
+/// Adds side records to a run's journal (see the module doc); cheap to clone. Records sent
+/// after the run's journal was flushed are dropped.
+#[derive(Clone, Debug)]
+pub struct JournalTap {
+    tx: mpsc::Sender<Msg>,
+}
+
+impl JournalTap {
+    /// Writes the line `{"record": kind, "time": time, "data": data}` (`kind` is a plain
+    /// word such as `world`). A value that does not serialise is skipped.
+    pub fn record(&self, kind: &str, time: f64, data: &impl Serialize) {
+        let line = Record {
+            record: kind.into(),
+            time,
+            data,
+        };
+        if let Ok(mut bytes) = serde_json::to_vec(&line) {
+            bytes.push(b'\n');
+            let _ = self.tx.send(Msg::Line(bytes));
+        }
+    }
+}
+
+/// A side record of a journal: written by a [`JournalTap`], read by [`read_recording`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Record<D = serde_json::Value> {
+    /// What it records (`world`, `map`, …).
+    pub record: Arc<str>,
+    /// Model time (seconds).
+    pub time: f64,
+    /// The record itself.
+    #[serde(default)]
+    pub data: D,
 }
 
 /// A JSON Lines writer for one run's events: a thread that writes through a buffer it
@@ -170,13 +227,14 @@ impl Names {
 impl Journal {
     /// Creates the file, writes the header (on disk before the run starts) and starts the
     /// writer thread.
-    pub(crate) fn create(
-        path: &Path,
-        net: &Net,
-        seed: u64,
-        time_scale: f64,
-    ) -> std::io::Result<Journal> {
+    pub(crate) fn create(path: &Path, net: &Net, run: RunFacts<'_>) -> std::io::Result<Journal> {
         let mut out = BufWriter::with_capacity(1 << 16, File::create(path)?);
+        let RunFacts {
+            seed,
+            time_scale,
+            file,
+            robots,
+        } = run;
         let header = JournalHeader {
             net: net.name().into(),
             hash: net_hash(net),
@@ -192,6 +250,9 @@ impl Journal {
                 .iter()
                 .map(|t| t.name.as_str().into())
                 .collect(),
+            file: file.map(|f| f.to_string_lossy()),
+            robots: robots.iter().map(|r| (**r).into()).collect(),
+            initial: Some(net.initial_marking().into_vec()),
         };
         let quoted = |names: &[std::borrow::Cow<'_, str>]| -> Vec<Box<str>> {
             names
@@ -218,6 +279,11 @@ impl Journal {
         })
     }
 
+    /// A tap for side records, while the writer runs.
+    pub(crate) fn tap(&self) -> Option<JournalTap> {
+        self.tx.clone().map(|tx| JournalTap { tx })
+    }
+
     /// Hands one event to the writer (an I/O error is reported once, at the end).
     pub(crate) fn write(&mut self, e: &Event) {
         let Some(tx) = &self.tx else {
@@ -239,7 +305,9 @@ impl Journal {
     /// Writes out and syncs everything handed over so far and ends the writer; the first
     /// error of the run, if any. Later events are dropped.
     pub(crate) fn flush(&mut self) -> Option<String> {
-        self.tx = None;
+        if let Some(tx) = self.tx.take() {
+            let _ = tx.send(Msg::End);
+        }
         if let Some(w) = self.writer.take() {
             let r = w
                 .join()
@@ -259,8 +327,22 @@ impl Drop for Journal {
     }
 }
 
+/// What the header says of a run besides its net.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RunFacts<'a> {
+    /// The seed.
+    pub(crate) seed: u64,
+    /// The time scale (0 = virtual time).
+    pub(crate) time_scale: f64,
+    /// The net's file.
+    pub(crate) file: Option<&'a Path>,
+    /// The robots bound to the initial agents.
+    pub(crate) robots: &'a [Arc<str>],
+}
+
 /// The writer thread: lines in, written to the file at most [`FLUSH_EVENTS`] lines or
-/// [`FLUSH_AFTER`] after they arrived; a final flush and sync when the sender goes away.
+/// [`FLUSH_AFTER`] after they arrived; a final flush and sync at [`Msg::End`] or when every
+/// sender went away.
 fn write_through(mut out: BufWriter<File>, rx: mpsc::Receiver<Msg>) -> Option<String> {
     let mut failed: Option<String> = None;
     let mut pending = 0usize;
@@ -295,7 +377,7 @@ fn write_through(mut out: BufWriter<File>, rx: mpsc::Receiver<Msg>) -> Option<St
                 pending = 0;
                 deadline = None;
             }
-            Err(mpsc::RecvTimeoutError::Disconnected) => {
+            Ok(Msg::End) | Err(mpsc::RecvTimeoutError::Disconnected) => {
                 flush(&mut out, &mut failed);
                 if let Err(e) = out.get_ref().sync_data() {
                     failed.get_or_insert(e.to_string());
@@ -329,22 +411,52 @@ pub enum JournalError {
         reason: String,
     },
     /// The header names another net.
-    #[error("the journal is of net `{journal}` ({hash}), not of this net `{net}` ({expected})")]
+    #[error(
+        "the journal is of net `{journal}`{} (hash {hash}), not of this net `{net}` (hash {expected}){}",
+        journal_file.as_deref().map(|f| format!(" from {f}")).unwrap_or_default(),
+        if *initial_differs { " even with the journal's initial marking" } else { "" }
+    )]
     OtherNet {
         /// The journal's net name.
         journal: String,
+        /// The file the journal's run read its net from, when the header says.
+        journal_file: Option<String>,
         /// The journal's net hash.
         hash: String,
         /// This net's name.
         net: String,
         /// This net's hash.
         expected: String,
+        /// The header has an initial marking of this net's size, other than this net's,
+        /// and this net with it still hashes differently.
+        initial_differs: bool,
     },
 }
 
-/// Reads a journal (JSON Lines: a header, then one [`Event`] per line) of a run of `net`:
-/// its events, checked against the net (the header's hash, every transition id and marking).
-pub fn read_events(text: &str, net: &Net) -> Result<Vec<Event>, JournalError> {
+/// A journal read back by [`read_recording`].
+#[derive(Clone, Debug)]
+pub struct Recording {
+    /// The net as it ran: the net given, or — for a run that started from another marking
+    /// (`plan-runner run --robots N` scales the robots' initial tokens) — that net with the
+    /// journal's initial marking.
+    pub net: Net,
+    /// True when [`net`](Self::net) has the journal's initial marking instead of the given
+    /// net's.
+    pub remarked: bool,
+    /// The file the run read its net from, when the header says.
+    pub file: Option<String>,
+    /// The robots bound to the initial agents (empty without robots).
+    pub robots: Vec<String>,
+    /// The events, in order.
+    pub events: Vec<Event>,
+    /// The side records ([`JournalTap::record`]), in order.
+    pub records: Vec<Record>,
+}
+
+/// Reads a journal (JSON Lines: a header, then one [`Event`] or side [`Record`] per line) of
+/// a run of `net`, checked against the net: the header's hash (of `net`, or of `net` with
+/// the header's initial marking), every transition id and marking.
+pub fn read_recording(text: &str, net: &Net) -> Result<Recording, JournalError> {
     let mut lines = text
         .lines()
         .enumerate()
@@ -359,16 +471,37 @@ pub fn read_events(text: &str, net: &Net) -> Result<Vec<Event>, JournalError> {
     let header: JournalHeader<'_> =
         serde_json::from_str(first).map_err(|e| bad(i, e.to_string()))?;
     let expected = net_hash(net);
-    if header.hash != expected {
+    let mut ran = None;
+    let mut initial_differs = false;
+    if header.hash != expected
+        && let Some(m) = &header.initial
+        && m.len() == net.place_count()
+        && m.as_slice() != net.initial_marking().as_slice()
+    {
+        initial_differs = true;
+        ran = net
+            .with_initial_marking(m)
+            .ok()
+            .filter(|n| net_hash(n) == header.hash);
+    }
+    let remarked = ran.is_some();
+    if header.hash != expected && !remarked {
         return Err(JournalError::OtherNet {
             journal: header.net.into_owned(),
+            journal_file: header.file.map(|f| f.into_owned()),
             hash: header.hash,
             net: net.name().to_string(),
             expected,
+            initial_differs,
         });
     }
     let mut events = Vec::new();
+    let mut records = Vec::new();
     for (i, l) in lines {
+        if l.starts_with("{\"record\"") {
+            records.push(serde_json::from_str(l).map_err(|e| bad(i, e.to_string()))?);
+            continue;
+        }
         let e: Event = serde_json::from_str(l).map_err(|e| bad(i, e.to_string()))?;
         if let EventKind::Fired {
             transition,
@@ -388,32 +521,57 @@ pub fn read_events(text: &str, net: &Net) -> Result<Vec<Event>, JournalError> {
         }
         events.push(e);
     }
-    Ok(events)
+    Ok(Recording {
+        net: ran.unwrap_or_else(|| net.clone()),
+        remarked,
+        file: header.file.map(|f| f.into_owned()),
+        robots: header.robots.iter().map(|r| r.to_string()).collect(),
+        events,
+        records,
+    })
+}
+
+/// Reads a journal of a run of `net`: its events ([`read_recording`] without the side
+/// records).
+pub fn read_events(text: &str, net: &Net) -> Result<Vec<Event>, JournalError> {
+    read_recording(text, net).map(|r| r.events)
 }
 
 /// Reads a journal of a run of `net` into frames: the initial marking, then the marking
-/// after each firing ([`read_events`]).
+/// after each firing ([`read_recording`], [`Recording::frames`]).
 pub fn read_journal(text: &str, net: &Net) -> Result<Vec<Frame>, JournalError> {
-    let mut frames = vec![Frame {
-        time: 0.0,
-        transition: None,
-        tokens: net.initial_marking().into_vec(),
-    }];
-    for e in read_events(text, net)? {
-        if let EventKind::Fired {
-            transition,
-            marking,
-            ..
-        } = e.kind
-        {
-            frames.push(Frame {
-                time: e.time,
-                transition: Some(net.transition(transition).name.clone()),
-                tokens: marking.into_vec(),
-            });
+    read_recording(text, net).map(|r| r.frames())
+}
+
+impl Recording {
+    /// The initial marking (the run's), then the marking after each firing.
+    pub fn frames(&self) -> Vec<Frame> {
+        let mut frames = vec![Frame {
+            time: 0.0,
+            transition: None,
+            tokens: self.net.initial_marking().into_vec(),
+        }];
+        for e in &self.events {
+            if let EventKind::Fired {
+                transition,
+                marking,
+                ..
+            } = &e.kind
+            {
+                frames.push(Frame {
+                    time: e.time,
+                    transition: Some(self.net.transition(*transition).name.clone()),
+                    tokens: marking.to_vec(),
+                });
+            }
         }
+        frames
     }
-    Ok(frames)
+
+    /// The side records of one kind, in order.
+    pub fn records<'a>(&'a self, kind: &'a str) -> impl Iterator<Item = &'a Record> + 'a {
+        self.records.iter().filter(move |r| &*r.record == kind)
+    }
 }
 
 /// The journal of a killed run, read back: a last line cut short — no newline after it and

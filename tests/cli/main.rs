@@ -11,6 +11,7 @@ mod endless_runs;
 mod journal_survives_signals;
 mod program_actions;
 mod readme;
+mod replay_robots;
 mod run;
 mod run_on_robots;
 mod simulate;

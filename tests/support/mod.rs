@@ -146,3 +146,24 @@ pub fn ring(
         .collect();
     (b.build().expect("a ring is a valid net"), ts)
 }
+
+/// `plan-runner run plans/temperature-patrol/plan.toml --robots N --seed S --max-firings F
+/// --journal PATH` (the binary cargo built for this test run); panics unless it exits 0.
+pub fn journal_of_patrol_on_robots(path: &std::path::Path, robots: usize, seed: u64, firings: u64) {
+    let plan =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("plans/temperature-patrol/plan.toml");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_plan-runner"))
+        .arg("run")
+        .arg(&plan)
+        .args(["--robots", &robots.to_string(), "--seed", &seed.to_string()])
+        .args(["--max-firings", &firings.to_string(), "--journal"])
+        .arg(path)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

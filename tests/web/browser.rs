@@ -77,6 +77,17 @@ pub(crate) async fn analyse_on_page(b: &Browser) {
     .await;
 }
 
+/// The replay cursor's time, as `#timeline-time` says it (`t = … s`; a range input keeps
+/// about 15 digits of its value, so compare to 1e-12).
+pub(crate) async fn cursor_time(b: &Browser) -> f64 {
+    let cursor = b.text("#timeline-time").await;
+    cursor
+        .strip_prefix("t = ")
+        .and_then(|c| c.strip_suffix(" s"))
+        .and_then(|c| c.parse().ok())
+        .unwrap_or_else(|| panic!("{cursor}"))
+}
+
 /// Opens the page and waits until its first drawing is on the screen.
 pub(crate) async fn open(b: &Browser, addr: SocketAddr) {
     b.client.goto(&format!("http://{addr}/")).await.unwrap();
@@ -93,7 +104,7 @@ async fn wait_drawn(b: &Browser) {
 }
 
 /// `[(place, tokens)]` as the page's hooks say, in the page's order.
-async fn page_marking(b: &Browser) -> Vec<(String, u32)> {
+pub(crate) async fn page_marking(b: &Browser) -> Vec<(String, u32)> {
     let v = b
         .js(
             "return [...document.querySelectorAll('[data-place]')]\
@@ -143,7 +154,7 @@ async fn wait_firings(b: &Browser, n: u64) {
     b.wait_js(&script, WAIT, &format!("{n} firings")).await;
 }
 
-fn marking_of(net: &Net, page: &[(String, u32)]) -> Vec<u32> {
+pub(crate) fn marking_of(net: &Net, page: &[(String, u32)]) -> Vec<u32> {
     assert_eq!(page.len(), net.place_count(), "one hook per place");
     net.places()
         .iter()
@@ -499,9 +510,16 @@ async fn a_journal_plays_back_on_the_time_slider() {
     )
     .await;
     assert_eq!(b.text("#frame").await, "3/12");
-    assert_eq!(
-        b.text("#timeline-time").await,
-        format!("t = {} s", frames[3].time)
+    // The cursor says the time it is at; the state, the firing it shows.
+    let shown = cursor_time(&b).await;
+    assert!(
+        (shown - between).abs() < 1e-12,
+        "cursor at {shown} for {between}"
+    );
+    let clock = b.text("#clock").await;
+    assert!(
+        clock.starts_with(&format!("time {}, 3 firings", frames[3].time)),
+        "{clock}"
     );
     // Keys: → and ← step one firing; the trace marks the current one.
     let key = |k: &'static str| {

@@ -98,7 +98,12 @@ fn place_of_robot_in_log(net: &Net, log: &[Value], id: &str) -> String {
 /// Robot positions from the server: `[[id, x, y]]` and the world's time.
 async fn robot_positions(addr: SocketAddr) -> (Vec<(String, f64, f64)>, f64) {
     let w = http_get(addr, "/api/live/world").await;
-    let robots = w["robots"]
+    (poses(&w["robots"]), w["time"].as_f64().unwrap())
+}
+
+/// `[[id, x, y]]` of a JSON list of robots (`[{"id", "x", "y", …}]`).
+pub(crate) fn poses(robots: &Value) -> Vec<(String, f64, f64)> {
+    robots
         .as_array()
         .unwrap()
         .iter()
@@ -109,8 +114,7 @@ async fn robot_positions(addr: SocketAddr) -> (Vec<(String, f64, f64)>, f64) {
                 r["y"].as_f64().unwrap(),
             )
         })
-        .collect();
-    (robots, w["time"].as_f64().unwrap())
+        .collect()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

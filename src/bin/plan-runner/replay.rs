@@ -1,8 +1,12 @@
 //! `plan-runner replay JOURNAL --net FILE [--web [ADDR]]`: play a run's journal back.
 //!
 //! The journal names its net by hash; `--net` gives the net (or plan) file it was run from.
-//! Without `--web` the firings are printed (time, transition, marking) — no feature needed;
-//! with it (feature `web`) the viewer shows the run on the net with a time slider.
+//! A run that started from another marking than the file's (`run --robots N` scales the
+//! robots' tokens) is recognised by the initial marking its journal's header records (older
+//! journals: the marking before the first firing). Without `--web` the firings are printed
+//! (time, transition, marking) — no feature needed; with it (feature `web`) the viewer shows
+//! the run on the net with a time slider in model seconds, and the simulated world's map
+//! when the journal recorded one.
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -10,7 +14,7 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use gspn::plan::open;
-use gspn::runtime::journal::{Frame, read_journal, split_torn};
+use gspn::runtime::journal::{JournalError, Recording, read_recording, split_torn};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -42,8 +46,23 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let text = std::fs::read_to_string(&args.journal)
         .with_context(|| format!("cannot read {}", args.journal.display()))?;
     let (text, torn) = split_torn(&text);
-    let frames = read_journal(text, &net)
-        .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
+    let recording = match read_recording(text, &net) {
+        // A journal written before headers recorded the initial marking.
+        Err(JournalError::OtherNet { .. })
+            if let Some(scaled) = crate::conform::scaled_net(text, &net) =>
+        {
+            read_recording(text, &scaled)
+        }
+        r => r,
+    }
+    .map_err(|e| match e {
+        JournalError::OtherNet { .. } => BadInput(format!(
+            "{}: {e}, read from --net {}",
+            args.journal.display(),
+            args.net.display()
+        )),
+        e => BadInput(format!("{}: {e}", args.journal.display())),
+    })?;
     if let Some(torn) = &torn {
         eprintln!(
             "warning: {}: {torn}: skipped (the run was killed while writing it)",
@@ -51,9 +70,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         );
     }
     match args.web {
-        Some(addr) => viewer(addr, &args.journal, net, frames),
+        Some(addr) => viewer(addr, &args.journal, recording),
         None => {
-            for f in &frames {
+            let net = &recording.net;
+            for f in &recording.frames() {
                 println!(
                     "{:>14.6}  {:<24}  {}",
                     f.time,
@@ -68,12 +88,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
 
 /// Without the viewer compiled in, `--web` is refused (exit code 2).
 #[cfg(not(feature = "web"))]
-fn viewer(
-    _: SocketAddr,
-    _: &std::path::Path,
-    _: gspn::net::Net,
-    _: Vec<Frame>,
-) -> anyhow::Result<ExitCode> {
+fn viewer(_: SocketAddr, _: &std::path::Path, _: Recording) -> anyhow::Result<ExitCode> {
     Err(BadInput("--web needs plan-runner built with the `web` feature".into()).into())
 }
 
@@ -81,8 +96,7 @@ fn viewer(
 fn viewer(
     addr: SocketAddr,
     journal: &std::path::Path,
-    net: gspn::net::Net,
-    frames: Vec<Frame>,
+    recording: Recording,
 ) -> anyhow::Result<ExitCode> {
     use gspn::web::{WebState, serve};
     let rt = tokio::runtime::Builder::new_multi_thread()
@@ -93,14 +107,15 @@ fn viewer(
         let listener = tokio::net::TcpListener::bind(addr)
             .await
             .with_context(|| format!("cannot listen on {addr}"))?;
+        let state = WebState::for_recording(recording);
         println!(
             "replay of {} ({} firings) at http://{}/",
             journal.display(),
-            frames.len() - 1,
+            state.replay_firings(),
             listener.local_addr()?
         );
         tokio::select! {
-            r = serve(listener, WebState::for_replay(net, frames)) => r.context("viewer server")?,
+            r = serve(listener, state) => r.context("viewer server")?,
             _ = tokio::signal::ctrl_c() => return Ok(ExitCode::from(130)),
         }
         Ok(ExitCode::SUCCESS)

@@ -89,15 +89,39 @@ function applyLive(s) {
 // Plays a journal back on a full-width timeline in model seconds: the slider picks a time
 // (the marking after the last firing up to it), ◀ and ▶ (keys ← →) step one firing, play
 // (space) plays the firings at the speed set now (changed while playing, it applies at
-// once), `loop` starts again at the end; the trace follows.
+// once), `loop` starts again at the end; the trace follows. A journal with a simulated world
+// shows its map beside the net: the robots where they were at the slider's time.
 async function startReplay() {
   for (const id of ['step', 'step-n', 'reset', 'n', 'seed']) {
     const e = $(id);
     (e.closest('label') || e).classList.add('hidden');
   }
-  const { frames } = await api('GET', '/api/replay');
+  const { frames, world } = await api('GET', '/api/replay');
   const times = frames.map((f) => f.time);
-  const end = times[times.length - 1] || 0;
+  const poses = world ? world.frames : [];
+  const poseTimes = poses.map((w) => w.time);
+  const end = Math.max(times[times.length - 1] || 0, poseTimes[poseTimes.length - 1] || 0);
+  // The last entry of the sorted `ts` at or before t (0 if none).
+  const lastAtOrBefore = (ts, t0) => {
+    const t = t0 + 1e-12 * Math.max(1, end);
+    let lo = 0;
+    let hi = ts.length - 1;
+    while (lo < hi) {
+      const mid = (lo + hi + 1) >> 1;
+      if (ts[mid] <= t) lo = mid;
+      else hi = mid - 1;
+    }
+    return lo;
+  };
+  const showWorld = (t) => {
+    if (!world || poses.length === 0) return;
+    const w = poses[lastAtOrBefore(poseTimes, t)];
+    drawWorld({
+      time: t,
+      map: world.map,
+      robots: w.robots.map((r) => Object.assign({ radius: world.radius }, r)),
+    });
+  };
   const slider = $('slider');
   slider.min = '0';
   slider.max = String(end);
@@ -105,10 +129,13 @@ async function startReplay() {
   $('timeline').classList.remove('hidden');
   $('timeline-end').textContent = fmtTime(end) + ' s';
   let at = 0;
-  const show = (i) => {
+  // Frame i; the map at model time t (the frame's time unless the slider picked another).
+  const show = (i, t) => {
     at = i;
     const f = frames[i];
-    slider.value = String(f.time);
+    const now = t === undefined ? f.time : t;
+    slider.value = String(now);
+    showWorld(now);
     f.tokens.forEach((k, p) => setTokens(p, k));
     setFired(f.transition ? transitionIndex(f.transition) : -1);
     recordTokens(f.time, f.tokens);
@@ -119,24 +146,17 @@ async function startReplay() {
       li.scrollIntoView({ block: 'nearest' });
     }
     $('frame').textContent = i + '/' + (frames.length - 1);
-    $('timeline-time').textContent = 't = ' + fmtTime(f.time) + ' s';
+    $('timeline-time').textContent = 't = ' + fmtTime(now) + ' s';
     $('clock').textContent = 'time ' + fmtTime(f.time) + ', ' + i + ' firings' +
       (f.transition ? ' — ' + f.transition + ' fired' : '');
   };
   // The frame shown at model time t: the last firing at or before it (the range input
   // keeps its value to about 15 digits: a hair's tolerance).
-  const frameAt = (t0) => {
-    const t = t0 + 1e-12 * Math.max(1, end);
-    let lo = 0;
-    let hi = times.length - 1;
-    while (lo < hi) {
-      const mid = (lo + hi + 1) >> 1;
-      if (times[mid] <= t) lo = mid;
-      else hi = mid - 1;
-    }
-    return lo;
-  };
-  slider.addEventListener('input', () => show(frameAt(Number(slider.value))));
+  const frameAt = (t) => lastAtOrBefore(times, t);
+  slider.addEventListener('input', () => {
+    const t = Number(slider.value);
+    show(frameAt(t), t);
+  });
   const ol = $('trace');
   ol.textContent = '';
   frames.slice(1).forEach((f, i) => {
