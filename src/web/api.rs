@@ -21,11 +21,7 @@ pub(crate) fn error(status: StatusCode, message: impl Into<String>) -> Response 
 
 /// `GET /api/net`: places, transitions, arcs and the layout.
 pub(crate) async fn net(State(state): State<WebState>) -> Json<Value> {
-    Json(net_json(
-        &state.inner.net,
-        state.inner.seed,
-        state.inner.source.get(),
-    ))
+    Json(crate::web::edit::routes::net_value(&state))
 }
 
 /// The net as the page draws it (with the look of its nodes in `source`, when it has one).
@@ -221,7 +217,7 @@ fn session_error(e: SessionError) -> Response {
 /// it; the result is kept. 409 `{error, kind: "cancelled", progress}` if it is cancelled
 /// meanwhile.
 pub(crate) async fn analysis(State(state): State<WebState>) -> Response {
-    match state.inner.analysis.result().await {
+    match state.analysis().result().await {
         Outcome::Done(value) => {
             let status = if value.get("error").is_some() {
                 StatusCode::UNPROCESSABLE_ENTITY
@@ -261,17 +257,63 @@ pub(crate) async fn analysis_start(
             "max_states = 0: the analysis needs at least the initial marking",
         );
     }
-    Json(state.inner.analysis.start(max_states)).into_response()
+    Json(state.analysis().start(max_states)).into_response()
+}
+
+/// Body of `POST /api/analysis/query`.
+#[derive(Debug, Default, Deserialize)]
+pub(crate) struct QueryBody {
+    /// Times of the transient points (`analyze --transient`).
+    #[serde(default)]
+    transient: Vec<f64>,
+    /// Predicates (`analyze --prob`).
+    #[serde(default)]
+    prob: Vec<String>,
+}
+
+/// `POST /api/analysis/query {transient: [t], prob: [expr]}`: on the finished analysis's
+/// state space, `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens,
+/// throughput, probability}]}` as `plan-runner analyze --json --transient … --prob …` gives
+/// them. 409 before an analysis has finished, 422 when it found no steady state to ask about,
+/// 400 for a bad time or predicate (the message names it).
+pub(crate) async fn analysis_query(
+    State(state): State<WebState>,
+    Json(b): Json<QueryBody>,
+) -> Response {
+    let (net, kept) = match state.analysis().kept() {
+        None => {
+            return error(
+                StatusCode::CONFLICT,
+                "analyse first: the questions are asked of the analysed state space",
+            );
+        }
+        Some(None) => {
+            return error(
+                StatusCode::UNPROCESSABLE_ENTITY,
+                "the analysis has no steady state to ask about (see its result)",
+            );
+        }
+        Some(Some(k)) => k,
+    };
+    let answer = tokio::task::spawn_blocking(move || {
+        crate::web::report::query(&net, &kept, &b.transient, &b.prob)
+    })
+    .await;
+    match answer {
+        Ok(Ok(v)) => Json(v).into_response(),
+        Ok(Err(message)) => error(StatusCode::BAD_REQUEST, message),
+        Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
+    }
 }
 
 /// `GET /api/analysis/progress`: `{state, phase, markings, seconds}`.
 pub(crate) async fn analysis_progress(State(state): State<WebState>) -> Json<Value> {
-    Json(state.inner.analysis.progress())
+    Json(state.analysis().progress())
 }
 
 /// `POST /api/analysis/cancel`: stops a running analysis; the progress.
 pub(crate) async fn analysis_cancel(State(state): State<WebState>) -> Json<Value> {
-    Json(state.inner.analysis.cancel())
+    Json(state.analysis().cancel())
 }
 
 /// Body of `POST /api/layout`.
@@ -296,8 +338,8 @@ pub(crate) async fn save_layout(
             .map(|&[x, y]| crate::net::Position { x, y })
             .collect()
     };
-    let net = &state.inner.net;
-    if let Some(source) = state.inner.source.get()
+    let net = &state.current_net();
+    if let Some(source) = state.source()
         && b.places.len() == net.place_count()
         && b.transitions.len() == net.transition_count()
     {
