@@ -21,6 +21,7 @@
 //! | `POST /api/analysis/start` | starts the analysis on a blocking thread (unless it is running or done); the progress |
 //! | `GET /api/analysis/progress` | `{state: idle\|running\|cancelling\|cancelled\|done, phase: "state space"\|"properties"\|"steady state", markings, seconds}`: markings found so far by the state-space search |
 //! | `POST /api/analysis/cancel` | stops a running analysis (the search within one block of ~1,000 markings, the steady-state solver at its next sweep, the properties before they start); the progress |
+//! | `POST /api/analysis/query {transient: [t], prob: [expr]}` | on the finished analysis's state space, as `plan-runner analyze --json --transient t,.. --prob expr ..`: `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens, throughput, probability}]}`; 409 before an analysis finished, 400 for a bad time or predicate |
 //! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`crate::runtime::journal::read_journal`]), or the token game |
 //! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
 //! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal, and `world: {map, radius, robots, frames: [{time, robots: [{id, agent, x, y}]}]}` when it recorded a simulated world |
@@ -382,6 +383,7 @@ fn routes(state: WebState, bound: guard::Bound) -> Router {
         .route("/api/analysis/start", post(api::analysis_start))
         .route("/api/analysis/progress", get(api::analysis_progress))
         .route("/api/analysis/cancel", post(api::analysis_cancel))
+        .route("/api/analysis/query", post(api::analysis_query))
         .route("/api/mode", get(mode))
         .route("/api/layout", post(api::save_layout))
         .route("/api/replay", get(replay::frames))

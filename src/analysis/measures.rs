@@ -114,6 +114,28 @@ impl TokenDistribution {
     }
 }
 
+/// The error bound of each transient distribution [`Solver::transient_points`] computes.
+pub const TRANSIENT_EPS: f64 = 1e-12;
+
+/// The state at one time: its measures and the probabilities of the asked predicates.
+#[derive(Clone, Debug)]
+pub struct TransientPoint {
+    /// The time.
+    pub t: f64,
+    /// The measures of the distribution at `t`.
+    pub measures: Measures,
+    /// P(predicate) at `t`, in the order asked.
+    pub probabilities: Vec<f64>,
+}
+
+/// The first of `times` that is not a time ≥ 0 (a transient point needs one).
+pub fn bad_time(times: &[f64]) -> Option<f64> {
+    times
+        .iter()
+        .copied()
+        .find(|t| !(t.is_finite() && *t >= 0.0))
+}
+
 impl<'a> Solver<'a> {
     /// A solver over the tangible states of `space`. Nothing is built yet: the row form of
     /// the generator ([`Solver::chain`]) is made on first use, and a large ergodic chain is
@@ -262,6 +284,26 @@ impl<'a> Solver<'a> {
     /// π(t) at each time, from the initial marking (uniformization, error ≤ `eps` each).
     pub fn transient(&self, times: &[f64], eps: f64) -> Vec<Vec<f64>> {
         self.chain().transient(self.space.initial(), times, eps)
+    }
+
+    /// The state at each of `times` from the initial marking: its measures and the
+    /// probability of each predicate (error ≤ [`TRANSIENT_EPS`] each) — what `plan-runner
+    /// analyze --transient T --prob EXPR` reports and the viewer's panel shows.
+    pub fn transient_points(&self, times: &[f64], predicates: &[Predicate]) -> Vec<TransientPoint> {
+        self.transient(times, TRANSIENT_EPS)
+            .into_iter()
+            .zip(times)
+            .map(|(pi, &t)| TransientPoint {
+                t,
+                measures: self.measures(&pi),
+                probabilities: self.probabilities(&pi, predicates),
+            })
+            .collect()
+    }
+
+    /// P(the marking satisfies each predicate) under distribution `pi`, in order.
+    pub fn probabilities(&self, pi: &[f64], predicates: &[Predicate]) -> Vec<f64> {
+        predicates.iter().map(|p| self.probability(pi, p)).collect()
     }
 
     /// Every measure of distribution `pi` over tangible states.

@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use super::invariants::Invariants;
-use super::measures::Measures;
+use super::measures::{Measures, TransientPoint};
 use super::properties::{DeadMarking, Liveness, Properties};
 use super::under_policy::{Regime, RewardRate};
 use crate::net::{Net, TransitionId};
@@ -235,6 +235,13 @@ impl MeasuresReport {
             t: Some(t),
             ..MeasuresReport::tokens_and_throughput(net, m)
         }
+    }
+
+    /// A transient point with the probabilities of the predicates `exprs` (their texts, in
+    /// the order [`Solver::transient_points`](crate::analysis::measures::Solver::transient_points)
+    /// was given them): one entry of `analyze --json`'s `transient`, and of the viewer's.
+    pub fn point(net: &Net, p: &TransientPoint, exprs: &[String]) -> Self {
+        MeasuresReport::transient(net, p.t, &p.measures).with_probabilities(exprs, &p.probabilities)
     }
 
     /// The steady state as the viewer's panel shows it: mean tokens and throughputs.

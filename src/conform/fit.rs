@@ -10,10 +10,12 @@ use crate::net::{Net, NetBuilder, PlaceId, Timing, TransitionId};
 /// One parameter of a fitted net.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Fitted {
-    /// The transition (the place, for `stages`).
+    /// The transition; for `stages` and `mean` the place (`P`) or the place's chain for one
+    /// way in (`P from T`, `P from other`).
     pub transition: String,
-    /// `rate`, `weight`, `stages` (of a place's Erlang holding time) or `stage_rate` (an
-    /// output transition's rate out of the last stage).
+    /// `rate`, `weight`, or of a place's phase-type holding time: `stages` and `mean` of a
+    /// chain, `exit` (an output transition's share of the stays; `old` is its share of the
+    /// net's rates).
     pub parameter: &'static str,
     /// The net's value.
     pub old: f64,
@@ -38,13 +40,21 @@ pub struct Fitted {
 /// **Phase-type holding times.** An action place whose agents' stays (see
 /// [`super::holding`]) the exponential does not fit — a race place (so the stays are the
 /// outputs' business alone) whose `holding_shape` test rejects at [`ALPHA`] — gets an
-/// Erlang-`k` holding time by the method of moments: mean `m` and variance `v` of its stays,
-/// `k = round(m²/v)` (at most [`Options::max_stages`]; a `k` of 1 keeps the exponential).
-/// The net gets `k` stage places `P~1 … P~k` beside `P`: every arc into `P` also puts its
-/// tokens in `P~1`, stage transitions `P~1>2 …` (rate `k/m`, infinite servers) move them on,
-/// and each output `t` of `P` also takes its token from `P~k`, at rate `q_t·k/m` where `q_t`
-/// is the share of the stays that left by `t`. `P` itself keeps its tokens for the whole
-/// stay, so a policy or a plan that reads `P` reads the same marking.
+/// Erlang holding time by the method of moments (mean `m`, variance `v`, `k = round(m²/v)`
+/// stages of rate `k/m`, at most [`Options::max_stages`]). When the stays depend on how the
+/// agent came in (a drive after `Go_Check`, a short re-measure after `AlarmOff`: the entry
+/// transitions with at least [`Options::min_gaps`] stays differ in mean by a one-way
+/// analysis of variance at [`ALPHA`]), each such entry gets its own chain, and the other
+/// entries and the initial tokens one chain fitted to all the stays (a hyper-Erlang
+/// mixture by entry); otherwise one chain, kept only when `k ≥ 2`.
+///
+/// In the net, `P` keeps its tokens for the whole stay (a policy or a plan that reads `P`
+/// reads the same marking); an entry `e` also puts its tokens in its chain's first stage
+/// (`P~1`, or `P~e~1` when split); infinite-server stage transitions move them on to
+/// `P~done`; each output `t` of `P` becomes immediate (weight `q_t`, the share of the stays
+/// that left by `t`; priority above every other immediate transition) and also takes its
+/// token from `P~done`. The parameters are listed as `stages` and `mean` per chain (named
+/// `P` or `P from e`) and `exit` per output.
 pub fn fit(net: &Net, obs: &Observations, opts: &Options) -> (Net, Vec<Fitted>) {
     let mut timings: Vec<Timing> = net.transitions().iter().map(|t| t.timing).collect();
     let mut out = Vec::new();
@@ -73,36 +83,79 @@ pub fn fit(net: &Net, obs: &Observations, opts: &Options) -> (Net, Vec<Fitted>) 
         });
     }
     fit_weights(net, obs, opts, &mut timings, &mut out);
-    let erlang = erlang_fits(net, obs, opts);
+    let phases = phase_fits(net, obs, opts);
+    // Exits of a phase-type place fire as soon as an agent's stay ends: immediate, above
+    // every other immediate transition (as the timed exit fired before anything it enabled).
+    let top = net
+        .transitions()
+        .iter()
+        .filter_map(|t| match t.timing {
+            Timing::Immediate { priority, .. } => Some(priority),
+            Timing::Exponential { .. } => None,
+        })
+        .max()
+        .unwrap_or(0)
+        + 1;
+    for ph in &phases {
+        let place = &net.place(ph.place).name;
+        let total: f64 = ph
+            .exits
+            .iter()
+            .map(|&(t, ..)| match net.transition(t).timing {
+                Timing::Exponential { rate, .. } => rate,
+                Timing::Immediate { .. } => 0.0,
+            })
+            .sum();
+        for &(t, share, k) in &ph.exits {
+            let old = match net.transition(t).timing {
+                Timing::Exponential { rate, .. } => rate / total,
+                Timing::Immediate { .. } => 0.0,
+            };
+            timings[t.index()] = Timing::Immediate {
+                weight: share,
+                priority: top,
+            };
+            let name = &net.transition(t).name;
+            out.retain(|f| !(f.parameter == "rate" && &f.transition == name));
+            let (lo, hi) = wilson(k, ph.n);
+            out.push(Fitted {
+                transition: name.clone(),
+                parameter: "exit",
+                old,
+                new: share,
+                interval: Some([lo, hi]),
+                n: k,
+                kept: false,
+            });
+        }
+        for c in &ph.chains {
+            let item = match &c.label {
+                None => place.clone(),
+                Some(l) => format!("{place} from {l}"),
+            };
+            out.push(Fitted {
+                transition: item.clone(),
+                parameter: "stages",
+                old: 1.0,
+                new: c.stages as f64,
+                interval: None,
+                n: c.n,
+                kept: false,
+            });
+            out.push(Fitted {
+                transition: item,
+                parameter: "mean",
+                old: 1.0 / total,
+                new: c.mean,
+                interval: c.interval,
+                n: c.n,
+                kept: false,
+            });
+        }
+    }
     let mut b = NetBuilder::new(net.name());
     for p in net.places() {
         b.add_place(p.clone());
-    }
-    for e in &erlang {
-        for (t, q) in &e.exits {
-            if let Timing::Exponential { servers, .. } = timings[t.index()] {
-                let rate = q * e.stage_rate();
-                timings[t.index()] = Timing::Exponential { rate, servers };
-                if let Some(f) = out
-                    .iter_mut()
-                    .find(|f| f.parameter == "rate" && f.transition == net.transition(*t).name)
-                {
-                    f.parameter = "stage_rate";
-                    f.new = rate;
-                    f.interval = None;
-                    f.kept = false;
-                }
-            }
-        }
-        out.push(Fitted {
-            transition: net.place(e.place).name.clone(),
-            parameter: "stages",
-            old: 1.0,
-            new: e.stages as f64,
-            interval: None,
-            n: e.n,
-            kept: false,
-        });
     }
     for (t, timing) in net.transitions().iter().zip(timings) {
         b.add_transition(crate::net::Transition {
@@ -113,8 +166,8 @@ pub fn fit(net: &Net, obs: &Observations, opts: &Options) -> (Net, Vec<Fitted>) 
     for a in net.arcs() {
         b.arc(a.kind, a.place, a.transition, a.weight, a.points.clone());
     }
-    for e in &erlang {
-        e.add_stages(net, &mut b);
+    for ph in &phases {
+        ph.add_stages(net, &mut b);
     }
     let fitted = b
         .build()
@@ -122,26 +175,77 @@ pub fn fit(net: &Net, obs: &Observations, opts: &Options) -> (Net, Vec<Fitted>) 
     (fitted, out)
 }
 
-/// The Erlang holding time fitted to one place.
-struct ErlangFit {
-    place: PlaceId,
+/// One Erlang chain of a place's phase-type holding time.
+struct Chain {
+    /// The entry it is fitted to (a transition's name, or `other` for the entries with too
+    /// few stays and the initial tokens); `None` for a place's only chain.
+    label: Option<String>,
+    /// The transitions whose tokens into the place start here.
+    entries: Vec<TransitionId>,
+    /// The place's initial tokens start here.
+    initial: bool,
     stages: u32,
     mean: f64,
-    /// Share of the stays out by each output transition.
-    exits: Vec<(TransitionId, f64)>,
+    /// 95% interval of the mean (Student t over the stays).
+    interval: Option<[f64; 2]>,
     n: u64,
 }
 
-impl ErlangFit {
+impl Chain {
+    /// The chain fitted to stays `xs` by the method of moments (`None` without a positive
+    /// finite mean).
+    fn new(
+        label: Option<String>,
+        entries: Vec<TransitionId>,
+        initial: bool,
+        xs: &[f64],
+        max_stages: u32,
+    ) -> Option<Chain> {
+        let n = xs.len();
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        if !(mean > 0.0 && mean.is_finite()) || n < 2 {
+            return None;
+        }
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n as f64 - 1.0);
+        let stages = if var > 0.0 {
+            (mean * mean / var).round().min(max_stages as f64)
+        } else {
+            max_stages as f64
+        }
+        .max(1.0) as u32;
+        let est = stats::estimate(xs);
+        Some(Chain {
+            label,
+            entries,
+            initial,
+            stages,
+            mean,
+            interval: Some([est.lo(), est.hi()]),
+            n: n as u64,
+        })
+    }
+
     fn stage_rate(&self) -> f64 {
         self.stages as f64 / self.mean
     }
+}
 
+/// The phase-type holding time fitted to one place: Erlang chains by entry and the exits'
+/// shares.
+struct PhaseFit {
+    place: PlaceId,
+    chains: Vec<Chain>,
+    /// Each output transition, the share of the stays that left by it and their number.
+    exits: Vec<(TransitionId, f64, u64)>,
+    /// Stays.
+    n: u64,
+}
+
+impl PhaseFit {
     /// The stage places and transitions (see [`fit`]), named after the place, beside it on
     /// the canvas.
     fn add_stages(&self, net: &Net, b: &mut NetBuilder) {
         let p = net.place(self.place);
-        let k = self.stages as usize;
         let unique = |b: &NetBuilder, name: String| {
             let mut n = name.clone();
             let mut i = 1;
@@ -157,81 +261,122 @@ impl ErlangFit {
                 y: q.y + dy,
             })
         };
-        let stages: Vec<PlaceId> = (1..=k)
-            .map(|j| {
-                let name = unique(b, format!("{}~{j}", p.name));
-                b.add_place(crate::net::Place {
-                    name,
-                    initial: if j == 1 { p.initial } else { 0 },
-                    capacity: None,
-                    position: at(2.0 * j as f64, 3.0),
+        let done_name = unique(b, format!("{}~done", p.name));
+        let done = b.add_place(crate::net::Place {
+            name: done_name,
+            initial: 0,
+            capacity: None,
+            position: at(0.0, -3.0),
+        });
+        for (row, c) in self.chains.iter().enumerate() {
+            let k = c.stages as usize;
+            let prefix = match &c.label {
+                None => p.name.clone(),
+                Some(l) => format!("{}~{l}", p.name),
+            };
+            let y = 3.0 + 3.0 * row as f64;
+            let stages: Vec<PlaceId> = (1..=k)
+                .map(|j| {
+                    let name = unique(b, format!("{prefix}~{j}"));
+                    b.add_place(crate::net::Place {
+                        name,
+                        initial: if j == 1 && c.initial { p.initial } else { 0 },
+                        capacity: None,
+                        position: at(2.0 * j as f64, y),
+                    })
                 })
-            })
-            .collect();
-        for j in 1..k {
-            let name = unique(b, format!("{}~{j}>{}", p.name, j + 1));
-            let t = b.add_transition(crate::net::Transition {
-                name,
-                timing: Timing::Exponential {
-                    rate: self.stage_rate(),
-                    servers: crate::net::Servers::Infinite,
-                },
-                position: at(2.0 * j as f64 + 1.0, 4.0),
-            });
-            b.input(stages[j - 1], t, 1);
-            b.output(t, stages[j], 1);
-        }
-        for t in net.transition_ids() {
-            if let Some(&(_, w)) = net.outputs(t).iter().find(|(q, _)| *q == self.place) {
-                b.output(t, stages[0], w);
+                .collect();
+            for j in 1..=k {
+                let to = if j < k {
+                    (j + 1).to_string()
+                } else {
+                    "done".to_string()
+                };
+                let name = unique(b, format!("{prefix}~{j}>{to}"));
+                let t = b.add_transition(crate::net::Transition {
+                    name,
+                    timing: Timing::Exponential {
+                        rate: c.stage_rate(),
+                        servers: crate::net::Servers::Infinite,
+                    },
+                    position: at(2.0 * j as f64 + 1.0, y + 1.0),
+                });
+                b.input(stages[j - 1], t, 1);
+                b.output(t, if j < k { stages[j] } else { done }, 1);
+            }
+            for &t in &c.entries {
+                if let Some(&(_, w)) = net.outputs(t).iter().find(|(q, _)| *q == self.place) {
+                    b.output(t, stages[0], w);
+                }
             }
         }
-        for &(t, _) in &self.exits {
-            b.input(stages[k - 1], t, 1);
+        for &(t, ..) in &self.exits {
+            b.input(done, t, 1);
         }
     }
 }
 
-/// The places that get an Erlang holding time (see [`fit`]).
-fn erlang_fits(net: &Net, obs: &Observations, opts: &Options) -> Vec<ErlangFit> {
+/// The places that get a phase-type holding time (see [`fit`]).
+fn phase_fits(net: &Net, obs: &Observations, opts: &Options) -> Vec<PhaseFit> {
     let mut fits = Vec::new();
+    let min = opts.min_gaps.max(2);
     for (p, outs) in holding::by_place(net, &obs.holdings) {
         if holding::race_rate(net, p).is_none() {
             continue;
         }
-        let xs: Vec<f64> = outs
-            .iter()
-            .flat_map(|(_, hs)| hs.iter().map(|h| h.duration))
-            .collect();
+        let stays: Vec<&Holding> = outs.iter().flat_map(|(_, hs)| hs.iter().copied()).collect();
+        let xs: Vec<f64> = stays.iter().map(|h| h.duration).collect();
         let n = xs.len();
-        if n < opts.min_gaps.max(2) || outs.iter().any(|(_, hs)| hs.is_empty()) {
+        if n < min || outs.iter().any(|(_, hs)| hs.is_empty()) {
             continue;
         }
         match stats::ks_exponential(&xs) {
             Some((_, p_value)) if p_value < ALPHA => {}
             _ => continue,
         }
-        let mean = xs.iter().sum::<f64>() / n as f64;
-        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n as f64 - 1.0);
-        if !(mean > 0.0 && mean.is_finite()) {
-            continue;
-        }
-        let k = if var > 0.0 {
-            (mean * mean / var).round().min(opts.max_stages as f64)
+        // The ways in, with the stays that came in by each.
+        let by_entry: Vec<(TransitionId, Vec<f64>)> = net
+            .transition_ids()
+            .filter(|&t| net.outputs(t).iter().any(|(q, _)| *q == p))
+            .map(|t| {
+                let ys = stays
+                    .iter()
+                    .filter(|h| h.entry == Some(t))
+                    .map(|h| h.duration)
+                    .collect();
+                (t, ys)
+            })
+            .collect();
+        let (big, rest): (Vec<_>, Vec<_>) = by_entry.iter().partition(|(_, ys)| ys.len() >= min);
+        let groups: Vec<&[f64]> = big.iter().map(|(_, ys)| ys.as_slice()).collect();
+        let split = big.len() >= 2 && stats::anova_p(&groups) < ALPHA;
+        let chains: Option<Vec<Chain>> = if split {
+            let mut chains: Vec<Option<Chain>> = big
+                .iter()
+                .map(|(t, ys)| {
+                    let name = net.transition(*t).name.clone();
+                    Chain::new(Some(name), vec![*t], false, ys, opts.max_stages)
+                })
+                .collect();
+            if !rest.is_empty() || net.place(p).initial > 0 {
+                let entries = rest.iter().map(|(t, _)| *t).collect();
+                let other = Some("other".to_string());
+                chains.push(Chain::new(other, entries, true, &xs, opts.max_stages));
+            }
+            chains.into_iter().collect()
         } else {
-            opts.max_stages as f64
-        }
-        .max(1.0) as u32;
-        if k < 2 {
-            continue;
-        }
-        fits.push(ErlangFit {
+            let entries = by_entry.iter().map(|(t, _)| *t).collect();
+            Chain::new(None, entries, true, &xs, opts.max_stages)
+                .filter(|c| c.stages >= 2)
+                .map(|c| vec![c])
+        };
+        let Some(chains) = chains else { continue };
+        fits.push(PhaseFit {
             place: p,
-            stages: k,
-            mean,
+            chains,
             exits: outs
                 .iter()
-                .map(|(t, hs)| (*t, hs.len() as f64 / n as f64))
+                .map(|(t, hs)| (*t, hs.len() as f64 / n as f64, hs.len() as u64))
                 .collect(),
             n: n as u64,
         });

@@ -28,6 +28,8 @@ pub struct Holding {
     pub place: PlaceId,
     /// The transition that took it out.
     pub transition: TransitionId,
+    /// The transition that put it in (`None` for an agent spawned there at the start).
+    pub entry: Option<TransitionId>,
     /// When it entered (model time).
     pub entered: f64,
     /// How long it stayed.
@@ -39,6 +41,7 @@ pub struct Holding {
 /// An agent in a place, not yet out.
 struct Stay {
     place: Option<PlaceId>,
+    entry: Option<TransitionId>,
     entered: f64,
     alone: bool,
 }
@@ -76,6 +79,7 @@ pub fn holdings(net: &Net, events: &[Event]) -> Vec<Holding> {
             EventKind::AgentSpawned { agent, place, .. } => {
                 stays.entry(*agent).or_insert(Stay {
                     place: None,
+                    entry: None,
                     entered: e.time,
                     alone: true,
                 });
@@ -101,6 +105,7 @@ pub fn holdings(net: &Net, events: &[Event]) -> Vec<Holding> {
                         agent: *a,
                         place: p,
                         transition: *transition,
+                        entry: s.entry,
                         entered: s.entered,
                         duration: e.time - s.entered,
                         alone: s.alone,
@@ -111,6 +116,7 @@ pub fn holdings(net: &Net, events: &[Event]) -> Vec<Holding> {
                         *a,
                         Stay {
                             place: None,
+                            entry: Some(*transition),
                             entered: e.time,
                             alone: true,
                         },

@@ -17,6 +17,7 @@ use crate::analysis::decision::RewardSpec;
 use crate::analysis::state_space::Monitor;
 use crate::net::Net;
 use crate::policy::Policy;
+use crate::web::report::Kept;
 
 /// What the analysis is doing, for the progress line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,6 +79,7 @@ enum State {
     },
     Done {
         value: Arc<Value>,
+        kept: Option<Arc<Kept>>,
         seconds: f64,
         max_states: usize,
     },
@@ -166,7 +168,7 @@ impl AnalysisJob {
 
     fn run(&self, progress: Arc<Progress>, max_states: usize) {
         let started = Instant::now();
-        let value = crate::web::report::analyse(
+        let (value, kept) = crate::web::report::analyse(
             &self.net,
             &self.policy,
             &self.rewards,
@@ -188,6 +190,7 @@ impl AnalysisJob {
             } else {
                 State::Done {
                     value: Arc::new(value),
+                    kept: kept.map(Arc::new),
                     seconds,
                     max_states,
                 }
@@ -209,6 +212,16 @@ impl AnalysisJob {
     /// The progress as JSON: `state`, and `phase`, `markings`, `seconds` where they apply.
     pub(crate) fn progress(&self) -> Value {
         progress_json(&self.lock(), self.max_states)
+    }
+
+    /// The net and what the finished analysis kept for questions: `None` while no analysis
+    /// has finished, `Some(None)` when it finished without a state space and steady state
+    /// (its result says why).
+    pub(crate) fn kept(&self) -> Option<Option<(Arc<Net>, Arc<Kept>)>> {
+        match &*self.lock() {
+            State::Done { kept, .. } => Some(kept.clone().map(|k| (self.net.clone(), k))),
+            _ => None,
+        }
     }
 
     /// Starts the analysis if needed and waits for it to end.
@@ -252,6 +265,7 @@ fn progress_json(s: &State, default_max: usize) -> Value {
             value,
             seconds,
             max_states,
+            ..
         } => json!({
             "state": "done",
             "markings": value.get("reachable").cloned().unwrap_or(Value::Null),

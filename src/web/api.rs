@@ -264,6 +264,52 @@ pub(crate) async fn analysis_start(
     Json(state.inner.analysis.start(max_states)).into_response()
 }
 
+/// Body of `POST /api/analysis/query`.
+#[derive(Debug, Default, Deserialize)]
+pub(crate) struct QueryBody {
+    /// Times of the transient points (`analyze --transient`).
+    #[serde(default)]
+    transient: Vec<f64>,
+    /// Predicates (`analyze --prob`).
+    #[serde(default)]
+    prob: Vec<String>,
+}
+
+/// `POST /api/analysis/query {transient: [t], prob: [expr]}`: on the finished analysis's
+/// state space, `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens,
+/// throughput, probability}]}` as `plan-runner analyze --json --transient … --prob …` gives
+/// them. 409 before an analysis has finished, 422 when it found no steady state to ask about,
+/// 400 for a bad time or predicate (the message names it).
+pub(crate) async fn analysis_query(
+    State(state): State<WebState>,
+    Json(b): Json<QueryBody>,
+) -> Response {
+    let (net, kept) = match state.inner.analysis.kept() {
+        None => {
+            return error(
+                StatusCode::CONFLICT,
+                "analyse first: the questions are asked of the analysed state space",
+            );
+        }
+        Some(None) => {
+            return error(
+                StatusCode::UNPROCESSABLE_ENTITY,
+                "the analysis has no steady state to ask about (see its result)",
+            );
+        }
+        Some(Some(k)) => k,
+    };
+    let answer = tokio::task::spawn_blocking(move || {
+        crate::web::report::query(&net, &kept, &b.transient, &b.prob)
+    })
+    .await;
+    match answer {
+        Ok(Ok(v)) => Json(v).into_response(),
+        Ok(Err(message)) => error(StatusCode::BAD_REQUEST, message),
+        Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
+    }
+}
+
 /// `GET /api/analysis/progress`: `{state, phase, markings, seconds}`.
 pub(crate) async fn analysis_progress(State(state): State<WebState>) -> Json<Value> {
     Json(state.inner.analysis.progress())

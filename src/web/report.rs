@@ -1,22 +1,35 @@
 //! The analysis panel's data: properties of the state space, steady-state measures, dead
-//! markings with the firing sequence that reaches each — or why they cannot be computed.
+//! markings with the firing sequence that reaches each — or why they cannot be computed —
+//! and, on the state space kept from it ([`Kept`]), transient points and `--prob`
+//! predicates computed by the same library calls as `plan-runner analyze` ([`query`]).
 
 use serde_json::{Value, json};
 
 use crate::analysis::ctmc::SolveError;
 use crate::analysis::decision::RewardSpec;
 use crate::analysis::invariants::{p_invariants, t_invariants};
-use crate::analysis::measures::SolverOptions;
+use crate::analysis::measures::{Solver, SolverOptions, bad_time};
 use crate::analysis::properties::Properties;
 use crate::analysis::report::{MeasuresReport, Panel};
 use crate::analysis::state_space::{AnalysisError, Options, StateSpace};
 use crate::analysis::under_policy::{self, Regime};
 use crate::net::Net;
+use crate::net::predicate::Predicate;
 use crate::policy::Policy;
 use crate::web::analysis_job::{Phase, Progress};
 
 /// Invariants kept at most, as `plan-runner analyze` keeps them.
 const INVARIANT_CAP: usize = 10_000;
+
+/// What a finished analysis keeps for later questions: the state space and its limiting
+/// distribution.
+#[derive(Debug)]
+pub(crate) struct Kept {
+    /// The state space (under the plan's policy, if any).
+    pub(crate) space: StateSpace,
+    /// The limiting distribution over its tangible markings.
+    pub(crate) steady: Vec<f64>,
+}
 
 /// Everything the panel shows for `net` under `policy` (the bare net when it is empty: the
 /// same analysis as `plan-runner analyze`, [`under_policy`]), with the long-run rates of
@@ -29,14 +42,14 @@ pub(crate) fn analyse(
     rewards: &[RewardSpec],
     max_states: usize,
     progress: &Progress,
-) -> Value {
+) -> (Value, Option<Kept>) {
     let opts = Options {
         max_states,
         progress: false,
         threads: 0,
         ..Options::default()
     };
-    let cancelled = || json!({ "error": "cancelled", "kind": "cancelled" });
+    let cancelled = || (json!({ "error": "cancelled", "kind": "cancelled" }), None);
     if !progress.enter(Phase::StateSpace) {
         return cancelled();
     }
@@ -68,7 +81,7 @@ pub(crate) fn analyse(
             if let AnalysisError::Unbounded { places } = &e {
                 v["places"] = json!(places);
             }
-            return v;
+            return (v, None);
         }
     };
     if !progress.enter(Phase::Properties) {
@@ -81,7 +94,7 @@ pub(crate) fn analyse(
     let to_json = |p: &Panel| serde_json::to_value(p).unwrap_or(Value::Null);
     if ss.tangible_count() == 0 {
         panel.steady_error = Some("no tangible marking: time never passes".into());
-        return to_json(&panel);
+        return (to_json(&panel), None);
     }
     if !progress.enter(Phase::SteadyState) {
         return cancelled();
@@ -96,9 +109,56 @@ pub(crate) fn analyse(
                 MeasuresReport::panel(net, a.limiting.ergodic, &a.measures)
                     .with_rewards(&a.rewards),
             );
+            let kept = Kept {
+                space: a.space,
+                steady: a.limiting.pi,
+            };
+            (to_json(&panel), Some(kept))
         }
-        Err(SolveError::Cancelled { .. }) => return cancelled(),
-        Err(e) => panel.steady_error = Some(e.to_string()),
+        Err(SolveError::Cancelled { .. }) => cancelled(),
+        // As `plan-runner analyze` stops there, no transient point or predicate either.
+        Err(e) => {
+            panel.steady_error = Some(e.to_string());
+            (to_json(&panel), None)
+        }
     }
-    to_json(&panel)
+}
+
+/// The panel's questions on a finished analysis (`POST /api/analysis/query`): the
+/// predicates' steady-state probabilities and the state at each of `times`, computed as
+/// `plan-runner analyze --prob EXPR --transient T --json` computes them
+/// ([`Solver::probabilities`], [`Solver::transient_points`]) and in its JSON form
+/// (`steady_state.probability`, `transient`). A bad time or predicate is the error text.
+pub(crate) fn query(
+    net: &Net,
+    kept: &Kept,
+    times: &[f64],
+    exprs: &[String],
+) -> Result<Value, String> {
+    if let Some(t) = bad_time(times) {
+        return Err(format!("transient: {t} is not a time ≥ 0"));
+    }
+    let predicates = exprs
+        .iter()
+        .map(|p| {
+            Predicate::parse(net, p)
+                .map_err(|e| format!("prob `{}`: {e}", crate::io::excerpt(p, 80)))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let solver = Solver::new(net, &kept.space);
+    let steady = solver.probabilities(&kept.steady, &predicates);
+    let transient: Vec<MeasuresReport> = solver
+        .transient_points(times, &predicates)
+        .iter()
+        .map(|p| MeasuresReport::point(net, p, exprs))
+        .collect();
+    let probability: serde_json::Map<String, Value> = exprs
+        .iter()
+        .zip(steady)
+        .map(|(e, p)| (e.clone(), json!(p)))
+        .collect();
+    Ok(json!({
+        "steady_state": { "probability": probability },
+        "transient": transient,
+    }))
 }

@@ -115,8 +115,9 @@ async fn the_agents_own_stays_are_tested_per_place_and_exit_and_a_fixed_delay_is
         Verdict::Consistent
     );
 
-    // The fit: B's stays have no spread, so B gets the most stages (20), each of rate 20/3,
-    // and Tb leaves the last one; A stays exponential.
+    // The fit: B's stays have no spread, and they are the same whichever way the agent came
+    // in (Ta or Tc: one chain), so B gets the most stages (20), each of rate 20/3, into
+    // B~done, which Tb (now immediate, above every other) leaves; A stays exponential.
     let (fitted, params) = fit(&net, &obs, &opts);
     let stages = params
         .iter()
@@ -124,8 +125,8 @@ async fn the_agents_own_stays_are_tested_per_place_and_exit_and_a_fixed_delay_is
         .expect("an Erlang fit");
     assert_eq!((stages.transition.as_str(), stages.new), ("B", 20.0));
     assert_eq!(params.iter().filter(|f| f.parameter == "stages").count(), 1);
-    assert_eq!(fitted.place_count(), 2 + 20);
-    assert_eq!(fitted.transition_count(), 3 + 19);
+    assert_eq!(fitted.place_count(), 2 + 20 + 1);
+    assert_eq!(fitted.transition_count(), 3 + 20);
     let rate = |name: &str| match fitted
         .transition(fitted.transition_by_name(name).unwrap())
         .timing
@@ -133,15 +134,19 @@ async fn the_agents_own_stays_are_tested_per_place_and_exit_and_a_fixed_delay_is
         Timing::Exponential { rate, .. } => rate,
         Timing::Immediate { .. } => panic!("{name} is exponential"),
     };
-    assert!((rate("Tb") - 20.0 / 3.0).abs() < 1e-9, "{}", rate("Tb"));
     assert!((rate("B~1>2") - 20.0 / 3.0).abs() < 1e-9);
+    assert!((rate("B~20>done") - 20.0 / 3.0).abs() < 1e-9);
     let tb = fitted.transition_by_name("Tb").unwrap();
-    let b20 = fitted.place_by_name("B~20").unwrap();
-    assert!(
-        fitted.inputs(tb).contains(&(b20, 1)),
-        "{:?}",
-        fitted.inputs(tb)
+    assert_eq!(
+        fitted.transition(tb).timing,
+        Timing::Immediate {
+            weight: 1.0,
+            priority: 1
+        }
     );
+    let done = fitted.place_by_name("B~done").unwrap();
+    let b = fitted.place_by_name("B").unwrap();
+    assert_eq!(fitted.inputs(tb), [(b, 1), (done, 1)]);
     // The learnt model predicts the run's throughput: one cycle per 3 s + A's fitted stay.
     let x = steady_predictions(&fitted, None, 10_000)
         .unwrap()
@@ -149,6 +154,89 @@ async fn the_agents_own_stays_are_tested_per_place_and_exit_and_a_fixed_delay_is
         .unwrap()[tb.index()];
     let observed = obs.throughput[tb.index()].mean;
     assert!((x - observed).abs() < 0.01 * observed, "{x} vs {observed}");
+}
+
+/// One agent: A -Ta-> B, B -Tb-> C -Tc-> B, B -Td-> A. B's action takes 3 s and fires `Tb`
+/// when the agent came from A, 0.5 s and fires `Td` when it came from C (it alternates).
+#[tokio::test(start_paused = true)]
+async fn stays_that_depend_on_the_way_in_get_one_erlang_chain_per_entry() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let mut b = NetBuilder::new("entries");
+    let (pa, pb, pc) = (b.place("A", 1), b.place("B", 0), b.place("C", 0));
+    let ta = b.exponential("Ta", 1.0, Servers::Single);
+    let tb = b.exponential("Tb", 1.0, Servers::Single);
+    let tc = b.exponential("Tc", 1.0, Servers::Single);
+    let td = b.exponential("Td", 1.0, Servers::Single);
+    b.moves(pa, ta, pb);
+    b.moves(pb, tb, pc);
+    b.moves(pc, tc, pb);
+    b.moves(pb, td, pa);
+    let net = b.build().unwrap();
+    let stays = Arc::new(AtomicU64::new(0));
+    let alternate = action_fn(move |ctx| {
+        let k = stays.fetch_add(1, Ordering::SeqCst);
+        async move {
+            let (d, t) = if k.is_multiple_of(2) {
+                (3.0, "Tb")
+            } else {
+                (0.5, "Td")
+            };
+            tokio::time::sleep(Duration::from_secs_f64(d)).await;
+            ctx.fire(t)
+        }
+    });
+    let mut h = Runtime::builder(net.clone())
+        .action("alternate", alternate)
+        .role(pa, role("wait"))
+        .role(pb, role("alternate"))
+        .role(pc, role("wait"))
+        .until(500.0)
+        .seed(3)
+        .spawn()
+        .unwrap();
+    let events = h.events().collect().await;
+    h.wait().await;
+    let trace = Trace::from_events(&net, &events);
+    let opts = Options::default();
+    let obs = observe(&net, None, &trace, &opts).unwrap();
+    let from_a: Vec<f64> = obs
+        .holdings
+        .iter()
+        .filter(|h| h.place == pb && h.entry == Some(ta))
+        .map(|h| h.duration)
+        .collect();
+    assert!(from_a.len() > 50, "{}", from_a.len());
+    assert!(from_a.iter().all(|&d| (d - 3.0).abs() < 1e-9), "{from_a:?}");
+    let (fitted, params) = fit(&net, &obs, &opts);
+    let param = |item: &str, what: &str| {
+        params
+            .iter()
+            .find(|f| f.transition == item && f.parameter == what)
+            .unwrap_or_else(|| panic!("no {what} of {item}: {params:#?}"))
+            .new
+    };
+    assert_eq!(param("B from Ta", "stages"), 20.0);
+    assert!((param("B from Ta", "mean") - 3.0).abs() < 1e-9);
+    assert_eq!(param("B from Tc", "stages"), 20.0);
+    assert!((param("B from Tc", "mean") - 0.5).abs() < 1e-9);
+    // No initial token and no other way in: no third chain.
+    assert!(params.iter().all(|f| !f.transition.contains("other")));
+    let share = param("Tb", "exit");
+    assert!((share - 0.5).abs() < 0.02, "{share}");
+    // A's entry feeds its chain: Ta puts the agent in B and in B's first stage from Ta.
+    let chain = fitted.place_by_name("B~Ta~1").unwrap();
+    let ta2 = fitted.transition_by_name("Ta").unwrap();
+    assert!(fitted.outputs(ta2).contains(&(chain, 1)));
+    let last = fitted.transition_by_name("B~Tc~20>done").unwrap();
+    match fitted.transition(last).timing {
+        Timing::Exponential { rate, servers } => {
+            assert!((rate - 40.0).abs() < 1e-9, "{rate}");
+            assert_eq!(servers, Servers::Infinite);
+        }
+        t => panic!("{t:?}"),
+    }
+    assert_eq!(fitted.place_count(), 3 + 40 + 1);
 }
 
 /// P1 -T1-> P2 -t2-> P3 -T3-> P1 with two tokens; T3 infinite-server at rate 2 (each agent's

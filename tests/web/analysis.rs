@@ -19,18 +19,18 @@ use gspn::plan::Plan;
 use gspn::web::{DEFAULT_MAX_STATES, WebState};
 use serde_json::{Value, json};
 
-fn patrol_plan_path() -> PathBuf {
+pub(crate) fn patrol_plan_path() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("plans/temperature_patrol.toml")
 }
 
-fn patrol_plan() -> Plan {
+pub(crate) fn patrol_plan() -> Plan {
     gspn::plan::open(&patrol_plan_path(), &ReadOptions::default())
         .unwrap()
         .into_plan()
 }
 
 /// The viewer of `plan` as `plan-runner serve PLAN` builds it.
-fn plan_state(plan: Plan) -> WebState {
+pub(crate) fn plan_state(plan: Plan) -> WebState {
     WebState::for_plan(
         plan.net,
         Some(plan.policy),
@@ -42,9 +42,15 @@ fn plan_state(plan: Plan) -> WebState {
 
 /// `plan-runner analyze FILE --json`.
 fn analyze_json(file: &std::path::Path) -> Value {
+    analyze_json_with(file, &[])
+}
+
+/// `plan-runner analyze FILE --json ARGS…`.
+pub(crate) fn analyze_json_with(file: &std::path::Path, args: &[&str]) -> Value {
     let out = Command::cargo_bin("plan-runner")
         .unwrap()
         .args(["analyze", file.to_str().unwrap(), "--json"])
+        .args(args)
         .output()
         .unwrap();
     assert!(out.status.success(), "{out:?}");

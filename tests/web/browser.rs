@@ -104,7 +104,7 @@ async fn wait_drawn(b: &Browser) {
 }
 
 /// `[(place, tokens)]` as the page's hooks say, in the page's order.
-async fn page_marking(b: &Browser) -> Vec<(String, u32)> {
+pub(crate) async fn page_marking(b: &Browser) -> Vec<(String, u32)> {
     let v = b
         .js(
             "return [...document.querySelectorAll('[data-place]')]\
@@ -154,7 +154,7 @@ async fn wait_firings(b: &Browser, n: u64) {
     b.wait_js(&script, WAIT, &format!("{n} firings")).await;
 }
 
-fn marking_of(net: &Net, page: &[(String, u32)]) -> Vec<u32> {
+pub(crate) fn marking_of(net: &Net, page: &[(String, u32)]) -> Vec<u32> {
     assert_eq!(page.len(), net.place_count(), "one hook per place");
     net.places()
         .iter()

@@ -12,6 +12,7 @@ mod layout;
 mod live;
 mod look;
 mod navigate;
+mod questions;
 mod replay_world;
 mod security;
 mod share;

@@ -1,7 +1,8 @@
 //! `plan-runner replay JOURNAL --net PLAN --web` of a run with `--robots 8`: the run is
 //! recognised (its scaled initial marking made the hash differ from the plan's net), the
 //! page shows the map with the 8 robots where the journal's world records put them, and the
-//! slider is in model seconds.
+//! slider is in model seconds. At 1280 px the header holds one row, the net keeps almost half
+//! the width beside the map and the side panel, and no two robot names on the map overlap.
 #![cfg(all(feature = "web", feature = "sim"))]
 
 use crate::browser::{BROWSER, WAIT, cursor_time, open, screenshot_path};
@@ -153,6 +154,119 @@ async fn a_journal_of_8_robots_replays_with_the_map_on_a_slider_in_model_seconds
     )
     .await;
     b.screenshot(&screenshot_path("replay-robots.png")).await;
+    b.close().await;
+    drop(child);
+}
+
+/// Every visible control of the header on the same line, the header one line high.
+pub(crate) async fn assert_header_one_row(b: &Browser) {
+    let rows = b
+        .js(
+            "const tops = [...document.querySelectorAll('header h1, .controls > *')]\
+               .filter(e => e.getClientRects().length > 0)\
+               .map(e => { const r = e.getBoundingClientRect(); return Math.round(r.top + r.height / 2); });\
+             return [Math.min(...tops), Math.max(...tops), document.querySelector('header').getBoundingClientRect().height];",
+            vec![],
+        )
+        .await;
+    let rows: [f64; 3] = serde_json::from_value(rows).unwrap();
+    assert!(
+        rows[1] - rows[0] <= 4.0,
+        "controls on several rows: {rows:?}"
+    );
+    assert!(rows[2] < 40.0, "header {} px high", rows[2]);
+}
+
+/// Client rectangles `[x0, y0, x1, y1]` of the robots' names on the map.
+async fn robot_name_boxes(b: &Browser) -> Vec<(String, [f64; 4])> {
+    let v = b
+        .js(
+            "return [...document.querySelectorAll('#map [data-robot] text')].map(t => {\
+               const r = t.getBoundingClientRect();\
+               return [t.textContent, [r.left, r.top, r.right, r.bottom]];\
+             });",
+            vec![],
+        )
+        .await;
+    serde_json::from_value(v).unwrap()
+}
+
+/// Pairs of names whose boxes overlap by more than half a pixel each way.
+fn overlapping(boxes: &[(String, [f64; 4])]) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for (i, (a, p)) in boxes.iter().enumerate() {
+        for (b, q) in &boxes[i + 1..] {
+            let w = p[2].min(q[2]) - p[0].max(q[0]);
+            let h = p[3].min(q[3]) - p[1].max(q[1]);
+            if w > 0.5 && h > 0.5 {
+                out.push((a.clone(), b.clone()));
+            }
+        }
+    }
+    out
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn at_1280_px_the_header_is_one_row_the_net_half_the_width_and_no_robot_names_overlap() {
+    let _one = BROWSER.lock().await;
+    let dir = tempfile::tempdir().unwrap();
+    let journal = dir.path().join("run.jsonl");
+    let plan = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("plans/temperature-patrol/plan.toml");
+    crate::support::journal_of_patrol_on_robots(&journal, 8, 5, 60);
+    let (child, addr) = replay_with_viewer(&journal, &plan);
+    let b = Browser::start(1280, 800).await;
+    open(&b, addr).await;
+    b.wait_js(
+        "return document.querySelectorAll('#map [data-robot]').length === 8;",
+        WAIT,
+        "the map with 8 robots",
+    )
+    .await;
+    assert_header_one_row(&b).await;
+    // The net keeps nearly half the window beside the map and the side panel.
+    let net_width = b
+        .js(
+            "return document.getElementById('canvas').getBoundingClientRect().width;",
+            vec![],
+        )
+        .await;
+    let net_width = net_width.as_f64().unwrap();
+    assert!(
+        net_width >= 0.45 * 1280.0,
+        "the net pane is {net_width} px wide"
+    );
+    // At the start three robots queue side by side at L1 (0.5 m apart), and at every time
+    // after: no two names overlap.
+    let end = b
+        .js(
+            "return Number(document.getElementById('slider').max);",
+            vec![],
+        )
+        .await
+        .as_f64()
+        .unwrap();
+    for k in 0..=10 {
+        let t = end * f64::from(k) / 10.0;
+        b.js(
+            "const s = document.getElementById('slider'); s.value = String(arguments[0]);\
+             s.dispatchEvent(new Event('input'));",
+            vec![json!(t)],
+        )
+        .await;
+        let boxes = robot_name_boxes(&b).await;
+        assert_eq!(boxes.len(), 8);
+        assert_eq!(
+            overlapping(&boxes),
+            Vec::<(String, String)>::new(),
+            "at t = {t}: {boxes:?}"
+        );
+        if k == 0 {
+            b.screenshot(&screenshot_path("replay-robots-1280-start.png"))
+                .await;
+        }
+    }
+    b.screenshot(&screenshot_path("replay-robots-1280.png"))
+        .await;
     b.close().await;
     drop(child);
 }

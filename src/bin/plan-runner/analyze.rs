@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use gspn::analysis::invariants::{Invariants, p_invariants, t_invariants};
-use gspn::analysis::measures::{Measures, Solver, SolverOptions};
+use gspn::analysis::measures::{Measures, Solver, SolverOptions, bad_time};
 use gspn::analysis::properties::Properties;
 use gspn::analysis::report::{MeasuresReport, Report, StateSpaceReport, transition_names};
 use gspn::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
@@ -70,11 +70,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         Regime::UnderPolicy
     };
-    if let Some(t) = args
-        .transient
-        .iter()
-        .find(|t| !(t.is_finite() && **t >= 0.0))
-    {
+    if let Some(t) = bad_time(&args.transient) {
         return Err(BadInput(format!("--transient: {t} is not a time ≥ 0")).into());
     }
     let predicates = args
@@ -143,24 +139,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             .with_context(|| format!("writing {}.tra/.sta/.lab", prefix.display()))?;
     }
     let steady = analysed.map(|(l, m, rewards)| {
-        let probs: Vec<f64> = predicates
-            .iter()
-            .map(|p| solver.probability(&l.pi, p))
-            .collect();
+        let probs = solver.probabilities(&l.pi, &predicates);
         (l.ergodic, m, probs, rewards)
     });
-    let transient: Vec<(f64, Measures, Vec<f64>)> = solver
-        .transient(&args.transient, 1e-12)
-        .into_iter()
-        .zip(&args.transient)
-        .map(|(pi, &t)| {
-            let probs = predicates
-                .iter()
-                .map(|p| solver.probability(&pi, p))
-                .collect();
-            (t, solver.measures(&pi), probs)
-        })
-        .collect();
+    let transient = solver.transient_points(&args.transient, &predicates);
     if args.json {
         let report = Report {
             analysed: regime.label().to_string(),
@@ -172,9 +154,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             }),
             transient: transient
                 .iter()
-                .map(|(t, m, probs)| {
-                    MeasuresReport::transient(net, *t, m).with_probabilities(&args.prob, probs)
-                })
+                .map(|p| MeasuresReport::point(net, p, &args.prob))
                 .collect(),
         };
         print_json(&report)?;
@@ -204,10 +184,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             }
         }
     }
-    for (t, m, probs) in &transient {
-        println!("\nat t = {t}:");
-        print_measures(net, m, false);
-        for (e, p) in args.prob.iter().zip(probs) {
+    for point in &transient {
+        println!("\nat t = {}:", point.t);
+        print_measures(net, &point.measures, false);
+        for (e, p) in args.prob.iter().zip(&point.probabilities) {
             println!("  P({e}) = {p:.9}");
         }
     }

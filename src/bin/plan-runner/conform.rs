@@ -43,6 +43,9 @@ pub(crate) struct Args {
     /// Batches of batch means.
     #[arg(long, value_name = "N", default_value_t = 20)]
     batches: usize,
+    /// Most stages of a fitted Erlang holding time (`--fit`; 1 fits rates only).
+    #[arg(long, value_name = "K", default_value_t = 20)]
+    max_stages: u32,
     /// Most reachable markings for the steady-state prediction.
     #[arg(long, value_name = "N", default_value_t = 1_000_000)]
     max_states: usize,
@@ -128,8 +131,12 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let format = args.fit.as_deref().map(fit_format).transpose()?;
     let (net, policy) = model(args.plan.as_deref(), args.net.as_deref(), &args.net_args)?;
     let trace = journal_trace(&args.journal, &net)?;
+    if args.max_stages < 1 {
+        return Err(BadInput("--max-stages 0: at least 1 is needed".into()).into());
+    }
     let opts = Options {
         batches: args.batches,
+        max_stages: args.max_stages,
         ..Options::default()
     };
     let policy = (!policy.is_empty()).then_some(policy);
@@ -227,13 +234,19 @@ fn print_report(r: &Report) {
 
 fn print_fitted(out: &Path, params: &[Fitted]) {
     println!("\n# fitted net written to {}", out.display());
+    let w = params
+        .iter()
+        .map(|f| f.transition.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(24);
     println!(
-        "{:<24} {:<7} {:>10} {:>10} {:>23} {:>7}",
-        "transition", "param", "old", "fitted", "95% interval", "n"
+        "{:<w$} {:<10} {:>10} {:>10} {:>23} {:>7}",
+        "item", "param", "old", "fitted", "95% interval", "n"
     );
     for f in params {
         println!(
-            "{:<24} {:<7} {:>10} {:>10} {:>23} {:>7}{}",
+            "{:<w$} {:<10} {:>10} {:>10} {:>23} {:>7}{}",
             f.transition,
             f.parameter,
             num(f.old),

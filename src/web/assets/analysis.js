@@ -2,7 +2,10 @@
 // field's limit), shows its progress (phase, markings, seconds) with a cancel button, then
 // what was analysed ("net under plan policy" or "bare net"), the properties, the place
 // bounds, the invariants, the steady-state bars, the plan's reward rates and the dead
-// markings (click one to replay its firing sequence on the net).
+// markings (click one to replay its firing sequence on the net); then questions on the
+// analysed state space: probabilities of `--prob`-style predicates (steady state and at
+// times t) and the expected tokens at those times, computed by the server exactly as
+// `plan-runner analyze --prob EXPR --transient T` computes them.
 'use strict';
 
 // ---- analysis --------------------------------------------------------------------------
@@ -108,12 +111,64 @@ async function analyse() {
     html += '<li class="dead mono" data-dead="' + i + '" title="click to replay">' +
       escapeHtml(d.text || '(empty)') + ' ← ' + escapeHtml(d.path.join(' ')) + '</li>';
   });
-  out.innerHTML = html + '</ol>';
+  out.innerHTML = html + '</ol>' + (a.steady ? queryForm() : '');
   // Widths through the CSSOM: the page's policy forbids inline style attributes.
   for (const b of out.querySelectorAll('.bar')) b.style.width = b.dataset.width + '%';
   for (const li of out.querySelectorAll('[data-dead]')) {
     li.addEventListener('click', () => replay(a.dead_markings[Number(li.dataset.dead)].path));
   }
+  if (a.steady) $('query').addEventListener('click', ask);
+}
+
+// The questions' form: times (comma-separated) and predicates (one per line).
+function queryForm() {
+  return '<h4>questions</h4><div class="query">' +
+    '<label>at times <input id="query-times" class="mono" placeholder="0.5, 1, 10"></label>' +
+    '<label>P( … ) <textarea id="query-prob" class="mono" rows="2" ' +
+    'placeholder="one predicate per line, e.g. P1 > 0 &amp;&amp; P2 == 0"></textarea></label>' +
+    '<button id="query" title="probabilities and expected tokens, as plan-runner analyze --prob --transient">ask</button>' +
+    '</div><div id="query-result"></div>';
+}
+
+// Asks the server the form's questions and shows a table: a row per predicate (steady state,
+// then each time) and per place (expected tokens at each time). Each number's cell carries
+// its full value in data-value.
+async function ask() {
+  const out = $('query-result');
+  const text = $('query-times').value.trim();
+  const times = text ? text.split(/[\s,]+/).filter((x) => x).map(Number) : [];
+  const prob = $('query-prob').value.split('\n').map((x) => x.trim()).filter((x) => x);
+  if (times.some((t) => !Number.isFinite(t))) {
+    out.innerHTML = '<p class="error">times: numbers separated by commas</p>';
+    return;
+  }
+  let q;
+  try {
+    q = await api('POST', '/api/analysis/query', { transient: times, prob });
+  } catch (e) {
+    if (unreachable(e)) offline(e);
+    out.innerHTML = '<p class="error">' + escapeHtml(e.message) + '</p>';
+    return;
+  }
+  const cell = (attrs, v) => '<td class="mono" ' + attrs + ' data-value="' + v + '">' + fmt(v) + '</td>';
+  let html = '<table class="query"><tr><th></th>' + (prob.length ? '<th>steady</th>' : '') +
+    q.transient.map((p) => '<th>t = ' + fmtTime(p.t) + '</th>').join('') + '</tr>';
+  for (const e of prob) {
+    const x = escapeHtml(e);
+    html += '<tr><td class="qname mono">P(' + x + ')</td>' +
+      cell('data-prob="' + x + '" data-t="steady"', q.steady_state.probability[e]) +
+      q.transient.map((p) => cell('data-prob="' + x + '" data-t="' + p.t + '"', p.probability[e])).join('') +
+      '</tr>';
+  }
+  if (q.transient.length) {
+    for (const pl of net.places) {
+      const x = escapeHtml(pl.name);
+      html += '<tr><td class="qname">E[' + x + ']</td>' + (prob.length ? '<td></td>' : '') +
+        q.transient.map((p) => cell('data-tokens="' + x + '" data-t="' + p.t + '"', p.mean_tokens[pl.name])).join('') +
+        '</tr>';
+    }
+  }
+  out.innerHTML = html + '</table>';
 }
 
 // Most tokens each place ever holds, in the net's order.

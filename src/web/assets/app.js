@@ -737,6 +737,7 @@ async function main() {
     }
     net = await api('GET', '/api/net');
     $('title').textContent = net.name + (net.layout === 'layered' ? ' (automatic layout)' : '');
+    $('title').title = $('title').textContent;
     document.title = net.name + ' — gspn';
     scaleCoordinates();
     drawNet();

@@ -32,6 +32,7 @@ function connectLive() {
       const first = net === null;
       net = msg;
       $('title').textContent = net.name + ' — live';
+      $('title').title = $('title').textContent;
       document.title = net.name + ' — gspn (live)';
       scaleCoordinates();
       drawNet();

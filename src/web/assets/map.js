@@ -6,7 +6,7 @@
 // each location's data-location="NAME".
 'use strict';
 
-const map = { key: null, robots: new Map(), size: 1 };
+const map = { key: null, robots: new Map(), size: 1, font: 0 };
 
 function mapEl(tag, attrs, parent) {
   return el(tag, attrs, parent);
@@ -69,9 +69,20 @@ function drawMapStatic(w) {
     const lg = mapEl('g', { class: 'location', 'data-location': l.name,
       transform: 'translate(' + l.x + ',' + -l.y + ')' }, g);
     mapEl('rect', { x: -s * 0.35, y: -s * 0.35, width: s * 0.7, height: s * 0.7 }, lg);
-    const t = mapEl('text', { y: Math.max(s * 0.35, robotR) + s * 1.1, 'font-size': s }, lg);
+    const t = mapEl('text', { y: Math.max(s * 0.35, robotR) + s * 1.1, 'font-size': s, class: 'location-name' }, lg);
     t.textContent = l.name;
   }
+  map.font = 0;
+}
+
+// Names at least 11 px high on the screen whatever the room's size (metres per pixel change
+// with the pane's size): the font size in metres.
+function mapFont() {
+  const svg = $('map');
+  const vb = svg.viewBox.baseVal;
+  const r = svg.getBoundingClientRect();
+  const pxPerMetre = vb && vb.width > 0 && r.width > 0 ? Math.min(r.width / vb.width, r.height / vb.height) : 0;
+  return pxPerMetre > 0 ? Math.max(map.size * 0.9, 11 / pxPerMetre) : map.size * 0.9;
 }
 
 const ROBOT_COLOURS = ['#d9480f', '#1971c2', '#2f9e44', '#ae3ec9', '#f08c00', '#0c8599', '#c2255c', '#5c940d'];
@@ -107,9 +118,16 @@ function drawWorld(w) {
       g.addEventListener('click', () => selectRobot(id));
       const c = mapEl('circle', { r: r.radius || map.size * 0.4 }, g);
       c.style.fill = robotColour(id);
-      const t = mapEl('text', { 'font-size': map.size * 0.9, y: -(r.radius || map.size * 0.4) - map.size * 0.2 }, g);
-      t.textContent = id + (r.agent !== undefined && r.agent !== null ? ' (' + r.agent + ')' : '');
+      const t = mapEl('text', { 'font-size': map.font || map.size * 0.9 }, g);
+      t.style.fill = robotColour(id);
       map.robots.set(id, g);
+    }
+    // The agent it carries changes as it goes.
+    const label = id + (r.agent !== undefined && r.agent !== null ? ' (' + r.agent + ')' : '');
+    const t = g.querySelector('text');
+    if (t.textContent !== label) {
+      t.textContent = label;
+      g.labelWidth = undefined;
     }
     g.setAttribute('data-x', String(r.x));
     g.setAttribute('data-y', String(r.y));
@@ -121,7 +139,66 @@ function drawWorld(w) {
       map.robots.delete(id);
     }
   }
+  const font = mapFont();
+  if (Math.abs(font - map.font) > 1e-9) {
+    map.font = font;
+    for (const t of $('map').querySelectorAll('.robot text, .location-name')) t.setAttribute('font-size', String(font));
+    for (const g of map.robots.values()) g.labelWidth = undefined;
+  }
+  placeRobotLabels(w.robots || []);
   const n = (w.robots || []).length;
   $('map-time').textContent = 'sim time ' + fmt(w.time || 0) + ' s, ' + n + ' robot' + (n === 1 ? '' : 's') +
     ($('map-panel').classList.contains('stopped') ? ' — stopped' : '');
+}
+
+// Puts each robot's name where it overlaps no other name and no robot: above it if that is
+// free, else below, beside, then further up or down (robots queued side by side at a
+// location would otherwise write their names over each other). Names are in the robot's
+// colour, so a name set further off still reads as its robot's. Greedy, in id order:
+// deterministic, and at most a few thousand box tests for 64 robots.
+function placeRobotLabels(robots) {
+  const s = map.size;
+  const h = map.font || s * 0.9; // the font size: a line's height
+  const gap = s * 0.2;
+  const discs = robots.map((r) => ({ x: r.x, y: -r.y, r: r.radius || s * 0.4 }));
+  const placed = [];
+  const hits = (b) => placed.some((o) => b.x0 < o.x1 && o.x0 < b.x1 && b.y0 < o.y1 && o.y0 < b.y1) ||
+    discs.some((d) => d.x + d.r > b.x0 && d.x - d.r < b.x1 && d.y + d.r > b.y0 && d.y - d.r < b.y1);
+  const order = robots.map((r, i) => i).sort((a, b) => String(robots[a].id).localeCompare(String(robots[b].id), 'en', { numeric: true }));
+  for (const i of order) {
+    const r = robots[i];
+    const g = map.robots.get(String(r.id));
+    if (!g) continue;
+    const t = g.querySelector('text');
+    if (g.labelWidth === undefined) g.labelWidth = t.getComputedTextLength() || h * 0.6 * t.textContent.length;
+    const w = g.labelWidth;
+    const rad = discs[i].r;
+    const cx = r.x;
+    const cy = -r.y;
+    // Candidate baselines (dy) and centres (dx) relative to the robot, nearest first. A
+    // name's box reaches 0.95 of the font size above its baseline and 0.3 below (what the
+    // browser's glyph boxes measure), rows are 1.25 apart.
+    const up = 0.95 * h;
+    const down = 0.3 * h;
+    const row = 1.25 * h;
+    const cands = [[0, -rad - gap - down], [0, rad + gap + up], [rad + gap + w / 2, h * 0.3], [-rad - gap - w / 2, h * 0.3]];
+    for (let k = 1; k <= 8; k++) {
+      cands.push([0, -rad - gap - down - k * row], [0, rad + gap + up + k * row]);
+    }
+    const boxAt = ([dx, dy]) => ({ x0: cx + dx - w / 2, x1: cx + dx + w / 2, y0: cy + dy - up, y1: cy + dy + down });
+    let best = cands[0];
+    let box = null;
+    for (const c of cands) {
+      const b = boxAt(c);
+      if (!hits(b)) {
+        best = c;
+        box = b;
+        break;
+      }
+    }
+    if (!box) box = boxAt(best);
+    placed.push(box);
+    t.setAttribute('x', String(best[0]));
+    t.setAttribute('y', String(best[1]));
+  }
 }
