@@ -301,6 +301,21 @@ pub enum LoadErrorKind {
     Invalid(String),
 }
 
+/// `v` as a count of at least `min` (0 or 1), or what a count must be: one rule for the
+/// readers (markings, multiplicities, priorities, servers) and the viewer's editor.
+pub(crate) fn whole_number(v: f64, min: u32) -> Result<u32, &'static str> {
+    if v.is_finite() && v.fract() == 0.0 && v >= min as f64 && v <= u32::MAX as f64 {
+        return Ok(v as u32);
+    }
+    Err(if v.fract() == 0.0 && v > u32::MAX as f64 {
+        crate::net::TOO_MANY_TOKENS
+    } else if min == 0 {
+        "must be a whole number ≥ 0"
+    } else {
+        "must be a whole number ≥ 1"
+    })
+}
+
 /// The file formats gspn knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {

@@ -28,6 +28,8 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("predicate", predicate),
     ("expr", expr),
     ("journal", journal),
+    #[cfg(feature = "ros2")]
+    ("rtps", rtps),
 ];
 
 /// The net that plans, predicates and journals are checked against: the repository's cyc3
@@ -114,4 +116,13 @@ pub fn journal(data: &[u8]) {
         return;
     };
     let _ = gspn::runtime::journal::read_journal(text, cyc3());
+}
+
+/// One UDP datagram through RustDDS's receive path (`vendor/rustdds`, gspn's patched copy):
+/// its message receiver, with the built-in readers and the user readers the datagram names
+/// matched with its writers, then Discovery's deserializers on the built-in topics' payloads
+/// (`rustdds::fuzzing::receive`).
+#[cfg(feature = "ros2")]
+pub fn rtps(data: &[u8]) {
+    rustdds::fuzzing::receive(data);
 }

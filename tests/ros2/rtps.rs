@@ -120,3 +120,24 @@ pub fn gap(prefix: [u8; 12], start: i64, list_base: i64) -> Vec<u8> {
     submessage(&mut m, 0x08, 0x00, &body); // GAP
     m
 }
+
+/// A DATA_FRAG from participant `prefix`'s SEDP publications announcer: fragment 1 (of
+/// 1024-byte fragments) of sample `sn`, whose size it claims is `sample_size` bytes (RustDDS
+/// allocated and zeroed the whole sample on the first fragment).
+pub fn data_frag(prefix: [u8; 12], sn: i64, sample_size: u32) -> Vec<u8> {
+    let mut m = header(prefix);
+    let mut body = Vec::new();
+    body.extend(0u16.to_le_bytes()); // extraFlags
+    body.extend(28u16.to_le_bytes()); // octetsToInlineQos
+    body.extend(SEDP_PUB_READER);
+    body.extend(SEDP_PUB_WRITER);
+    body.extend(seq(sn));
+    body.extend(1u32.to_le_bytes()); // fragmentStartingNum
+    body.extend(1u16.to_le_bytes()); // fragmentsInSubmessage
+    body.extend(1024u16.to_le_bytes()); // fragmentSize
+    body.extend(sample_size.to_le_bytes()); // sampleSize
+    body.extend([0x00, 0x03, 0x00, 0x00]); // PL_CDR_LE encapsulation, then the fragment
+    body.extend([0u8; 1020]);
+    submessage(&mut m, 0x16, 0x00, &body); // DATA_FRAG
+    m
+}

@@ -9,7 +9,10 @@ use crate::ros2_support as support;
 use std::net::{IpAddr, Ipv4Addr, UdpSocket};
 use std::time::Duration;
 
-use support::{domain, finish, robot, rss, supervisor, udp_sockets, wait_for_log};
+use support::{
+    domain, finish, robot, robot_with_data_limit, rss, supervisor, try_rss, udp_sockets,
+    wait_for_log,
+};
 
 const LOOPBACK: IpAddr = IpAddr::V4(Ipv4Addr::LOCALHOST);
 
@@ -57,16 +60,19 @@ async fn every_dds_socket_of_a_default_run_is_bound_to_loopback() {
     drop(robots);
 }
 
-/// A robot's memory before and after two hostile packets: an SPDP announcement of a fake
+/// A robot's memory before and after hostile packets: an SPDP announcement of a fake
 /// participant, then HEARTBEATs from its SEDP announcers claiming sequence numbers
-/// 1..=6·10¹³ (and a GAP over 2..6·10¹³); unpatched RustDDS listed every "missing" number
-/// (over 1 GB in a second).
+/// 1..=6·10¹³ (and a GAP over 2..6·10¹³), then DATA_FRAGs claiming samples of 3 GB;
+/// unpatched RustDDS listed every "missing" number (over 1 GB in a second) and allocated
+/// every claimed sample on its first fragment. The robot runs with its data segment
+/// limited to 300 MB, so a regression makes it die at once (the test fails) rather than eat
+/// the machine's memory.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn malformed_rtps_packets_do_not_make_a_robot_grow() {
     const HUGE: i64 = 60_000_000_000_000;
     let dir = tempfile::tempdir().unwrap();
     let d = domain(6);
-    let mut r = robot(dir.path(), "r1", d);
+    let mut r = robot_with_data_limit(dir.path(), "r1", d, 300 << 20);
     assert!(
         wait_for_log(&r, "serving on domain", Duration::from_secs(30)).await,
         "{}",
@@ -102,6 +108,11 @@ async fn malformed_rtps_packets_do_not_make_a_robot_grow() {
         attacker
             .send_to(&rtps::heartbeats(prefix, 1, HUGE, 2), (s.addr, s.port))
             .unwrap();
+        for sn in 1..=4 {
+            attacker
+                .send_to(&rtps::data_frag(prefix, sn, 3 << 30), (s.addr, s.port))
+                .unwrap();
+        }
     }
     // The robot answers the heartbeats (an ACKNACK to the announced locator): the packets
     // were processed, not dropped as garbage.
@@ -118,12 +129,16 @@ async fn malformed_rtps_packets_do_not_make_a_robot_grow() {
     let mut peak = baseline;
     for _ in 0..30 {
         tokio::time::sleep(Duration::from_millis(100)).await;
-        assert!(
-            r.child.try_wait().unwrap().is_none(),
-            "the robot died: {}",
-            r.log()
-        );
-        peak = peak.max(rss(pid));
+        let now = try_rss(pid).filter(|_| r.child.try_wait().unwrap().is_none());
+        let Some(now) = now else {
+            let status = r.child.wait().await.unwrap();
+            panic!(
+                "the robot died ({status}, peak RSS {} MB before): {}",
+                peak >> 20,
+                r.log()
+            );
+        };
+        peak = peak.max(now);
     }
     println!(
         "robot RSS: baseline {} MB, peak after the packets {} MB",

@@ -50,9 +50,28 @@ fn command_env(
     stdout: bool,
     env: &[(&str, &str)],
 ) -> Proc {
+    spawn(
+        dir,
+        name,
+        args,
+        stdout,
+        env,
+        Command::new(env!("CARGO_BIN_EXE_plan-runner")),
+    )
+}
+
+/// [`command_env`] on `cmd` (a `plan-runner` command the caller may have prepared).
+fn spawn(
+    dir: &Path,
+    name: &str,
+    args: &[String],
+    stdout: bool,
+    env: &[(&str, &str)],
+    mut cmd: Command,
+) -> Proc {
     let log = dir.join(format!("{name}.log"));
     let err = std::fs::File::create(&log).expect("log file");
-    let child = Command::new(env!("CARGO_BIN_EXE_plan-runner"))
+    let child = cmd
         .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .env_remove("RUST_LOG")
@@ -84,6 +103,31 @@ pub fn robot_with(dir: &Path, id: &str, plan: &Path, domain: u16, extra: &[&str]
     robot_env(dir, id, plan, domain, extra, &[])
 }
 
+/// [`robot`] whose data segment (heap and other private writable memory, `RLIMIT_DATA`) may
+/// not exceed `max_bytes`: a robot whose memory runs away fails at once (allocation failure,
+/// abort) instead of taking the machine's memory. (`RLIMIT_AS` does not fit: an idle debug
+/// robot already reserves ~300 MB of address space, glibc's per-thread malloc arenas, of
+/// which ~15 MB are data.)
+pub fn robot_with_data_limit(dir: &Path, id: &str, domain: u16, max_bytes: u64) -> Proc {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_plan-runner"));
+    let limit = libc::rlimit {
+        rlim_cur: max_bytes,
+        rlim_max: max_bytes,
+    };
+    // SAFETY: setrlimit is async-signal-safe; the closure touches nothing else.
+    unsafe {
+        cmd.pre_exec(move || {
+            if libc::setrlimit(libc::RLIMIT_DATA, &limit) == 0 {
+                Ok(())
+            } else {
+                Err(std::io::Error::last_os_error())
+            }
+        });
+    }
+    let args = robot_args(id, Path::new(PLAN), domain, &[]);
+    spawn(dir, id, &args, false, &[], cmd)
+}
+
 /// The robot's debug log on: it says when each goal starts and ends.
 pub const GOAL_LOG: (&str, &str) = (
     "RUST_LOG",
@@ -100,6 +144,11 @@ pub fn robot_env(
     extra: &[&str],
     env: &[(&str, &str)],
 ) -> Proc {
+    command_env(dir, id, &robot_args(id, plan, domain, extra), false, env)
+}
+
+/// `robot --id ID --plan PLAN --ros2-domain D EXTRA…`.
+fn robot_args(id: &str, plan: &Path, domain: u16, extra: &[&str]) -> Vec<String> {
     let mut args: Vec<String> = vec![
         "robot".into(),
         "--id".into(),
@@ -110,7 +159,7 @@ pub fn robot_env(
         domain.to_string(),
     ];
     args.extend(extra.iter().map(|s| s.to_string()));
-    command_env(dir, id, &args, false, env)
+    args
 }
 
 /// `plan-runner run PLAN --ros2-domain D --json EXTRA…` (stdout piped: the JSON summary).
@@ -261,14 +310,18 @@ pub fn udp_sockets(pid: u32) -> Vec<UdpSocket> {
 
 /// The resident set size of process `pid` in bytes (`VmRSS` of /proc/<pid>/status).
 pub fn rss(pid: u32) -> u64 {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).expect("process status");
+    try_rss(pid).expect("VmRSS of a running process")
+}
+
+/// [`rss`], or `None` when the process has ended (a zombie has no `VmRSS`).
+pub fn try_rss(pid: u32) -> Option<u64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
     let kb = status
         .lines()
         .find_map(|l| l.strip_prefix("VmRSS:"))
         .and_then(|v| v.split_whitespace().next())
-        .and_then(|v| v.parse::<u64>().ok())
-        .expect("VmRSS");
-    kb * 1024
+        .and_then(|v| v.parse::<u64>().ok())?;
+    Some(kb * 1024)
 }
 
 /// Waits (at most `limit`) until the process's log contains `what`; false if it never did.

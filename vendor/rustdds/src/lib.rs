@@ -179,6 +179,8 @@ mod serialization_test;
 mod checked_impl;
 #[doc(hidden)]
 pub mod discovery; // to access some Discovered data in e.g. ros2-client crate
+#[doc(hidden)]
+pub mod fuzzing; // gspn patch: the receive path for cargo-fuzz
 mod messages;
 mod network;
 mod rtps;

@@ -5,7 +5,7 @@ use std::{
 
 use bit_vec::BitVec;
 use enumflags2::BitFlags;
-use bytes::BytesMut;
+use bytes::{Bytes, BytesMut};
 #[allow(unused_imports)]
 use log::{debug, error, info, trace, warn};
 
@@ -24,7 +24,12 @@ use crate::{
 
 // This is for the assembly of a single object
 struct AssemblyBuffer {
-  buffer_bytes: BytesMut,
+  // The fragment runs received so far, by their first fragment index (from 0),
+  // each copied out of its datagram: memory follows the bytes received, not
+  // the sample size a DATAFRAG claims (which a hostile or broken peer sets to
+  // up to 4 GiB). Assembled into one buffer when the last fragment arrives.
+  runs: BTreeMap<usize, Bytes>,
+  data_size: usize,
   fragment_count: usize,
   received_bitmap: BitVec,
 
@@ -33,6 +38,12 @@ struct AssemblyBuffer {
   created_time: Timestamp,
   modified_time: Timestamp,
 }
+
+// Largest sample accepted in fragments, and most fragments per sample: a
+// DATAFRAG claiming more is refused (the bitmap of received fragments costs
+// one bit per claimed fragment).
+const MAX_FRAGMENTED_SAMPLE_SIZE: usize = 256 << 20;
+const MAX_FRAGMENTS_PER_SAMPLE: usize = 1 << 20;
 
 impl AssemblyBuffer {
   pub fn new(datafrag: &DataFrag) -> Option<Self> {
@@ -45,24 +56,43 @@ impl AssemblyBuffer {
       return None;
     }
 
-    let mut buffer_bytes = BytesMut::with_capacity(data_size);
-    buffer_bytes.resize(data_size, 0);
-
     let fragment_count = usize::from(datafrag.total_number_of_fragments());
     if fragment_count == 0 {
       error!("Cannot create AssemblyBuffer: zero fragment count");
+      return None;
+    }
+    if data_size > MAX_FRAGMENTED_SAMPLE_SIZE || fragment_count > MAX_FRAGMENTS_PER_SAMPLE {
+      warn!(
+        "Cannot create AssemblyBuffer: data_size={data_size} in {fragment_count} fragments is \
+         above the limit ({MAX_FRAGMENTED_SAMPLE_SIZE} bytes, {MAX_FRAGMENTS_PER_SAMPLE} \
+         fragments)"
+      );
       return None;
     }
 
     let now = Timestamp::now();
 
     Some(Self {
-      buffer_bytes,
+      runs: BTreeMap::new(),
+      data_size,
       fragment_count,
       received_bitmap: BitVec::from_elem(fragment_count, false),
       created_time: now,
       modified_time: now,
     })
+  }
+
+  /// The sample's bytes, once complete.
+  fn assemble(&self, frag_size: u16) -> BytesMut {
+    let mut buffer_bytes = BytesMut::zeroed(self.data_size);
+    for (start, run) in &self.runs {
+      let from = start * usize::from(frag_size);
+      let to = std::cmp::min(from + run.len(), self.data_size);
+      if from < to {
+        buffer_bytes[from..to].copy_from_slice(&run[..to - from]);
+      }
+    }
+    buffer_bytes
   }
 
   /// Returns `false` if the fragment run is invalid or out of bounds.
@@ -124,7 +154,7 @@ impl AssemblyBuffer {
           frags_in_submessage * frag_size,
           datafrag.serialized_payload.len(),
         ),
-      self.buffer_bytes.len(),
+      self.data_size,
     );
     if from_byte > to_before_byte {
       error!(
@@ -159,11 +189,22 @@ impl AssemblyBuffer {
       datafrag.serialized_payload.len()
     );
 
-    self.buffer_bytes.as_mut()[from_byte..to_before_byte]
-      .copy_from_slice(&datafrag.serialized_payload[..payload_size]);
-
-    for f in 0..frags_in_submessage {
-      self.received_bitmap.set(start_frag_from_0 + f, true);
+    // Keep the run only if it brings a fragment not received yet (a repeated
+    // DATAFRAG costs nothing).
+    if (0..frags_in_submessage).any(|f| !self.received_bitmap[start_frag_from_0 + f]) {
+      let longer = self
+        .runs
+        .get(&start_frag_from_0)
+        .is_none_or(|run| run.len() < payload_size);
+      if longer {
+        self.runs.insert(
+          start_frag_from_0,
+          Bytes::copy_from_slice(&datafrag.serialized_payload[..payload_size]),
+        );
+      }
+      for f in 0..frags_in_submessage {
+        self.received_bitmap.set(start_frag_from_0 + f, true);
+      }
     }
     self.modified_time = Timestamp::now();
     true
@@ -249,7 +290,7 @@ impl FragmentAssembler {
       if let Some(assembly_buffer) = self.assembly_buffers.remove(&writer_sn) {
         // Return what we have assembled.
         let serialized_data_or_key =
-          SerializedPayload::from_bytes(&assembly_buffer.buffer_bytes.freeze()).map_or_else(
+          SerializedPayload::from_bytes(&assembly_buffer.assemble(frag_size).freeze()).map_or_else(
             |e| {
               error!("Deserializing SerializedPayload from DATAFRAG: {:?}", e);
               None
@@ -327,8 +368,10 @@ impl FragmentAssembler {
     match self.assembly_buffers.get(&seq) {
       None => Box::new(iter::empty()),
       Some(ab) => {
+        // A NACK_FRAG's FragmentNumberSet holds at most 256 numbers.
         let iter = (0..ab.fragment_count)
           .filter(move |f| !ab.received_bitmap.get(*f).unwrap_or(true))
+          .take(256)
           .map(|f| FragmentNumber::new((f + 1).try_into().unwrap()));
         Box::new(iter)
       }
@@ -379,7 +422,7 @@ mod tests {
     ab.insert_frags(&tail, frag_size);
     assert!(ab.is_complete(), "all fragments received");
     assert_eq!(
-      &ab.buffer_bytes[..],
+      &ab.assemble(frag_size)[..],
       &whole[..],
       "reassembled bytes must match the original sample"
     );
@@ -396,7 +439,7 @@ mod tests {
     let mut ab = AssemblyBuffer::new(&all).expect("valid fragment set");
     ab.insert_frags(&all, frag_size);
     assert!(ab.is_complete());
-    assert_eq!(&ab.buffer_bytes[..], &whole[..]);
+    assert_eq!(&ab.assemble(frag_size)[..], &whole[..]);
   }
 
   // Malformed span (starting at last fragment but claiming multiple fragments)
