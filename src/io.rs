@@ -93,12 +93,13 @@ impl Span {
 #[derive(Clone, Debug)]
 pub struct LineIndex {
     starts: Vec<usize>,
-    /// Characters in `text[..k * STEP]`, per k.
+    /// Characters in `text[..k * STEP]`, per k; empty when the text is ASCII (a character
+    /// per byte, nothing to count).
     chars: Vec<usize>,
 }
 
 impl LineIndex {
-    const STEP: usize = 4096;
+    const STEP: usize = 256;
 
     /// Indexes the lines of `text`.
     pub fn new(text: &[u8]) -> LineIndex {
@@ -109,18 +110,24 @@ impl LineIndex {
                 .filter(|&(_, &b)| b == b'\n')
                 .map(|(i, _)| i + 1),
         );
-        let mut chars = Vec::with_capacity(text.len() / Self::STEP + 1);
-        let mut n = 0;
-        chars.push(0);
-        for block in text.chunks(Self::STEP) {
-            n += char_starts(block);
-            chars.push(n);
+        let mut chars = Vec::new();
+        if !text.is_ascii() {
+            chars.reserve(text.len() / Self::STEP + 1);
+            let mut n = 0;
+            chars.push(0);
+            for block in text.chunks(Self::STEP) {
+                n += char_starts(block);
+                chars.push(n);
+            }
         }
         LineIndex { starts, chars }
     }
 
     /// Characters in `text[..offset]`.
     fn chars_before(&self, text: &[u8], offset: usize) -> usize {
+        if self.chars.is_empty() {
+            return offset;
+        }
         let k = offset / Self::STEP;
         self.chars[k] + char_starts(&text[k * Self::STEP..offset])
     }
@@ -471,6 +478,26 @@ mod tests {
             assert_eq!(
                 index.locate(text, at),
                 Span::locate(text, at),
+                "offset {at}"
+            );
+        }
+        // ASCII text: columns are byte counts, no character table.
+        let ascii = format!("a\n{}\nb", "xy".repeat(5000));
+        let (ascii, index) = (ascii.as_bytes(), LineIndex::new(ascii.as_bytes()));
+        for at in [
+            0,
+            1,
+            2,
+            3,
+            257,
+            9000,
+            ascii.len() - 1,
+            ascii.len(),
+            ascii.len() + 5,
+        ] {
+            assert_eq!(
+                index.locate(ascii, at),
+                Span::locate(ascii, at),
                 "offset {at}"
             );
         }
