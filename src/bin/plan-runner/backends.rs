@@ -112,7 +112,7 @@ pub(crate) async fn setup(
             gspn::world::Fleet::new(plan, args.robots).map_err(|e| BadInput(e.to_string()))?;
         #[cfg(feature = "web")]
         if let Some(addr) = args.web {
-            let feed = world_feed(fleet.world.view());
+            let feed = gspn::world::WorldView::json_feed(fleet.world.view());
             backends.push(gspn::world::WorldBackend::new(fleet.world));
             backends.push(crate::serve::LiveViewer::new(
                 addr,
@@ -157,23 +157,4 @@ pub(crate) async fn setup(
     }
     let _ = args;
     Ok((plan.runtime_builder(), backends))
-}
-
-/// The world's view as JSON for the viewer's map: a task forwards each new view.
-#[cfg(all(feature = "sim", feature = "web"))]
-fn world_feed(
-    mut view: tokio::sync::watch::Receiver<gspn::world::WorldView>,
-) -> tokio::sync::watch::Receiver<serde_json::Value> {
-    let json =
-        |v: &gspn::world::WorldView| serde_json::to_value(v).unwrap_or(serde_json::Value::Null);
-    let (tx, rx) = tokio::sync::watch::channel(json(&view.borrow_and_update()));
-    tokio::spawn(async move {
-        while view.changed().await.is_ok() {
-            let v = json(&view.borrow_and_update());
-            if tx.send(v).is_err() {
-                break;
-            }
-        }
-    });
-    rx
 }
