@@ -173,7 +173,7 @@ impl PlanFile {
     /// refused with their line and column.
     pub fn parse(path: &Path, text: &str) -> Result<PlanFile, LoadError> {
         toml::from_str::<PlanFile>(text).map_err(|e| {
-            let message = e.message().trim().to_string();
+            let message = misplaced_map_key(e.message().trim());
             match e.span() {
                 Some(s) => LoadError::at(path, locate(text, s), LoadErrorKind::Invalid(message)),
                 None => LoadError::file(path, LoadErrorKind::Invalid(message)),
@@ -185,6 +185,34 @@ impl PlanFile {
     pub fn net_path(&self, plan_path: &Path) -> PathBuf {
         let dir = plan_path.parent().unwrap_or(Path::new(""));
         dir.join(self.net.get_ref())
+    }
+}
+
+/// TOML puts a key into the last table header above it: a `[map]` key (`edges = …`, `patrol`,
+/// `walls`, …) written after a `[map.locations.NAME]` header lands in that location, whose
+/// reader then says "unknown field". Says where the key belongs.
+fn misplaced_map_key(message: &str) -> String {
+    const MAP_KEYS: [&str; 8] = [
+        "edges",
+        "patrol",
+        "walls",
+        "obstacles",
+        "step_hz",
+        "robot",
+        "stuck_after",
+        "locations",
+    ];
+    let in_location = message.contains("expected one of `x`, `y`, `queue`, `places`");
+    let key = MAP_KEYS
+        .iter()
+        .find(|k| message.starts_with(&format!("unknown field `{k}`")));
+    match key {
+        Some(k) if in_location => format!(
+            "{message}: `{k}` belongs to [map], and this line is under a [map.locations.…] \
+             header (TOML puts a key into the last table above it) — move it above the first \
+             [map.locations.…] table"
+        ),
+        _ => message.to_string(),
     }
 }
 

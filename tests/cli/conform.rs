@@ -351,6 +351,15 @@ fn fitted_prediction(dir: &Path, j: &Path, max_stages: &str) -> f64 {
     let copy_path = dir.join(format!("fitted-{max_stages}.toml"));
     std::fs::write(&copy_path, copy).unwrap();
     let v = ok_json(&run(&["analyze", copy_path.to_str().unwrap(), "--json"]));
+    // A copy of a plan with a [map] simulates too (the token game ignores the map).
+    let sim = ok_json(&run(&[
+        "simulate",
+        copy_path.to_str().unwrap(),
+        "--steps",
+        "5",
+        "--json",
+    ]));
+    assert_eq!(sim["trace"].as_array().unwrap().len(), 5);
     checks_per_second(&v["steady_state"]["throughput"])
 }
 

@@ -281,3 +281,27 @@ fn roles_timeouts_and_failure_policies_resolve() {
     assert!(when.eval(&m));
     assert_eq!(plan.stop.time_limit, Some(50.0));
 }
+
+/// A `[map]` key written below a `[map.locations.NAME]` header belongs to that location in
+/// TOML: refused at its line (by `run`, `simulate` and `analyze` alike: they read plans
+/// through one reader), saying where it belongs.
+#[test]
+fn a_map_key_under_a_location_header_is_refused_saying_where_it_belongs() {
+    let text = "net = \"patrol.xml\"\n[map]\npatrol = [\"L1\"]\n\n[map.locations.L1]\nx = 0.0\ny = 0.0\n\nedges = [[\"L1\", \"L1\"]]\n";
+    let (l, c, k) = err_at(text);
+    assert_eq!((l, c), (9, 1));
+    let LoadErrorKind::Invalid(message) = k else {
+        panic!("{k:?}")
+    };
+    assert!(message.starts_with("unknown field `edges`"), "{message}");
+    assert!(
+        message.contains("`edges` belongs to [map]")
+            && message.contains("move it above the first [map.locations.…] table"),
+        "{message}"
+    );
+    // Above the location tables it is read.
+    let fixed = "net = \"patrol.xml\"\n[map]\npatrol = [\"L1\"]\nedges = [[\"L1\", \"L1\"]]\n\n[map.locations.L1]\nx = 0.0\ny = 0.0\n";
+    let (_dir, path) = with_plan(fixed);
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(gspn::plan::PlanFile::parse(&path, &text).is_ok());
+}
