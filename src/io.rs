@@ -93,12 +93,13 @@ impl Span {
 #[derive(Clone, Debug)]
 pub struct LineIndex {
     starts: Vec<usize>,
-    /// Characters in `text[..k * STEP]`, per k.
+    /// Characters in `text[..k * STEP]`, per k; empty when the text is ASCII (a character
+    /// per byte, nothing to count).
     chars: Vec<usize>,
 }
 
 impl LineIndex {
-    const STEP: usize = 4096;
+    const STEP: usize = 256;
 
     /// Indexes the lines of `text`.
     pub fn new(text: &[u8]) -> LineIndex {
@@ -109,18 +110,24 @@ impl LineIndex {
                 .filter(|&(_, &b)| b == b'\n')
                 .map(|(i, _)| i + 1),
         );
-        let mut chars = Vec::with_capacity(text.len() / Self::STEP + 1);
-        let mut n = 0;
-        chars.push(0);
-        for block in text.chunks(Self::STEP) {
-            n += char_starts(block);
-            chars.push(n);
+        let mut chars = Vec::new();
+        if !text.is_ascii() {
+            chars.reserve(text.len() / Self::STEP + 1);
+            let mut n = 0;
+            chars.push(0);
+            for block in text.chunks(Self::STEP) {
+                n += char_starts(block);
+                chars.push(n);
+            }
         }
         LineIndex { starts, chars }
     }
 
     /// Characters in `text[..offset]`.
     fn chars_before(&self, text: &[u8], offset: usize) -> usize {
+        if self.chars.is_empty() {
+            return offset;
+        }
         let k = offset / Self::STEP;
         self.chars[k] + char_starts(&text[k * Self::STEP..offset])
     }
@@ -301,6 +308,21 @@ pub enum LoadErrorKind {
     Invalid(String),
 }
 
+/// `v` as a count of at least `min` (0 or 1), or what a count must be: one rule for the
+/// readers (markings, multiplicities, priorities, servers) and the viewer's editor.
+pub(crate) fn whole_number(v: f64, min: u32) -> Result<u32, &'static str> {
+    if v.is_finite() && v.fract() == 0.0 && v >= min as f64 && v <= u32::MAX as f64 {
+        return Ok(v as u32);
+    }
+    Err(if v.fract() == 0.0 && v > u32::MAX as f64 {
+        crate::net::TOO_MANY_TOKENS
+    } else if min == 0 {
+        "must be a whole number ≥ 0"
+    } else {
+        "must be a whole number ≥ 1"
+    })
+}
+
 /// The file formats gspn knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
@@ -456,6 +478,26 @@ mod tests {
             assert_eq!(
                 index.locate(text, at),
                 Span::locate(text, at),
+                "offset {at}"
+            );
+        }
+        // ASCII text: columns are byte counts, no character table.
+        let ascii = format!("a\n{}\nb", "xy".repeat(5000));
+        let (ascii, index) = (ascii.as_bytes(), LineIndex::new(ascii.as_bytes()));
+        for at in [
+            0,
+            1,
+            2,
+            3,
+            257,
+            9000,
+            ascii.len() - 1,
+            ascii.len(),
+            ascii.len() + 5,
+        ] {
+            assert_eq!(
+                index.locate(ascii, at),
+                Span::locate(ascii, at),
                 "offset {at}"
             );
         }

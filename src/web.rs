@@ -24,11 +24,28 @@
 //! | `POST /api/analysis/query {transient: [t], prob: [expr]}` | on the finished analysis's state space, as `plan-runner analyze --json --transient t,.. --prob expr ..`: `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens, throughput, probability}]}`; 409 before an analysis finished, 400 for a bad time or predicate |
 //! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`crate::runtime::journal::read_journal`]), or the token game |
 //! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
+//! | `GET /api/edit` | `{editable, reason, save_to, history {version, edits, undo, redo}}`: whether the net may be edited (not a live run, a replay, or a plan with a policy or rewards), where "save" writes, the labels of the edits undo and redo would take back or do again |
+//! | `POST /api/edit {op, ...}` | one edit of the net ([`edit`](self#editing)): `{net, history, state}` — the new net as `/api/net` gives it (with its `version`, also in every token-game state as `net_version`), the history, the token game restarted on it; 422 `{error}` when refused (the net is unchanged) |
+//! | `POST /api/edit/undo`, `POST /api/edit/redo` | back to the version before the last edit, on to the one after; as `POST /api/edit`; 409 when there is nothing to undo or redo |
+//! | `POST /api/edit/export {format: "pnpro"\|"pipe", places, transitions}` | `{text, file}`: the current net (with the page's positions) as a GreatSPN project or a PIPE net, to download |
+//! | `POST /api/edit/save {places, transitions}` | writes the current net to the file of `serve --save-to PATH` ([`WebState::saving_to`]) in its format; `{saved, format, bytes}`; 409 without one |
 //! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal, and `world: {map, radius, robots, frames: [{time, robots: [{id, agent, x, y}]}]}` when it recorded a simulated world |
 //! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log`, and `world` with a world feed |
 //! | `GET /api/live/world` | the latest value of the run's simulated world ([`LiveRun::with_world`]: map and robots, metres, y up); 404 without a feed |
 //! | `POST /api/live/stop` | asks the live run to stop |
 //! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "state", ...}` snapshots (log entries since the previous one, `world` with a world feed), at most one per [`FRAME`]; a new event or world value wakes the next one |
+//!
+//! # Editing
+//!
+//! The page edits the net as GreatSPN's editor does (places, transitions, arcs, their
+//! names and parameters, undo and redo) by sending one operation at a time to `POST
+//! /api/edit`. The server rebuilds the net with it and checks it as the readers check a
+//! file (a whole number ≥ 0 for a marking, a finite rate > 0, a weight ≥ 0, unique names,
+//! arcs between a place and a transition, ...): a refused edit answers its reason and
+//! leaves the net as it was. Every version is kept (undo and redo move between them). The
+//! token game and the analysis panel then use the edited net, and every open page redraws
+//! it. Saving writes GreatSPN's PNPRO or PIPE XML through the same writers as
+//! `plan-runner convert`, to the file named on the command line only.
 //!
 //! # Security
 //!
@@ -57,6 +74,7 @@
 
 mod analysis_job;
 mod api;
+mod edit;
 mod greatspn;
 mod guard;
 pub mod layout;
@@ -79,6 +97,7 @@ use crate::analysis::decision::RewardSpec;
 use crate::net::Net;
 use crate::policy::Policy;
 use crate::runtime::journal::{Frame, Recording};
+pub use edit::routes::SaveFormatError;
 pub use live::{FRAME, LiveRun};
 use session::Session;
 
@@ -149,6 +168,11 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/navigate.js"),
     },
     Asset {
+        path: "/edit.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/edit.js"),
+    },
+    Asset {
         path: "/style.css",
         mime: "text/css; charset=utf-8",
         body: include_str!("web/assets/style.css"),
@@ -163,10 +187,19 @@ pub struct WebState {
 
 #[derive(Debug)]
 struct Inner {
+    /// The net the viewer was opened with (the editor's versions are in `editor`).
     net: Arc<Net>,
     seed: u64,
     session: Mutex<Session>,
-    analysis: Arc<analysis_job::AnalysisJob>,
+    /// The analysis of the current net (replaced by every edit).
+    analysis: Mutex<Arc<analysis_job::AnalysisJob>>,
+    /// The versions of the net the page edited, the current one last.
+    editor: Mutex<edit::History>,
+    /// Why this net cannot be edited, when it cannot (a plan whose policy or rewards name
+    /// its nodes).
+    not_editable: Option<String>,
+    /// Where the editor saves (`serve --save-to`).
+    save_to: OnceLock<std::path::PathBuf>,
     live: OnceLock<LiveRun>,
     replay: OnceLock<Arc<replay::Replay>>,
     source: OnceLock<greatspn::Source>,
@@ -207,6 +240,11 @@ impl WebState {
     ) -> WebState {
         let net = Arc::new(net);
         let policy = policy.filter(|p| !p.is_empty()).map(Arc::new);
+        let not_editable = (policy.is_some() || !rewards.is_empty()).then(|| {
+            "the net of a plan with a policy or rewards cannot be edited here (they name its \
+             places and transitions): serve the net file to edit it"
+                .to_string()
+        });
         let session = Session::new(net.clone(), policy.clone(), seed);
         let analysis = Arc::new(analysis_job::AnalysisJob::new(
             net.clone(),
@@ -216,10 +254,13 @@ impl WebState {
         ));
         WebState {
             inner: Arc::new(Inner {
-                net,
+                net: Arc::clone(&net),
                 seed,
                 session: Mutex::new(session),
-                analysis,
+                analysis: Mutex::new(analysis),
+                editor: Mutex::new(edit::History::new(Arc::clone(&net))),
+                not_editable,
+                save_to: OnceLock::new(),
                 live: OnceLock::new(),
                 replay: OnceLock::new(),
                 source: OnceLock::new(),
@@ -276,13 +317,89 @@ impl WebState {
         self
     }
 
+    /// The editor's "save" writes the edited net to `path` (a GreatSPN project `.PNPRO` or
+    /// a PIPE net `.xml`, by its extension), replacing it; without it the page downloads
+    /// the net. A request never names the file.
+    pub fn saving_to(self, path: std::path::PathBuf) -> Result<WebState, SaveFormatError> {
+        edit::routes::save_format(&path)?;
+        let _ = self.inner.save_to.set(path);
+        Ok(self)
+    }
+
     fn live(&self) -> Option<&LiveRun> {
         self.inner.live.get()
     }
 
-    /// The net being served.
+    /// The net the viewer was opened with.
     pub fn net(&self) -> &Net {
         &self.inner.net
+    }
+
+    /// The net as the page's edits left it (the opened one until an edit): the one the
+    /// token game plays and the analysis panel analyses.
+    pub fn current_net(&self) -> Arc<Net> {
+        self.editor().net().clone()
+    }
+
+    fn editor(&self) -> MutexGuard<'_, edit::History> {
+        self.inner
+            .editor
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    fn analysis(&self) -> Arc<analysis_job::AnalysisJob> {
+        self.inner
+            .analysis
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .clone()
+    }
+
+    /// The GreatSPN file the net came from, while the net is the file's (not edited).
+    fn source(&self) -> Option<&greatspn::Source> {
+        self.inner.source.get().filter(|_| !self.editor().edited())
+    }
+
+    /// Whether the page may edit the net: not a live run, a replay, or a plan whose policy
+    /// or rewards name its nodes.
+    fn editable(&self) -> Result<(), edit::EditError> {
+        let why = if self.live().is_some() {
+            Some("a live run's net cannot be edited")
+        } else if self.inner.replay.get().is_some() {
+            Some("a recorded run's net cannot be edited")
+        } else {
+            self.inner.not_editable.as_deref()
+        };
+        match why {
+            Some(w) => Err(edit::EditError::NotEditable(w.to_string())),
+            None => Ok(()),
+        }
+    }
+
+    /// Changes the net's history with `f` (an edit, an undo, a redo) and, when it gives a
+    /// new current net, plays and analyses that one: the token game starts again from its
+    /// initial marking, a running analysis is cancelled, and the other pages are told.
+    fn change(
+        &self,
+        f: impl FnOnce(&mut edit::History) -> Result<Arc<Net>, edit::EditError>,
+    ) -> Result<(), edit::EditError> {
+        self.editable()?;
+        let mut history = self.editor();
+        let net = f(&mut history)?;
+        self.session().replace_net(net.clone());
+        {
+            let mut job = self
+                .inner
+                .analysis
+                .lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+            job.cancel();
+            *job = Arc::new(job.with_net(net));
+        }
+        drop(history);
+        self.sim_changed();
+        Ok(())
     }
 
     fn session(&self) -> MutexGuard<'_, Session> {
@@ -302,6 +419,7 @@ impl WebState {
     /// The token game's state as JSON, with the last `trace` firings.
     fn sim_json(&self, trace: usize) -> Value {
         let version = *self.inner.sim_version.borrow();
+        let net_version = self.editor().version();
         let s = self.session();
         let net = s.net().clone();
         let m = s.marking();
@@ -334,6 +452,7 @@ impl WebState {
             });
         json!({
             "version": version,
+            "net_version": net_version,
             "choice": choice,
             "seed": s.seed(),
             "time": s.time(),
@@ -386,6 +505,14 @@ fn routes(state: WebState, bound: guard::Bound) -> Router {
         .route("/api/analysis/query", post(api::analysis_query))
         .route("/api/mode", get(mode))
         .route("/api/layout", post(api::save_layout))
+        .route(
+            "/api/edit",
+            get(edit::routes::status).post(edit::routes::edit),
+        )
+        .route("/api/edit/undo", post(edit::routes::undo))
+        .route("/api/edit/redo", post(edit::routes::redo))
+        .route("/api/edit/export", post(edit::routes::export))
+        .route("/api/edit/save", post(edit::routes::save))
         .route("/api/replay", get(replay::frames))
         .route("/api/live/state", get(live::state))
         .route("/api/live/world", get(live::world))

@@ -130,6 +130,17 @@ impl AnalysisJob {
         }
     }
 
+    /// A job for `net` (an edited version of this job's net) with this job's policy,
+    /// rewards and limit; not started.
+    pub(crate) fn with_net(&self, net: Arc<Net>) -> AnalysisJob {
+        AnalysisJob::new(
+            net,
+            self.policy.clone(),
+            self.rewards.clone(),
+            self.max_states,
+        )
+    }
+
     fn lock(&self) -> MutexGuard<'_, State> {
         self.state
             .lock()

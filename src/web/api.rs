@@ -21,11 +21,7 @@ pub(crate) fn error(status: StatusCode, message: impl Into<String>) -> Response 
 
 /// `GET /api/net`: places, transitions, arcs and the layout.
 pub(crate) async fn net(State(state): State<WebState>) -> Json<Value> {
-    Json(net_json(
-        &state.inner.net,
-        state.inner.seed,
-        state.inner.source.get(),
-    ))
+    Json(crate::web::edit::routes::net_value(&state))
 }
 
 /// The net as the page draws it (with the look of its nodes in `source`, when it has one).
@@ -221,7 +217,7 @@ fn session_error(e: SessionError) -> Response {
 /// it; the result is kept. 409 `{error, kind: "cancelled", progress}` if it is cancelled
 /// meanwhile.
 pub(crate) async fn analysis(State(state): State<WebState>) -> Response {
-    match state.inner.analysis.result().await {
+    match state.analysis().result().await {
         Outcome::Done(value) => {
             let status = if value.get("error").is_some() {
                 StatusCode::UNPROCESSABLE_ENTITY
@@ -261,7 +257,7 @@ pub(crate) async fn analysis_start(
             "max_states = 0: the analysis needs at least the initial marking",
         );
     }
-    Json(state.inner.analysis.start(max_states)).into_response()
+    Json(state.analysis().start(max_states)).into_response()
 }
 
 /// Body of `POST /api/analysis/query`.
@@ -284,7 +280,7 @@ pub(crate) async fn analysis_query(
     State(state): State<WebState>,
     Json(b): Json<QueryBody>,
 ) -> Response {
-    let (net, kept) = match state.inner.analysis.kept() {
+    let (net, kept) = match state.analysis().kept() {
         None => {
             return error(
                 StatusCode::CONFLICT,
@@ -312,12 +308,12 @@ pub(crate) async fn analysis_query(
 
 /// `GET /api/analysis/progress`: `{state, phase, markings, seconds}`.
 pub(crate) async fn analysis_progress(State(state): State<WebState>) -> Json<Value> {
-    Json(state.inner.analysis.progress())
+    Json(state.analysis().progress())
 }
 
 /// `POST /api/analysis/cancel`: stops a running analysis; the progress.
 pub(crate) async fn analysis_cancel(State(state): State<WebState>) -> Json<Value> {
-    Json(state.inner.analysis.cancel())
+    Json(state.analysis().cancel())
 }
 
 /// Body of `POST /api/layout`.
@@ -342,8 +338,8 @@ pub(crate) async fn save_layout(
             .map(|&[x, y]| crate::net::Position { x, y })
             .collect()
     };
-    let net = &state.inner.net;
-    if let Some(source) = state.inner.source.get()
+    let net = &state.current_net();
+    if let Some(source) = state.source()
         && b.places.len() == net.place_count()
         && b.transitions.len() == net.transition_count()
     {

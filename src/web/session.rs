@@ -105,6 +105,13 @@ impl Session {
         );
     }
 
+    /// Plays `net` from now on (an edited version of the net): back to its initial marking
+    /// at time 0, with the same seed.
+    pub(crate) fn replace_net(&mut self, net: Arc<Net>) {
+        self.net = net;
+        self.reset(None);
+    }
+
     pub(crate) fn net(&self) -> &Arc<Net> {
         &self.net
     }

@@ -41,7 +41,7 @@ pub(crate) fn plan_state(plan: Plan) -> WebState {
 }
 
 /// `plan-runner analyze FILE --json`.
-fn analyze_json(file: &std::path::Path) -> Value {
+pub(crate) fn analyze_json(file: &std::path::Path) -> Value {
     analyze_json_with(file, &[])
 }
 

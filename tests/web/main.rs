@@ -7,6 +7,7 @@ mod support;
 mod analysis;
 mod api;
 mod browser;
+mod edit;
 mod follow;
 mod layout;
 mod live;

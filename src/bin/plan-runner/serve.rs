@@ -1,4 +1,5 @@
-//! `plan-runner serve FILE [--addr 127.0.0.1:PORT] [--seed S]`: the viewer for a net or a plan.
+//! `plan-runner serve FILE [--addr 127.0.0.1:PORT] [--seed S] [--save-to PATH]`: the viewer
+//! (and editor) for a net or a plan.
 //!
 //! Draws the net in the browser (positions from the file, else an automatic layout), plays
 //! its seeded token game (a plan's policy and seed apply) and shows its analysis. Every asset
@@ -36,12 +37,27 @@ pub(crate) struct Args {
     /// "max states" field starts at this value).
     #[arg(long, value_name = "N", default_value_t = gspn::web::DEFAULT_MAX_STATES)]
     max_states: usize,
+    /// Where the editor's "save" writes the edited net: a GreatSPN project (.PNPRO) or a
+    /// PIPE net (.xml), replaced whole (expressions, constants and templates of the opened
+    /// file are written as their values). Without it the page downloads the net.
+    #[arg(long, value_name = "PATH")]
+    save_to: Option<PathBuf>,
     #[command(flatten)]
     net: NetArgs,
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     check_bind(args.addr, args.allow_remote)?;
+    if let Some(path) = &args.save_to
+        && !args.addr.ip().is_loopback()
+    {
+        return Err(BadInput(format!(
+            "--save-to with a non-loopback --addr: anyone who can reach {} could overwrite {}",
+            args.addr,
+            path.display()
+        ))
+        .into());
+    }
     let plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     for w in &plan.warnings {
         eprintln!("warning: {w}");
@@ -63,6 +79,20 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         args.max_states,
     )
     .with_source(&plan.net_path);
+    let state = match args.save_to {
+        Some(path) => {
+            let real = |p: &std::path::Path| std::fs::canonicalize(p).ok();
+            if real(&path).is_some() && real(&path) == real(&plan.net_path) {
+                eprintln!(
+                    "warning: `save` replaces {} itself: its constants, templates and \
+                     expressions are written as their values",
+                    path.display()
+                );
+            }
+            state.saving_to(path).map_err(|e| BadInput(e.to_string()))?
+        }
+        None => state,
+    };
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()

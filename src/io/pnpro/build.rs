@@ -159,17 +159,8 @@ impl Env<'_> {
         min: u32,
     ) -> Result<u32, LoadError> {
         let v = self.value(attr, owner)?;
-        if v.is_finite() && v.fract() == 0.0 && v >= min as f64 && v <= u32::MAX as f64 {
-            return Ok(v as u32);
-        }
-        let expected = if v.fract() == 0.0 && v > u32::MAX as f64 {
-            crate::net::TOO_MANY_TOKENS
-        } else if min == 0 {
-            "must be a whole number ≥ 0"
-        } else {
-            "must be a whole number ≥ 1"
-        };
-        Err(self.out_of_range(attr, owner, what, v, expected))
+        crate::io::whole_number(v, min)
+            .map_err(|expected| self.out_of_range(attr, owner, what, v, expected))
     }
 
     /// `what` of `owner` in `attr` has the value `v`, which is not what was `expected`.

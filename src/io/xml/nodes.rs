@@ -330,10 +330,9 @@ fn label(x: &mut XmlStream<'_>) -> Result<Option<Value>, LoadError> {
                 _ => {}
             },
             Some(XmlEvent::Text(s, at)) => {
-                if x.depth() == depth {
-                    if direct_at.is_none() && !s.trim().is_empty() {
-                        direct_at = Some(at);
-                    }
+                // Indentation before the first word is dropped unread: it would be trimmed.
+                if x.depth() == depth && (direct_at.is_some() || !s.trim().is_empty()) {
+                    direct_at.get_or_insert(at);
                     direct.push_str(&s);
                 }
             }
@@ -341,10 +340,19 @@ fn label(x: &mut XmlStream<'_>) -> Result<Option<Value>, LoadError> {
     }
     Ok(found.or_else(|| {
         direct_at.map(|at| Value {
-            text: direct.trim().to_string(),
+            text: trimmed(direct),
             at,
         })
     }))
+}
+
+/// `s` without its leading and trailing whitespace, reusing its buffer when it has none.
+fn trimmed(s: String) -> String {
+    if s.trim().len() == s.len() {
+        s
+    } else {
+        s.trim().to_string()
+    }
 }
 
 /// The text inside the element just opened, up to its end tag (nested elements skipped).
@@ -356,15 +364,15 @@ fn text(x: &mut XmlStream<'_>, tag_at: usize) -> Result<Value, LoadError> {
             None | Some(XmlEvent::End) => break,
             Some(XmlEvent::Start(_)) => x.skip()?,
             Some(XmlEvent::Text(t, off)) => {
-                if at.is_none() && !t.trim().is_empty() {
-                    at = Some(off);
+                if at.is_some() || !t.trim().is_empty() {
+                    at.get_or_insert(off);
+                    s.push_str(&t);
                 }
-                s.push_str(&t);
             }
         }
     }
     Ok(Value {
-        text: s.trim().to_string(),
+        text: trimmed(s),
         at: at.unwrap_or(tag_at),
     })
 }

@@ -558,10 +558,11 @@ function setupInteraction() {
     for (const a of (isPlace ? arcsOfPlace : arcsOfTransition)[i]) drawArc(a);
     canvasViewChanged();
   });
-  window.addEventListener('mouseup', () => {
+  window.addEventListener('mouseup', (ev) => {
     const d = drag;
     drag = null;
     box.classList.remove('panning');
+    if (editMouseUp(d, ev)) return;
     if (d && d.node && !d.moved && !d.node.isPlace && transEnabled[d.node.i] && state) {
       fire(net.transitions[d.node.i].name);
     }
@@ -676,7 +677,7 @@ function setupKeys() {
   const list = $('help-keys');
   for (const [key, what] of KEYS) {
     const dt = document.createElement('dt');
-    dt.textContent = { Escape: 'Esc', ' ': 'space', ArrowLeft: '←', ArrowRight: '→' }[key] || key;
+    dt.textContent = { Escape: 'Esc', ' ': 'space', ArrowLeft: '←', ArrowRight: '→', Delete: 'Del' }[key] || key;
     const dd = document.createElement('dd');
     dd.textContent = what;
     list.append(dt, dd);
@@ -721,6 +722,7 @@ async function main() {
   setupTheme();
   setupControls();
   setupInteraction();
+  setupEdit();
   setupKeys();
   setupResize();
   setupPanes();
@@ -750,6 +752,7 @@ async function main() {
     }
     applyState(await api('GET', '/api/sim/state'));
     initMaxStates();
+    initEdit();
     markDrawn();
     followSession();
   } catch (e) {

@@ -17,6 +17,8 @@ async function followSession() {
     try {
       const s = await api('GET', '/api/sim/wait?after=' + after);
       online();
+      // Another page edited the net: draw the new one first.
+      if (net && s.net_version !== undefined && s.net_version !== net.version) await reloadNet();
       if (!busy && (!state || s.version !== state.version)) applyState(s);
     } catch (e) {
       offline(e);
