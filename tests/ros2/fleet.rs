@@ -1,13 +1,13 @@
-//! Fleets on one host: 40 robot processes and the supervisor, started in a random order
+//! Fleets on one host: 24 robot processes and the supervisor, started in a random order
 //! (the supervisor after three quarters of them: discovery well beyond 12 participants), run
 //! the temperature patrol to 100 firings; then every robot leaves by itself when the
 //! supervisor says the run is over.
 //!
 //! The issue asks for 64; 64 debug processes do not fit 2 cores (docs/ros2.md, "Fleet
 //! limits"): the supervisor hears the robots, then loses their heartbeats (none for 10 s)
-//! and they are never all ready. 40 is the largest size measured to pass (ready after 34 s,
-//! 100 firings after 43 s, load average 22). `GSPN_FLEET=N` runs the same test with N robots,
-//! to measure.
+//! and they are never all ready. 40 passed twice (ready after 18.5 s and 34 s) and failed
+//! once (never ready in 240 s, load average 46); 24 is ready after 3.4 s. `GSPN_FLEET=N`
+//! runs the same test with N robots, to measure.
 #![cfg(feature = "ros2")]
 
 use crate::ros2_support as support;
@@ -51,7 +51,8 @@ fn fleet_plan(dir: &std::path::Path, ids: &[String]) -> std::path::PathBuf {
             &format!("robots = [{}]", robots.join(", ")),
         )
         .replace("startup = 30.0", "startup = 240.0")
-        // Heartbeats of 64 processes on 2 cores: a loaded machine must not lose a robot.
+        // Heartbeats of a fleet of debug processes on 2 cores: a loaded machine must not lose a
+        // robot.
         .replace("lost_after = 1.0", "lost_after = 10.0");
     let plan = dir.join("fleet.toml");
     std::fs::write(&plan, text).unwrap();
@@ -59,11 +60,11 @@ fn fleet_plan(dir: &std::path::Path, ids: &[String]) -> std::path::PathBuf {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn forty_robots_started_in_random_order_run_the_patrol() {
+async fn a_fleet_started_in_random_order_runs_the_patrol() {
     let fleet: usize = std::env::var("GSPN_FLEET")
         .ok()
         .and_then(|s| s.parse().ok())
-        .unwrap_or(40);
+        .unwrap_or(24);
     const FIRINGS: usize = 100;
     let dir = tempfile::tempdir().unwrap();
     let d = domain(7);
@@ -137,21 +138,12 @@ async fn forty_robots_started_in_random_order_run_the_patrol() {
     }
 
     // The run is over: every robot process leaves by itself, exit code 0.
-    let mut left = 0;
+    assert_eq!(robots.len(), fleet);
     for r in robots {
-        let name = r.name.clone();
-        let log_path = r.log.clone();
-        let (code, _) = finish(r, Duration::from_secs(60)).await;
-        let rlog = std::fs::read_to_string(log_path).unwrap_or_default();
-        assert_eq!(code, Some(0), "{name}: {rlog}");
-        assert!(
-            rlog.contains("the supervisor's run is over (max_firings after 100 firings)"),
-            "{name}: {rlog}"
-        );
-        left += 1;
+        let says = "the supervisor's run is over (max_firings after 100 firings)";
+        support::assert_leaves(r, Duration::from_secs(60), says).await;
     }
     let all_left = start.elapsed();
-    assert_eq!(left, fleet);
     println!(
         "{fleet} robots + supervisor: all ready after {ready:.1?}, {FIRINGS} firings done after \
          {ran:.1?}, every robot gone after {all_left:.1?} ({} robots moved)",
