@@ -3,7 +3,11 @@
 //!
 //! ```text
 //! cargo run --release --example bench_viewer [-- --places 10000 --runs 5 --seconds 10 --svg]
+//! cargo run --release --example bench_viewer -- --net FILE --runs 5 --seconds 0
 //! ```
+//!
+//! `--net FILE` opens that net (or plan) instead of the ring (the thesis's temperature
+//! patrol: `plans/temperature-patrol/temperature_patrol.xml`, drawn with the layered layout).
 //!
 //! `--svg` forces the SVG renderer (`/?renderer=svg`), which the page otherwise uses only up
 //! to 1,500 nodes, to compare it with the canvas.
@@ -82,7 +86,22 @@ async fn main() {
     // ---- open: the token game's page, loaded `runs` times
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
-    let server = tokio::spawn(serve(listener, WebState::new(ring(n), None, 1)));
+    let args: Vec<String> = std::env::args().collect();
+    let file = args
+        .iter()
+        .position(|a| a == "--net")
+        .and_then(|i| args.get(i + 1));
+    let net = match file {
+        Some(f) => {
+            gspn::plan::open(std::path::Path::new(f), &gspn::io::ReadOptions::default())
+                .expect("the net")
+                .into_plan()
+                .net
+        }
+        None => ring(n),
+    };
+    let n = net.place_count();
+    let server = tokio::spawn(serve(listener, WebState::new(net, None, 1)));
     let mut opens = Vec::new();
     let mut walls = Vec::new();
     for _ in 0..runs {
@@ -125,6 +144,10 @@ async fn main() {
         median(walls),
     );
     server.abort();
+    if file.is_some() || seconds == 0 {
+        browser.close().await;
+        return;
+    }
 
     // ---- live: the ring running in real time
     let mut handle = Runtime::builder(ring(n))

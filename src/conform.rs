@@ -39,7 +39,7 @@ pub use fit::{Fitted, fit};
 pub use holding::Holding;
 
 pub use crate::runtime::{Drift, Monitored};
-pub use monitor::{Monitor, MonitorOptions};
+pub use monitor::{Monitor, MonitorOptions, SharedMonitor, Statistic};
 
 use std::collections::BTreeMap;
 use std::sync::Arc;

@@ -74,6 +74,7 @@
 
 mod analysis_job;
 mod api;
+mod conform;
 mod edit;
 mod greatspn;
 mod guard;
@@ -146,6 +147,11 @@ pub const ASSETS: &[Asset] = &[
         path: "/analysis.js",
         mime: "text/javascript; charset=utf-8",
         body: include_str!("web/assets/analysis.js"),
+    },
+    Asset {
+        path: "/conform.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/conform.js"),
     },
     Asset {
         path: "/live.js",
@@ -281,11 +287,9 @@ impl WebState {
     /// A viewer of a recorded run ([`crate::runtime::journal::read_journal`]): the page shows a time slider
     /// over `frames` instead of playing its own token game.
     pub fn for_replay(net: Net, frames: Vec<Frame>) -> WebState {
+        let replay = replay::Replay::of_frames(&net, frames);
         let state = WebState::new(net, None, 0);
-        let _ = state
-            .inner
-            .replay
-            .set(Arc::new(replay::Replay::of_frames(frames)));
+        let _ = state.inner.replay.set(Arc::new(replay));
         state
     }
 

@@ -13,6 +13,9 @@
 //! `drift` events of the run (journal, bus, viewer, ROS 2).
 
 use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+
+use serde::Serialize;
 
 use super::{active_servers, stats};
 use crate::net::{Net, PlaceId, Timing, TransitionId};
@@ -62,6 +65,8 @@ struct PlaceBatches {
     closed: Vec<VecDeque<f64>>,
     lengths: VecDeque<f64>,
     drifting: Vec<bool>,
+    /// Each place's statistic at the last full window.
+    last: Vec<Option<Statistic>>,
 }
 
 /// Follows one run (see the module).
@@ -106,6 +111,7 @@ impl Monitor {
             closed: vec![VecDeque::new(); np],
             lengths: VecDeque::new(),
             drifting: vec![false; np],
+            last: vec![None; np],
         });
         self
     }
@@ -135,6 +141,44 @@ impl Monitor {
                 .map(|(i, _)| Monitored::Place(PlaceId(i as u32)))
         });
         ts.chain(ps)
+    }
+
+    /// What the monitor sees now, item by item: every exponential transition's rate over its
+    /// window (once it has [`MonitorOptions::min_firings`]), then every place's mean tokens
+    /// over the last full window of batches — each with the model's value, the 95% interval,
+    /// the test's p-value and whether it is drifting. What the viewer's table shows.
+    pub fn statistics(&self) -> Vec<Statistic> {
+        let ts = self
+            .net
+            .transition_ids()
+            .filter_map(|t| self.transition_statistic(t));
+        let ps = self
+            .places
+            .iter()
+            .flat_map(|b| b.last.iter().flatten().cloned());
+        ts.chain(ps).collect()
+    }
+
+    /// `t`'s rate over its window against the net's, once the window has enough firings.
+    fn transition_statistic(&self, t: TransitionId) -> Option<Statistic> {
+        let Timing::Exponential { rate, .. } = self.net.transition(t).timing else {
+            return None;
+        };
+        let w = &self.window[t.index()];
+        if w.len() < self.opts.min_firings {
+            return None;
+        }
+        let (n, e) = (w.len() as u64, w.iter().sum::<f64>());
+        let (lo, hi) = stats::rate_interval(n, e);
+        Some(Statistic {
+            of: Monitored::Transition(t),
+            observed: n as f64 / e,
+            predicted: rate,
+            interval: [lo, hi],
+            n,
+            p_value: stats::rate_test(n, e, rate),
+            drifting: self.drifting[t.index()],
+        })
     }
 
     /// `t` fired at `time`, leaving `marking`: the drifts that have just begun — `t`'s rate
@@ -167,37 +211,23 @@ impl Monitor {
     }
 
     fn transition_drift(&mut self, t: TransitionId) -> Option<Drift> {
-        let Timing::Exponential { rate, .. } = self.net.transition(t).timing else {
+        if self.net.transition(t).is_immediate() {
             return None;
-        };
+        }
         let i = t.index();
         let w = &mut self.window[i];
         w.push_back(std::mem::take(&mut self.open_gap[i]));
         if w.len() > self.opts.window {
             w.pop_front();
         }
-        if w.len() < self.opts.min_firings {
-            return None;
-        }
-        let (n, e) = (w.len() as u64, w.iter().sum::<f64>());
-        let p = stats::rate_test(n, e, rate);
+        let s = self.transition_statistic(t)?;
         let was = self.drifting[i];
         self.drifting[i] = if was {
-            p < self.opts.back
+            s.p_value < self.opts.back
         } else {
-            p < self.opts.alpha
+            s.p_value < self.opts.alpha
         };
-        (self.drifting[i] && !was).then(|| {
-            let (lo, hi) = stats::rate_interval(n, e);
-            Drift {
-                of: Monitored::Transition(t),
-                observed: n as f64 / e,
-                predicted: rate,
-                interval: [lo, hi],
-                n,
-                p_value: p,
-            }
-        })
+        (self.drifting[i] && !was).then(|| s.drift())
     }
 }
 
@@ -231,18 +261,82 @@ fn place_drifts(b: &mut PlaceBatches, opts: &MonitorOptions, time: f64) -> Vec<D
         let pv = stats::t_test(&est, predicted, lengths.len() as u64 - 1);
         let was = b.drifting[p];
         b.drifting[p] = if was { pv < opts.back } else { pv < opts.alpha };
+        let s = Statistic {
+            of: Monitored::Place(PlaceId(p as u32)),
+            observed: est.mean,
+            predicted,
+            interval: [est.lo(), est.hi()],
+            n: lengths.len() as u64,
+            p_value: pv,
+            drifting: b.drifting[p],
+        };
         if b.drifting[p] && !was {
-            out.push(Drift {
-                of: Monitored::Place(PlaceId(p as u32)),
-                observed: est.mean,
-                predicted,
-                interval: [est.lo(), est.hi()],
-                n: lengths.len() as u64,
-                p_value: pv,
-            });
+            out.push(s.drift());
         }
+        b.last[p] = Some(s);
     }
     out
+}
+
+/// One monitored item now (see [`Monitor::statistics`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Statistic {
+    /// The transition (its rate) or place (its mean tokens).
+    pub of: Monitored,
+    /// The observation over the window.
+    pub observed: f64,
+    /// The model's value.
+    pub predicted: f64,
+    /// The 95% interval of the observation.
+    pub interval: [f64; 2],
+    /// Firings (a rate) or batches (mean tokens) in the window.
+    pub n: u64,
+    /// The test's p-value.
+    pub p_value: f64,
+    /// Drifting now (reported, not yet back).
+    pub drifting: bool,
+}
+
+impl Statistic {
+    fn drift(&self) -> Drift {
+        Drift {
+            of: self.of,
+            observed: self.observed,
+            predicted: self.predicted,
+            interval: self.interval,
+            n: self.n,
+            p_value: self.p_value,
+        }
+    }
+}
+
+/// One [`Monitor`] shared between the run's supervisor (it is the run's [`Watcher`]) and
+/// whoever shows its [`Monitor::statistics`] while the run goes on (the viewer).
+#[derive(Clone, Debug)]
+pub struct SharedMonitor(Arc<Mutex<Monitor>>);
+
+impl SharedMonitor {
+    /// Shares `monitor`.
+    pub fn new(monitor: Monitor) -> Self {
+        SharedMonitor(Arc::new(Mutex::new(monitor)))
+    }
+
+    /// The monitor's statistics now.
+    pub fn statistics(&self) -> Vec<Statistic> {
+        self.lock().statistics()
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Monitor> {
+        self.0
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+}
+
+impl Watcher for SharedMonitor {
+    fn fired(&mut self, time: f64, t: TransitionId, marking: &[u32]) -> Vec<Drift> {
+        self.lock().fired(time, t, marking)
+    }
 }
 
 impl Watcher for Monitor {

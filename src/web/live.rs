@@ -43,6 +43,8 @@ struct LiveInner {
     /// The agents as the supervisor listed them after the latest firing: what the page
     /// shows once the run is over and the supervisor lists none.
     last_agents: Mutex<Vec<AgentInfo>>,
+    /// The run's monitor (`run --monitor`), whose statistics the page tabulates.
+    monitor: OnceLock<crate::conform::SharedMonitor>,
 }
 
 #[derive(Debug)]
@@ -77,6 +79,7 @@ impl LiveRun {
                 version,
                 world: OnceLock::new(),
                 last_agents: Mutex::new(Vec::new()),
+                monitor: OnceLock::new(),
             }),
         };
         tokio::spawn(live.clone().fold(events));
@@ -101,6 +104,14 @@ impl LiveRun {
     /// one stays).
     pub fn with_world(self, rx: watch::Receiver<Value>) -> LiveRun {
         let _ = self.inner.world.set(rx);
+        self
+    }
+
+    /// Adds the run's monitor (the one given to the run as its watcher): every state frame
+    /// carries its statistics as `"conform"` (see `src/web/conform.rs`), which the page shows
+    /// as a table, drifting items highlighted. A second monitor is ignored.
+    pub fn with_monitor(self, monitor: crate::conform::SharedMonitor) -> LiveRun {
+        let _ = self.inner.monitor.set(monitor);
         self
     }
 
@@ -249,6 +260,9 @@ impl LiveRun {
         drop(s);
         if let Some(world) = self.world() {
             v["world"] = world;
+        }
+        if let Some(m) = self.inner.monitor.get() {
+            v["conform"] = super::conform::rows(net, m);
         }
         v
     }

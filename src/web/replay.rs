@@ -8,6 +8,7 @@ use axum::response::{IntoResponse, Response};
 use serde_json::{Value, json};
 
 use super::{WebState, api};
+use crate::net::Net;
 use crate::runtime::journal::{Frame, Recording};
 
 /// What `GET /api/replay` serves.
@@ -17,12 +18,15 @@ pub(crate) struct Replay {
     pub(crate) frames: Vec<Frame>,
     /// `{"map", "radius", "frames": [{"time", "robots"}]}` when the journal recorded a world.
     pub(crate) world: Option<Value>,
+    /// The conformance table along the run (`[{time, rows}]`, see `conform::replay_rows`).
+    pub(crate) conform: Option<Value>,
 }
 
 impl Replay {
-    /// The frames of a journal without a world.
-    pub(crate) fn of_frames(frames: Vec<Frame>) -> Replay {
+    /// The frames of a journal of `net` without a world.
+    pub(crate) fn of_frames(net: &Net, frames: Vec<Frame>) -> Replay {
         Replay {
+            conform: super::conform::replay_rows(net, &frames),
             frames,
             world: None,
         }
@@ -43,21 +47,27 @@ impl Replay {
                 "frames": frames,
             })
         });
+        let frames = recording.frames();
         Replay {
-            frames: recording.frames(),
+            conform: super::conform::replay_rows(&recording.net, &frames),
+            frames,
             world,
         }
     }
 }
 
 /// `GET /api/replay`: `{"frames": [{time, transition, tokens}], "world"?: {map, radius,
-/// robots, frames: [{time, robots: [{id, agent, x, y}]}]}}` (404 without a recording).
+/// robots, frames: [{time, robots: [{id, agent, x, y}]}]}, "conform"?: [{time, rows}]}` (404
+/// without a recording; `conform`: the monitor's table of transitions' rates along the run).
 pub(crate) async fn frames(State(state): State<WebState>) -> Response {
     match state.inner.replay.get() {
         Some(r) => {
             let mut v = json!({ "frames": r.frames });
             if let Some(w) = &r.world {
                 v["world"] = w.clone();
+            }
+            if let Some(c) = &r.conform {
+                v["conform"] = c.clone();
             }
             axum::Json(v).into_response()
         }

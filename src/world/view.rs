@@ -81,3 +81,24 @@ impl MapView {
         }
     }
 }
+
+impl WorldView {
+    /// The views of `view` as JSON values (the viewer's world feed,
+    /// `gspn::web::LiveRun::with_world`): a task forwards each new view until the world or
+    /// every reader is gone. Call inside a tokio runtime.
+    pub fn json_feed(
+        mut view: tokio::sync::watch::Receiver<WorldView>,
+    ) -> tokio::sync::watch::Receiver<serde_json::Value> {
+        let json = |v: &WorldView| serde_json::to_value(v).unwrap_or(serde_json::Value::Null);
+        let (tx, rx) = tokio::sync::watch::channel(json(&view.borrow_and_update()));
+        tokio::spawn(async move {
+            while view.changed().await.is_ok() {
+                let v = json(&view.borrow_and_update());
+                if tx.send(v).is_err() {
+                    break;
+                }
+            }
+        });
+        rx
+    }
+}

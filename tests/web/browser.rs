@@ -293,6 +293,7 @@ async fn the_page_loads_everything_from_its_own_server() {
         "canvas.js",
         "map.js",
         "analysis.js",
+        "conform.js",
         "live.js",
         "follow.js",
         "share.js",

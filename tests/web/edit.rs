@@ -519,6 +519,45 @@ async fn the_analysis_is_the_edited_nets_and_save_writes_only_the_named_file() {
 }
 
 #[tokio::test]
+async fn a_pipe_file_is_saved_as_pipe_and_a_net_without_positions_keeps_its_drawing() {
+    // cyc3 built in code has no positions: the page draws the automatic layout, and the
+    // first edit keeps every node where it was drawn.
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("edited.xml");
+    let state = WebState::new(common::cyc3(Servers::Single), None, 1)
+        .saving_to(target.clone())
+        .unwrap();
+    let (_, drawn) = call(&state, "GET", "/api/net", None).await;
+    assert_eq!(drawn["layout"], "layered");
+    let v = edit_ok(
+        &state,
+        json!({"op": "set_place", "place": "P1", "tokens": 3}),
+    )
+    .await;
+    assert_eq!(v["net"]["layout"], "file");
+    for key in ["places", "transitions"] {
+        for (a, b) in drawn[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(v["net"][key].as_array().unwrap())
+        {
+            assert_eq!((&a["x"], &a["y"]), (&b["x"], &b["y"]), "{}", a["name"]);
+        }
+    }
+    let (status, v) = call(&state, "POST", "/api/edit/save", None).await;
+    assert_eq!(
+        (status, v["format"].clone()),
+        (StatusCode::OK, json!("pipe")),
+        "{v}"
+    );
+    let back = read_net(&target, &ReadOptions::default()).unwrap();
+    assert_eq!(back.format, gspn::io::Format::Pipe);
+    assert!(back.net.diff(&state.current_net()).is_empty());
+    assert_eq!(back.net.place(gspn::net::PlaceId(0)).initial, 3);
+}
+
+#[tokio::test]
 async fn nets_that_cannot_be_edited_or_saved_say_so() {
     // No `--save-to`: the page downloads instead.
     let state = cyc3_state();
@@ -804,6 +843,22 @@ async fn an_edit_in_the_browser_saved_and_reloaded_analyses_as_plan_runner_analy
     let mean = &page["steady"]["mean_tokens"];
     assert!((mean["P4"].as_f64().unwrap() - mean["P2"].as_f64().unwrap()).abs() < 1e-12);
     b.screenshot(&screenshot_path("editor-reloaded.png")).await;
+    // The editor in the dark theme, an inhibitor arc on its way (dashed source).
+    b.client
+        .goto(&format!("http://{addr}/?theme=dark"))
+        .await
+        .unwrap();
+    wait_shown(&b, "edit-mode", true).await;
+    keys(&b, "e", false, false).await;
+    keys(&b, "h", false, false).await;
+    click_node(&b, "place", "P4").await;
+    wait_for(
+        &b,
+        "document.querySelector('[data-place=\"P4\"]').dataset.editSelected === 'arc-from'",
+        "the arc's source",
+    )
+    .await;
+    b.screenshot(&screenshot_path("editor-dark.png")).await;
     server.abort();
     b.close().await;
 }

@@ -7,6 +7,7 @@ mod support;
 mod analysis;
 mod api;
 mod browser;
+mod conform;
 mod edit;
 mod follow;
 mod layout;

@@ -30,6 +30,10 @@ pub(crate) struct BackendArgs {
     #[cfg(feature = "sim")]
     #[arg(long, value_name = "N")]
     robots: Option<usize>,
+    /// The run's monitor (`run --monitor`), set once it is made, for the viewer's table.
+    #[cfg(feature = "web")]
+    #[arg(skip)]
+    pub(crate) monitor: crate::serve::MonitorSlot,
     /// ROS 2 flags, used when the plan has `ros2` places (feature `ros2`).
     #[cfg(feature = "ros2")]
     #[command(flatten)]
@@ -108,9 +112,13 @@ pub(crate) async fn setup(
             gspn::world::Fleet::new(plan, args.robots).map_err(|e| BadInput(e.to_string()))?;
         #[cfg(feature = "web")]
         if let Some(addr) = args.web {
-            let feed = world_feed(fleet.world.view());
+            let feed = gspn::world::WorldView::json_feed(fleet.world.view());
             backends.push(gspn::world::WorldBackend::new(fleet.world));
-            backends.push(crate::serve::LiveViewer::new(addr, Some(feed)));
+            backends.push(crate::serve::LiveViewer::new(
+                addr,
+                Some(feed),
+                args.monitor.clone(),
+            ));
             return Ok((fleet.builder, backends));
         }
         backends.push(gspn::world::WorldBackend::new(fleet.world));
@@ -141,27 +149,12 @@ pub(crate) async fn setup(
     }
     #[cfg(feature = "web")]
     if let Some(addr) = args.web {
-        backends.push(crate::serve::LiveViewer::new(addr, None));
+        backends.push(crate::serve::LiveViewer::new(
+            addr,
+            None,
+            args.monitor.clone(),
+        ));
     }
     let _ = args;
     Ok((plan.runtime_builder(), backends))
-}
-
-/// The world's view as JSON for the viewer's map: a task forwards each new view.
-#[cfg(all(feature = "sim", feature = "web"))]
-fn world_feed(
-    mut view: tokio::sync::watch::Receiver<gspn::world::WorldView>,
-) -> tokio::sync::watch::Receiver<serde_json::Value> {
-    let json =
-        |v: &gspn::world::WorldView| serde_json::to_value(v).unwrap_or(serde_json::Value::Null);
-    let (tx, rx) = tokio::sync::watch::channel(json(&view.borrow_and_update()));
-    tokio::spawn(async move {
-        while view.changed().await.is_ok() {
-            let v = json(&view.borrow_and_update());
-            if tx.send(v).is_err() {
-                break;
-            }
-        }
-    });
-    rx
 }

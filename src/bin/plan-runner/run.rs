@@ -162,7 +162,13 @@ async fn execute(
         b = b.journal(j);
     }
     if args.monitor {
-        let m = crate::conform::monitor_for(b.net(), b.policy_value(), 1_000_000);
+        let m = gspn::conform::SharedMonitor::new(crate::conform::monitor_for(
+            b.net(),
+            b.policy_value(),
+            1_000_000,
+        ));
+        #[cfg(feature = "web")]
+        let _ = args.backends.monitor.set(m.clone());
         b = b.watch(m);
     }
     let mut handle = b.spawn().map_err(|e| BadInput(e.to_string()))?;

@@ -137,18 +137,25 @@ pub(crate) fn check_bind(addr: SocketAddr, allow_remote: bool) -> Result<(), Bad
 pub(crate) struct LiveViewer {
     addr: SocketAddr,
     world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
+    monitor: MonitorSlot,
     served: Option<(SocketAddr, tokio::task::JoinHandle<std::io::Result<()>>)>,
 }
 
+/// Where `run --monitor` leaves its monitor for the viewer (set before the run starts).
+pub(crate) type MonitorSlot = Arc<std::sync::OnceLock<gspn::conform::SharedMonitor>>;
+
 impl LiveViewer {
-    /// A viewer to serve at `addr`, with the world's view when the run has one.
+    /// A viewer to serve at `addr`, with the world's view when the run has one and the
+    /// monitor's table when `monitor` is set by the time the run starts.
     pub(crate) fn new(
         addr: SocketAddr,
         world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
+        monitor: MonitorSlot,
     ) -> Self {
         LiveViewer {
             addr,
             world,
+            monitor,
             served: None,
         }
     }
@@ -171,6 +178,9 @@ impl Backend for LiveViewer {
             let mut live = LiveRun::start(Arc::clone(start.run), events);
             if let Some(world) = self.world.take() {
                 live = live.with_world(world);
+            }
+            if let Some(m) = self.monitor.get() {
+                live = live.with_monitor(m.clone());
             }
             let addr = self.addr;
             let listener = tokio::net::TcpListener::bind(addr)

@@ -219,6 +219,7 @@ function showSelection() {
     const i = nodeIndex(ref);
     if (i >= 0) (ref.isPlace ? placeEls : transEls)[i].setAttribute('data-edit-selected', what);
   }
+  $('edit-delete').disabled = !ed.sel;
   canvasDirty();
   showProps();
 }

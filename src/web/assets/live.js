@@ -64,6 +64,7 @@ function applyLive(s) {
   // Before the map is drawn: its clock line says when the run (and so the world) stopped.
   $('map-panel').classList.toggle('stopped', !!s.stopped);
   if (s.world) drawWorld(s.world);
+  if (s.conform) showConform(s.conform);
   followLive(s);
   $('clock').textContent = 'time ' + fmt(s.time) + ', ' + s.firings + ' firings' +
     (s.stopped ? ' — stopped: ' + s.stopped : '') +
@@ -97,7 +98,7 @@ async function startReplay() {
     const e = $(id);
     (e.closest('label') || e).classList.add('hidden');
   }
-  const { frames, world } = await api('GET', '/api/replay');
+  const { frames, world, conform } = await api('GET', '/api/replay');
   const times = frames.map((f) => f.time);
   const poses = world ? world.frames : [];
   const poseTimes = poses.map((w) => w.time);
@@ -137,6 +138,7 @@ async function startReplay() {
     const now = t === undefined ? f.time : t;
     slider.value = String(now);
     showWorld(now);
+    if (conform) showConformAt(conform, now);
     f.tokens.forEach((k, p) => setTokens(p, k));
     setFired(f.transition ? transitionIndex(f.transition) : -1);
     recordTokens(f.time, f.tokens);

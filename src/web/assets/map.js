@@ -6,7 +6,8 @@
 // each location's data-location="NAME".
 'use strict';
 
-const map = { key: null, robots: new Map(), size: 1, font: 0 };
+const map = { key: null, robots: new Map(), size: 1, font: 0, fontDirty: true };
+new ResizeObserver(() => { map.fontDirty = true; }).observe(document.getElementById('map'));
 
 function mapEl(tag, attrs, parent) {
   return el(tag, attrs, parent);
@@ -139,7 +140,10 @@ function drawWorld(w) {
       map.robots.delete(id);
     }
   }
-  const font = mapFont();
+  // The font follows the pane's size: measured again only after a resize or a new map
+  // (reading the layout on every frame would cost each frame a reflow).
+  const font = map.fontDirty || map.font === 0 ? mapFont() : map.font;
+  map.fontDirty = false;
   if (Math.abs(font - map.font) > 1e-9) {
     map.font = font;
     for (const t of $('map').querySelectorAll('.robot text, .location-name')) t.setAttribute('font-size', String(font));
