@@ -360,3 +360,13 @@ pub fn python() -> PathBuf {
     );
     py
 }
+
+/// Waits (at most `limit`) for robot `r` to leave by itself: exit code 0 and `says` in its
+/// log.
+pub async fn assert_leaves(r: Proc, limit: Duration, says: &str) {
+    let (name, log) = (r.name.clone(), r.log.clone());
+    let (code, _) = finish(r, limit).await;
+    let text = std::fs::read_to_string(log).unwrap_or_default();
+    assert_eq!(code, Some(0), "{name}: {text}");
+    assert!(text.contains(says), "{name}: {text}");
+}

@@ -1,0 +1,152 @@
+//! Fleets on one host: 24 robot processes and the supervisor, started in a random order
+//! (the supervisor after three quarters of them: discovery well beyond 12 participants), run
+//! the temperature patrol to 100 firings; then every robot leaves by itself when the
+//! supervisor says the run is over.
+//!
+//! The issue asks for 64; 64 debug processes do not fit 2 cores (docs/ros2.md, "Fleet
+//! limits"): the supervisor hears the robots, then loses their heartbeats (none for 10 s)
+//! and they are never all ready. 40 passed twice (ready after 18.5 s and 34 s) and failed
+//! once (never ready in 240 s, load average 46); 24 is ready after 3.4 s. `GSPN_FLEET=N`
+//! runs the same test with N robots, to measure.
+#![cfg(feature = "ros2")]
+
+use crate::ros2_support as support;
+
+use std::collections::BTreeSet;
+use std::time::{Duration, Instant};
+
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use support::{domain, finish, listen, repo, robot_with, supervisor_with, take, wait_for_log};
+
+/// The patrol's net with `counts` robots at the three initial Check places (p1, p5, p9).
+fn patrol_net(counts: [usize; 3]) -> String {
+    const ONE: &str = "<initialMarking>\n      <value>Default,1</value>";
+    let xml = std::fs::read_to_string(repo("plans/nets/temperature_patrol.xml")).unwrap();
+    let mut out = String::new();
+    let mut rest = xml.as_str();
+    for n in counts {
+        let at = rest.find(ONE).expect("an initial robot token");
+        out.push_str(&rest[..at]);
+        out.push_str(&ONE.replace("Default,1", &format!("Default,{n}")));
+        rest = &rest[at + ONE.len()..];
+    }
+    assert!(!rest.contains(ONE), "more than three initial robot tokens");
+    out.push_str(rest);
+    out
+}
+
+/// The ROS 2 patrol plan for robots `ids` (net written beside it).
+fn fleet_plan(dir: &std::path::Path, ids: &[String]) -> std::path::PathBuf {
+    let n = ids.len();
+    let counts = [n - 2 * (n / 3), n / 3, n / 3];
+    std::fs::write(dir.join("patrol.xml"), patrol_net(counts)).unwrap();
+    let robots: Vec<String> = ids.iter().map(|r| format!("{r:?}")).collect();
+    let text = std::fs::read_to_string(repo(support::PLAN))
+        .unwrap()
+        .replace("nets/temperature_patrol.xml", "patrol.xml")
+        .replace(
+            "robots = [\"r1\", \"r2\", \"r3\"]",
+            &format!("robots = [{}]", robots.join(", ")),
+        )
+        .replace("startup = 30.0", "startup = 240.0")
+        // Heartbeats of a fleet of debug processes on 2 cores: a loaded machine must not lose a
+        // robot.
+        .replace("lost_after = 1.0", "lost_after = 10.0");
+    let plan = dir.join("fleet.toml");
+    std::fs::write(&plan, text).unwrap();
+    plan
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_fleet_started_in_random_order_runs_the_patrol() {
+    let fleet: usize = std::env::var("GSPN_FLEET")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(24);
+    const FIRINGS: usize = 100;
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(7);
+    let ids: Vec<String> = (1..=fleet).map(|k| format!("r{k}")).collect();
+    let plan = fleet_plan(dir.path(), &ids);
+
+    // The robots in a random order (seeded: repeatable), the supervisor after three quarters
+    // of them.
+    let mut order: Vec<Option<&String>> = ids.iter().map(Some).collect();
+    order.shuffle(&mut ChaCha8Rng::seed_from_u64(17));
+    order.insert(3 * fleet / 4, None);
+    let sup_at = 3 * fleet / 4;
+    println!(
+        "supervisor started as process {} of {}",
+        sup_at + 1,
+        order.len()
+    );
+    assert!(
+        fleet < 16 || sup_at > 12,
+        "the order must put the supervisor beyond index 12"
+    );
+
+    let (mut firings, _markings) = listen(d);
+    let start = Instant::now();
+    let mut robots = Vec::new();
+    let mut sup = None;
+    for who in &order {
+        match who {
+            Some(id) => robots.push(robot_with(dir.path(), id, &plan, d, &[])),
+            None => {
+                sup = Some(supervisor_with(
+                    dir.path(),
+                    &plan,
+                    d,
+                    &["--max-firings", &FIRINGS.to_string()],
+                ))
+            }
+        }
+        // One process at a time takes the next participant index.
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let sup = sup.unwrap();
+    assert!(
+        wait_for_log(&sup, "ros2: robots ready", Duration::from_secs(240)).await,
+        "{}",
+        sup.log()
+    );
+    let ready = start.elapsed();
+    let got = take(&mut firings, FIRINGS, Duration::from_secs(120)).await;
+    let log = sup.log();
+    let (code, out) = finish(sup, Duration::from_secs(60)).await;
+    let ran = start.elapsed();
+    assert_eq!(code, Some(0), "{out}\n{log}");
+    let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
+    assert_eq!(summary["stopped"], "max_firings");
+    assert_eq!(summary["firings"], FIRINGS as u64);
+    assert_eq!(got.len(), FIRINGS, "firings received");
+    let seqs: Vec<u64> = got.iter().map(|f| f.seq).collect();
+    assert_eq!(seqs, (1..=FIRINGS as u64).collect::<Vec<_>>());
+    let movers: BTreeSet<&str> = got
+        .iter()
+        .flat_map(|f| f.robots.iter().map(String::as_str))
+        .collect();
+    assert!(
+        movers.len() >= fleet / 2,
+        "{} robots moved: {movers:?}",
+        movers.len()
+    );
+    for f in &got {
+        assert_eq!(f.marking.iter().sum::<u32>(), fleet as u32, "{f:?}");
+    }
+
+    // The run is over: every robot process leaves by itself, exit code 0.
+    assert_eq!(robots.len(), fleet);
+    for r in robots {
+        let says = "the supervisor's run is over (max_firings after 100 firings)";
+        support::assert_leaves(r, Duration::from_secs(60), says).await;
+    }
+    let all_left = start.elapsed();
+    println!(
+        "{fleet} robots + supervisor: all ready after {ready:.1?}, {FIRINGS} firings done after \
+         {ran:.1?}, every robot gone after {all_left:.1?} ({} robots moved)",
+        movers.len()
+    );
+}
