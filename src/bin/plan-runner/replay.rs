@@ -37,6 +37,7 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    #[cfg(feature = "web")]
     if let Some(addr) = args.web {
         crate::serve::check_bind(addr, args.allow_remote)?;
     }
