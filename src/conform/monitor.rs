@@ -171,12 +171,14 @@ impl Monitor {
         let (n, e) = (w.len() as u64, w.iter().sum::<f64>());
         let (lo, hi) = stats::rate_interval(n, e);
         Some(Statistic {
-            of: Monitored::Transition(t),
-            observed: n as f64 / e,
-            predicted: rate,
-            interval: [lo, hi],
-            n,
-            p_value: stats::rate_test(n, e, rate),
+            figures: Drift {
+                of: Monitored::Transition(t),
+                observed: n as f64 / e,
+                predicted: rate,
+                interval: [lo, hi],
+                n,
+                p_value: stats::rate_test(n, e, rate),
+            },
             drifting: self.drifting[t.index()],
         })
     }
@@ -223,11 +225,11 @@ impl Monitor {
         let s = self.transition_statistic(t)?;
         let was = self.drifting[i];
         self.drifting[i] = if was {
-            s.p_value < self.opts.back
+            s.figures.p_value < self.opts.back
         } else {
-            s.p_value < self.opts.alpha
+            s.figures.p_value < self.opts.alpha
         };
-        (self.drifting[i] && !was).then(|| s.drift())
+        (self.drifting[i] && !was).then_some(s.figures)
     }
 }
 
@@ -262,52 +264,34 @@ fn place_drifts(b: &mut PlaceBatches, opts: &MonitorOptions, time: f64) -> Vec<D
         let was = b.drifting[p];
         b.drifting[p] = if was { pv < opts.back } else { pv < opts.alpha };
         let s = Statistic {
-            of: Monitored::Place(PlaceId(p as u32)),
-            observed: est.mean,
-            predicted,
-            interval: [est.lo(), est.hi()],
-            n: lengths.len() as u64,
-            p_value: pv,
+            figures: Drift {
+                of: Monitored::Place(PlaceId(p as u32)),
+                observed: est.mean,
+                predicted,
+                interval: [est.lo(), est.hi()],
+                n: lengths.len() as u64,
+                p_value: pv,
+            },
             drifting: b.drifting[p],
         };
         if b.drifting[p] && !was {
-            out.push(s.drift());
+            out.push(s.figures.clone());
         }
         b.last[p] = Some(s);
     }
     out
 }
 
-/// One monitored item now (see [`Monitor::statistics`]).
+/// One monitored item now (see [`Monitor::statistics`]): the figures a [`Drift`] event
+/// carries, and whether the item is drifting.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Statistic {
-    /// The transition (its rate) or place (its mean tokens).
-    pub of: Monitored,
-    /// The observation over the window.
-    pub observed: f64,
-    /// The model's value.
-    pub predicted: f64,
-    /// The 95% interval of the observation.
-    pub interval: [f64; 2],
-    /// Firings (a rate) or batches (mean tokens) in the window.
-    pub n: u64,
-    /// The test's p-value.
-    pub p_value: f64,
+    /// The item, its observation, the model's value, the interval, the sample size and the
+    /// test's p-value.
+    #[serde(flatten)]
+    pub figures: Drift,
     /// Drifting now (reported, not yet back).
     pub drifting: bool,
-}
-
-impl Statistic {
-    fn drift(&self) -> Drift {
-        Drift {
-            of: self.of,
-            observed: self.observed,
-            predicted: self.predicted,
-            interval: self.interval,
-            n: self.n,
-            p_value: self.p_value,
-        }
-    }
 }
 
 /// One [`Monitor`] shared between the run's supervisor (it is the run's [`Watcher`]) and

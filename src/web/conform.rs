@@ -15,19 +15,20 @@ pub(crate) fn rows(net: &Net, monitor: &SharedMonitor) -> Value {
 }
 
 fn row(net: &Net, s: &Statistic) -> Value {
-    let (kind, item) = match s.of {
+    let (f, drifting) = (&s.figures, s.drifting);
+    let (kind, item) = match f.of {
         Monitored::Transition(t) => ("rate", &net.transition(t).name),
         Monitored::Place(p) => ("mean_tokens", &net.place(p).name),
     };
     json!({
         "kind": kind,
         "item": item,
-        "observed": s.observed,
-        "predicted": s.predicted,
-        "interval": s.interval,
-        "n": s.n,
-        "p_value": s.p_value,
-        "drifting": s.drifting,
+        "observed": f.observed,
+        "predicted": f.predicted,
+        "interval": f.interval,
+        "n": f.n,
+        "p_value": f.p_value,
+        "drifting": drifting,
     })
 }
 

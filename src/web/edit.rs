@@ -90,6 +90,18 @@ impl Parts {
             .ok_or_else(|| unknown("transition", name))
     }
 
+    /// The name of a new place or transition (`what`): the one `given`, checked, or the
+    /// first free `P<k>` / `T<k>`.
+    fn new_name(&self, given: &Option<String>, what: &'static str) -> Result<String, EditError> {
+        let place = what == "place";
+        let name = match given {
+            Some(s) => s.clone(),
+            None => self.fresh(if place { "P" } else { "T" }, place),
+        };
+        check_name(what, &name)?;
+        Ok(name)
+    }
+
     /// The first name `prefix<k>` (k from the count + 1) that no node of that kind has.
     fn fresh(&self, prefix: &str, place: bool) -> String {
         let taken = |n: &str| {
@@ -217,11 +229,7 @@ pub(crate) fn apply(net: &Net, edit: &Edit) -> Result<(Net, String), EditError> 
             x,
             y,
         } => {
-            let name = match name {
-                Some(s) => s.clone(),
-                None => n.fresh("P", true),
-            };
-            check_name("place", &name)?;
+            let name = n.new_name(name, "place")?;
             let initial = match tokens {
                 Some(k) => k.whole("initial marking", &name, 0)?,
                 None => 0,
@@ -248,11 +256,7 @@ pub(crate) fn apply(net: &Net, edit: &Edit) -> Result<(Net, String), EditError> 
             x,
             y,
         } => {
-            let name = match name {
-                Some(s) => s.clone(),
-                None => n.fresh("T", false),
-            };
-            check_name("transition", &name)?;
+            let name = n.new_name(name, "transition")?;
             let timing = timing(&name, *kind, None, rate, servers, weight, priority)?;
             n.transitions.push(Transition {
                 position: Some(position(&name, *x, *y)?),

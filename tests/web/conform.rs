@@ -191,14 +191,14 @@ async fn a_replay_shows_the_monitors_table_at_the_sliders_time() {
     let expected = monitor.statistics();
     assert_eq!(expected.len(), 2, "{expected:?}");
     let t3 = expected[1].clone();
-    assert!(t3.drifting && t3.n == 200, "{t3:?}");
+    assert!(t3.drifting && t3.figures.n == 200, "{t3:?}");
 
     let (addr, server) = start_server(WebState::for_replay(model, frames.clone())).await;
     let snapshots = http_get(addr, "/api/replay").await["conform"].clone();
     let last = snapshots.as_array().unwrap().last().unwrap();
     assert_eq!(last["time"], frames.last().unwrap().time);
     let served = row(&last["rows"], "rate", "T3");
-    assert_eq!(served["observed"].as_f64().unwrap(), t3.observed);
+    assert_eq!(served["observed"].as_f64().unwrap(), t3.figures.observed);
     assert_eq!(served["drifting"], true);
     assert_eq!(row(&last["rows"], "rate", "T1")["drifting"], false);
 
@@ -216,7 +216,7 @@ async fn a_replay_shows_the_monitors_table_at_the_sliders_time() {
     assert_eq!(b.js(rows_shown, vec![]).await, 2);
     assert_eq!(
         cell(&b, "T3", "observed").await,
-        format!("{:.4}", t3.observed)
+        format!("{:.4}", t3.figures.observed)
     );
     assert_eq!(cell(&b, "T3", "predicted").await, "0.5000");
     let classes = b
