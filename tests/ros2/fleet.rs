@@ -61,6 +61,7 @@ fn fleet_plan(dir: &std::path::Path, ids: &[String]) -> std::path::PathBuf {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_fleet_started_in_random_order_runs_the_patrol() {
+    let _fleet = support::FLEET.lock().await;
     let fleet: usize = std::env::var("GSPN_FLEET")
         .ok()
         .and_then(|s| s.parse().ok())

@@ -278,6 +278,7 @@ fn transition_names(dir: &Path) -> Vec<String> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn sixteen_robots_on_four_hosts_run_the_fleet_plan() {
+    let _fleet = support::FLEET.lock().await;
     const N: u64 = 200;
     let dir = tempfile::tempdir().unwrap();
     let plan = write_fleet_plan(dir.path(), 16, 0.02, &format!("max_firings = {N}"));
@@ -352,6 +353,7 @@ async fn sixteen_robots_on_four_hosts_run_the_fleet_plan() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_host_cut_off_for_5_s_is_lost_repaired_and_serves_again() {
+    let _fleet = support::FLEET.lock().await;
     let dir = tempfile::tempdir().unwrap();
     // 4 robots, one per host; 25 s of real time (250 model seconds × 0.1).
     let plan = write_fleet_plan(dir.path(), 4, 0.1, "time_limit = 250.0");
@@ -459,6 +461,7 @@ async fn a_host_cut_off_for_5_s_is_lost_repaired_and_serves_again() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn over_lossy_slow_links_every_firing_reaches_every_robot_once_in_order() {
+    let _fleet = support::FLEET.lock().await;
     const N: usize = 100;
     let dir = tempfile::tempdir().unwrap();
     let plan = write_fleet_plan(dir.path(), 4, 0.02, &format!("max_firings = {N}"));

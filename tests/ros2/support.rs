@@ -12,6 +12,11 @@ use gspn::ros2::msgs::{Firing, Marking};
 use tokio::process::{Child, Command};
 use tokio::sync::mpsc;
 
+/// Held by the tests that start a fleet of processes (the 24-robot fleet, the netns
+/// scenarios): run side by side on 2 cores, 40 robot processes starve each other's DDS
+/// heartbeats and no robot becomes ready (seen in CI). The rest run in parallel with them.
+pub static FLEET: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
+
 /// The plan every ROS 2 test runs: the temperature patrol, 3 robots, every place `ros2`.
 pub const PLAN: &str = "plans/temperature_patrol_ros2.toml";
 
