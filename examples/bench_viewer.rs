@@ -27,11 +27,10 @@ mod browser;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use browser::Browser;
+use browser::{Browser, quantile};
 use gspn::net::{Net, NetBuilder, Servers};
 use gspn::runtime::Runtime;
 use gspn::web::{LiveRun, WebState, serve};
-use serde_json::Value;
 
 fn ring(n: usize) -> Net {
     let mut b = NetBuilder::new(format!("ring{n}"));
@@ -53,22 +52,6 @@ fn arg(name: &str, default: u64) -> u64 {
         .and_then(|i| args.get(i + 1))
         .map(|v| v.parse().expect("a number"))
         .unwrap_or(default)
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v[v.len() / 2]
-}
-
-fn quantile(mut v: Vec<f64>, q: f64) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
 #[tokio::main(flavor = "multi_thread", worker_threads = 2)]
@@ -139,9 +122,9 @@ async fn main() {
     println!(
         "open {n} places: median {:.0} ms (page: navigation start → first paint; runs {:?}); \
          wall from goto {:.0} ms",
-        median(opens.clone()),
+        quantile(&opens, 0.5),
         opens.iter().map(|x| x.round()).collect::<Vec<_>>(),
-        median(walls),
+        quantile(&walls, 0.5),
     );
     server.abort();
     if file.is_some() || seconds == 0 {
@@ -174,37 +157,8 @@ async fn main() {
             "the live page",
         )
         .await;
-    browser
-        .js(
-            "window.gspnPerf.frames = []; window.gspnPerf.handler = [];",
-            vec![],
-        )
-        .await;
-    tokio::time::sleep(Duration::from_secs(seconds)).await;
-    let perf = browser
-        .js(
-            "return {frames: window.gspnPerf.frames, handler: window.gspnPerf.handler, \
-             firings: document.getElementById('clock').textContent};",
-            vec![],
-        )
-        .await;
-    let list = |v: &Value| -> Vec<f64> {
-        v.as_array()
-            .map(|a| a.iter().filter_map(Value::as_f64).collect())
-            .unwrap_or_default()
-    };
-    let frames = list(&perf["frames"]);
-    let handler = list(&perf["handler"]);
-    println!(
-        "live {n} places: {} frames in {seconds} s; message → paint median {:.1} ms, p90 {:.1} ms, \
-         max {:.1} ms; script per frame median {:.1} ms ({})",
-        frames.len(),
-        median(frames.clone()),
-        quantile(frames.clone(), 0.9),
-        frames.iter().copied().fold(0.0, f64::max),
-        median(handler),
-        perf["firings"].as_str().unwrap_or(""),
-    );
+    let frames = browser.live_frames(seconds).await;
+    println!("live {n} places: {}", frames.summary(seconds));
     handle.stop();
     server.abort();
     browser.close().await;

@@ -22,7 +22,6 @@ use browser::Browser;
 use gspn::io::ReadOptions;
 use gspn::web::{LiveRun, WebState, serve};
 use gspn::world::{Fleet, WorldView};
-use serde_json::Value;
 
 fn arg(name: &str, default: u64) -> u64 {
     let args: Vec<String> = std::env::args().collect();
@@ -31,14 +30,6 @@ fn arg(name: &str, default: u64) -> u64 {
         .and_then(|i| args.get(i + 1))
         .map(|v| v.parse().expect("a number"))
         .unwrap_or(default)
-}
-
-fn quantile(mut v: Vec<f64>, q: f64) -> f64 {
-    v.sort_by(f64::total_cmp);
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v[((v.len() - 1) as f64 * q).round() as usize]
 }
 
 #[tokio::main(flavor = "multi_thread", worker_threads = 2)]
@@ -80,41 +71,12 @@ async fn main() {
             "every robot on the map",
         )
         .await;
-    browser
-        .js(
-            "window.gspnPerf.frames = []; window.gspnPerf.handler = [];",
-            vec![],
-        )
-        .await;
-    tokio::time::sleep(Duration::from_secs(seconds)).await;
-    let perf = browser
-        .js(
-            "return {frames: window.gspnPerf.frames, handler: window.gspnPerf.handler, \
-             clock: document.getElementById('clock').textContent};",
-            vec![],
-        )
-        .await;
-    let list = |v: &Value| -> Vec<f64> {
-        v.as_array()
-            .map(|a| a.iter().filter_map(Value::as_f64).collect())
-            .unwrap_or_default()
-    };
-    let frames = list(&perf["frames"]);
-    let handler = list(&perf["handler"]);
+    let frames = browser.live_frames(seconds).await;
     println!(
         "open (patrol, {robots} robots, live): {:.0} ms",
         drawn.as_f64().unwrap_or(f64::NAN)
     );
-    println!(
-        "live {robots} robots: {} frames in {seconds} s; message → paint median {:.1} ms, p90 {:.1} ms, \
-         max {:.1} ms; script per frame median {:.1} ms ({})",
-        frames.len(),
-        quantile(frames.clone(), 0.5),
-        quantile(frames.clone(), 0.9),
-        frames.iter().copied().fold(0.0, f64::max),
-        quantile(handler, 0.5),
-        perf["clock"].as_str().unwrap_or(""),
-    );
+    println!("live {robots} robots: {}", frames.summary(seconds));
     handle.stop();
     server.abort();
     browser.close().await;

@@ -207,3 +207,70 @@ impl Drop for Browser {
         }
     }
 }
+
+/// The viewer's live frames over some seconds of real time, as the page times them
+/// (`window.gspnPerf`, see `assets/live.js`), in milliseconds.
+#[derive(Debug)]
+pub struct LiveFrames {
+    /// WebSocket message → the paint after it, per frame.
+    pub paint: Vec<f64>,
+    /// The page's own script, per frame.
+    pub script: Vec<f64>,
+    /// The page's clock at the end (model time, firings).
+    pub clock: String,
+}
+
+impl Browser {
+    /// Clears the page's frame timings, waits `seconds` (real time) and reads them.
+    pub async fn live_frames(&self, seconds: u64) -> LiveFrames {
+        self.js(
+            "window.gspnPerf.frames = []; window.gspnPerf.handler = [];",
+            vec![],
+        )
+        .await;
+        tokio::time::sleep(Duration::from_secs(seconds)).await;
+        let perf = self
+            .js(
+                "return {frames: window.gspnPerf.frames, handler: window.gspnPerf.handler, \
+                 clock: document.getElementById('clock').textContent};",
+                vec![],
+            )
+            .await;
+        let list = |v: &Value| -> Vec<f64> {
+            v.as_array()
+                .map(|a| a.iter().filter_map(Value::as_f64).collect())
+                .unwrap_or_default()
+        };
+        LiveFrames {
+            paint: list(&perf["frames"]),
+            script: list(&perf["handler"]),
+            clock: perf["clock"].as_str().unwrap_or("").to_string(),
+        }
+    }
+}
+
+impl LiveFrames {
+    /// `N frames in S s; message → paint median …, p90 …, max …; script per frame median …`.
+    pub fn summary(&self, seconds: u64) -> String {
+        format!(
+            "{} frames in {seconds} s; message → paint median {:.1} ms, p90 {:.1} ms, max {:.1} \
+             ms; script per frame median {:.1} ms ({})",
+            self.paint.len(),
+            quantile(&self.paint, 0.5),
+            quantile(&self.paint, 0.9),
+            self.paint.iter().copied().fold(0.0, f64::max),
+            quantile(&self.script, 0.5),
+            self.clock,
+        )
+    }
+}
+
+/// The `q` quantile of `v` (the element at rank round((n − 1)·q)); NaN when empty.
+pub fn quantile(v: &[f64], q: f64) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
