@@ -8,8 +8,8 @@
 //! attach    registers the `ros2` action (RemotePlaces) on the runtime builder
 //!           then says the run is `running` on /gspn/run
 //! publish   a task that publishes every firing and the marking from the run's events
-//! finish    waits for the publisher and the subscribers' acknowledgements, says the run
-//!           is `over` (robots leave), waits for that to be acknowledged (≤ linger in all)
+//! finish    waits for the publisher and the subscribers' acknowledgements (≤ linger), says
+//!           the run is `over` (robots leave), waits for that to be acknowledged (≤ linger)
 //! ```
 
 use std::collections::HashMap;
@@ -199,11 +199,13 @@ impl Ros2Backend {
 
     /// Waits for the publisher to have sent every firing (the run must be over) and for
     /// every subscriber to acknowledge them, says the run is over (`stopped`: why) so robots
-    /// leave, and waits for that to be acknowledged too; the two waits together take at most
-    /// `linger` (a lost sample is repaired in that time; a subscriber that never answers
-    /// costs the whole of it).
+    /// leave, and waits for that to be acknowledged too. Each wait takes at most `linger` (a
+    /// lost sample is repaired in that time; a subscriber that never answers, such as a
+    /// killed robot whose reader DDS still counts, costs the whole of it). The second wait
+    /// has its own `linger`, not what the first left: the end of the run is written to the
+    /// DDS event loop, which sends it after `publish` returns, so with no time left the
+    /// process could exit before the live robots were ever sent it.
     pub async fn finish(mut self, linger: Duration, stopped: &str) -> Published {
-        let deadline = tokio::time::Instant::now() + linger;
         let mut published = match self.task.take() {
             Some(t) => t.await.unwrap_or_default(),
             None => Published::default(),
@@ -222,8 +224,11 @@ impl Ros2Backend {
             tracing::warn!("publishing the end of the run: {e}");
             published.errors += 1;
         }
-        let left = deadline.saturating_duration_since(tokio::time::Instant::now());
-        self.run_state.acknowledged(left).await;
+        if !self.run_state.acknowledged(linger).await {
+            tracing::warn!(
+                "not every subscriber acknowledged the end of the run within {linger:?} (--ros2-linger)"
+            );
+        }
         self.beat.0.abort();
         self.spin.abort();
         published

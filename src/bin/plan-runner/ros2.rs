@@ -61,7 +61,7 @@ pub(crate) struct RunArgs {
     #[arg(long, value_name = "N", default_value_t = 0)]
     ros2_wait_subscribers: usize,
     /// At most this many seconds after the run for the subscribers to acknowledge the last
-    /// firings and the end of the run (lost samples are repaired meanwhile).
+    /// firings, then as many for the end of the run (lost samples are repaired meanwhile).
     #[arg(long, value_name = "SECS", default_value_t = 0.5)]
     ros2_linger: f64,
     /// Accept time scale 0 (virtual time) with ros2 places: the robots still act in real
