@@ -83,7 +83,7 @@ impl Ros2Backend {
         cfg: &DdsConfig,
         subscribers: usize,
     ) -> Result<Ros2Backend, Ros2Error> {
-        let mut node = cfg.node("supervisor")?;
+        let mut node = cfg.node("supervisor", None)?;
         let spinner = node.spinner().map_err(Ros2Error::dds)?;
         let spin = tokio::spawn(async move {
             if let Err(e) = spinner.spin().await {

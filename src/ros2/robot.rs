@@ -193,7 +193,7 @@ pub async fn serve(
     stop: impl Future<Output = ()>,
 ) -> Result<RobotStats, Ros2Error> {
     let node_name = format!("robot_{}", sanitize(&opts.id));
-    let mut node = cfg.node(&node_name)?;
+    let mut node = cfg.node(&node_name, Some(&opts.id))?;
     let spinner = node.spinner().map_err(Ros2Error::dds)?;
     let spin = tokio::spawn(spinner.spin());
     let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;

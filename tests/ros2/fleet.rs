@@ -18,6 +18,7 @@ use std::time::{Duration, Instant};
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
+use rustdds::RTPSEntity;
 use support::{domain, finish, listen, repo, robot_with, supervisor_with, take, wait_for_log};
 
 /// The patrol's net with `counts` robots at the three initial Check places (p1, p5, p9).
@@ -150,4 +151,55 @@ async fn a_fleet_started_in_random_order_runs_the_patrol() {
          {ran:.1?}, every robot gone after {all_left:.1?} ({} robots moved)",
         movers.len()
     );
+}
+
+/// The participants (GUID prefixes, as text) whose writers `ctx` has discovered.
+fn writers_seen(ctx: &ros2_client::Context) -> BTreeSet<String> {
+    ctx.domain_participant()
+        .discovered_writers()
+        .iter()
+        .map(|w| format!("{:?}", w.writer_proxy.remote_writer_guid.prefix))
+        .collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn robots_ignore_each_other_and_see_everyone_else() {
+    let cfg = gspn::ros2::DdsConfig {
+        domain_id: domain(13),
+        ..gspn::ros2::DdsConfig::default()
+    };
+    let (a, b, sup) = (
+        cfg.context(Some("a")).unwrap(),
+        cfg.context(Some("b")).unwrap(),
+        cfg.context(None).unwrap(),
+    );
+    let prefix = |c: &ros2_client::Context| format!("{:?}", c.domain_participant().guid().prefix);
+    let (pa, pb, ps) = (prefix(&a), prefix(&b), prefix(&sup));
+    // Every context has a writer (ROS 2's graph topic): the supervisor sees both robots'.
+    let start = Instant::now();
+    while !(writers_seen(&sup).contains(&pa) && writers_seen(&sup).contains(&pb)) {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the supervisor never discovered both robots"
+        );
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    // Each robot sees the supervisor, and still not the other robot a second later.
+    while !(writers_seen(&a).contains(&ps) && writers_seen(&b).contains(&ps)) {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "a robot never discovered the supervisor"
+        );
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    tokio::time::sleep(Duration::from_secs(1)).await;
+    assert!(
+        !writers_seen(&a).contains(&pb),
+        "robot a discovered robot b"
+    );
+    assert!(
+        !writers_seen(&b).contains(&pa),
+        "robot b discovered robot a"
+    );
+    assert!(writers_seen(&a).contains(&ps) && writers_seen(&b).contains(&ps));
 }
