@@ -33,7 +33,7 @@
 use std::sync::OnceLock;
 
 use crate::analysis::ctmc::{Columns, Ctmc, Limiting, Method, SolveError, SteadyOptions};
-use crate::analysis::state_space::StateSpace;
+use crate::analysis::state_space::{Monitor, StateSpace};
 use crate::net::Net;
 use crate::net::predicate::Predicate;
 
@@ -290,8 +290,31 @@ impl<'a> Solver<'a> {
     /// probability of each predicate (error ≤ [`TRANSIENT_EPS`] each) — what `plan-runner
     /// analyze --transient T --prob EXPR` reports and the viewer's panel shows.
     pub fn transient_points(&self, times: &[f64], predicates: &[Predicate]) -> Vec<TransientPoint> {
-        self.transient(times, TRANSIENT_EPS)
-            .into_iter()
+        self.points(self.transient(times, TRANSIENT_EPS), times, predicates)
+    }
+
+    /// [`Solver::transient_points`] watched by `monitor` from another thread (the viewer's
+    /// questions): its progress and cancel as [`Ctmc::transient_monitored`]'s; stops with
+    /// [`SolveError::Cancelled`] within one iteration of [`Monitor::cancel`].
+    pub fn transient_points_monitored(
+        &self,
+        times: &[f64],
+        predicates: &[Predicate],
+        monitor: &Monitor,
+    ) -> Result<Vec<TransientPoint>, SolveError> {
+        let at =
+            self.chain()
+                .transient_monitored(self.space.initial(), times, TRANSIENT_EPS, monitor)?;
+        Ok(self.points(at, times, predicates))
+    }
+
+    fn points(
+        &self,
+        at: Vec<Vec<f64>>,
+        times: &[f64],
+        predicates: &[Predicate],
+    ) -> Vec<TransientPoint> {
+        at.into_iter()
             .zip(times)
             .map(|(pi, &t)| TransientPoint {
                 t,

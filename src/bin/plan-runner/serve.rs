@@ -70,7 +70,9 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         .into());
     }
     // The panel analyses the net under the plan's policy, with its rewards (the bare net
-    // for a net file), as `plan-runner analyze` does.
+    // for a net file), as `plan-runner analyze` does; the editor checks every edit against
+    // the plan as the plan reader does.
+    let text = plan.text;
     let state = WebState::for_plan(
         plan.net,
         Some(plan.policy),
@@ -79,6 +81,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         args.max_states,
     )
     .with_source(&plan.net_path);
+    let state = match text {
+        Some(text) => state.with_plan(text),
+        None => state,
+    };
     let state = match args.save_to {
         Some(path) => {
             let real = |p: &std::path::Path| std::fs::canonicalize(p).ok();

@@ -5,7 +5,8 @@
 // markings (click one to replay its firing sequence on the net); then questions on the
 // analysed state space: probabilities of `--prob`-style predicates (steady state and at
 // times t) and the expected tokens at those times, computed by the server exactly as
-// `plan-runner analyze --prob EXPR --transient T` computes them.
+// `plan-runner analyze --prob EXPR --transient T` computes them, with their progress (the
+// time point, the solver's iterations) and the same cancel button.
 'use strict';
 
 // ---- analysis --------------------------------------------------------------------------
@@ -130,9 +131,26 @@ function queryForm() {
     '</div><div id="query-result"></div>';
 }
 
+let asking = false;
+
+// The question's progress line: its phase (the time point the transient solver works
+// towards), the point of the times asked, the solver's iterations done of planned.
+function showQuestionProgress(p) {
+  if (p.state === 'done' || p.state === 'idle') {
+    $('analysis-progress').textContent = '';
+    return;
+  }
+  const it = p.of ? ', ' + p.iterations.toLocaleString('en') + ' of ' + p.of.toLocaleString('en') +
+    ' iterations' : '';
+  const pt = p.points > 1 ? ', point ' + p.point + ' of ' + p.points : '';
+  $('analysis-progress').textContent = 'question ' + p.state + ' (' + p.phase + pt + ')' + it +
+    ', ' + fmt(Math.round(p.seconds * 10) / 10) + ' s';
+}
+
 // Asks the server the form's questions and shows a table: a row per predicate (steady state,
 // then each time) and per place (expected tokens at each time). Each number's cell carries
-// its full value in data-value.
+// its full value in data-value. While the server computes, the progress line shows how far
+// the transient solver is and the cancel button stops it.
 async function ask() {
   const out = $('query-result');
   const text = $('query-times').value.trim();
@@ -142,13 +160,50 @@ async function ask() {
     out.innerHTML = '<p class="error">times: numbers separated by commas</p>';
     return;
   }
+  if (asking) return;
+  asking = true;
+  out.classList.add('stale');
+  $('analysis-cancel').classList.remove('hidden');
   let q;
+  let polling = true;
+  const poll = (async () => {
+    while (polling) {
+      await new Promise((r) => setTimeout(r, 200));
+      if (!polling) break;
+      try {
+        showQuestionProgress(await api('GET', '/api/analysis/query/progress'));
+      } catch (e) {
+        break;
+      }
+    }
+  })();
   try {
-    q = await api('POST', '/api/analysis/query', { transient: times, prob });
+    const res = await fetch('/api/analysis/query', {
+      method: 'POST',
+      headers: { 'Content-Type': 'application/json' },
+      body: JSON.stringify({ transient: times, prob }),
+    });
+    const data = await res.json();
+    if (res.status === 409 && data.kind === 'cancelled') {
+      const p = data.progress;
+      out.innerHTML = '<p class="error" data-cancelled="' + p.iterations + '">question cancelled (' +
+        escapeHtml(p.phase) + ') after ' + p.iterations.toLocaleString('en') + ' of ' +
+        p.of.toLocaleString('en') + ' iterations</p>';
+      return;
+    }
+    if (!res.ok) throw new Error(data.error || res.statusText);
+    q = data;
   } catch (e) {
     if (unreachable(e)) offline(e);
     out.innerHTML = '<p class="error">' + escapeHtml(e.message) + '</p>';
     return;
+  } finally {
+    polling = false;
+    await poll;
+    asking = false;
+    out.classList.remove('stale');
+    $('analysis-cancel').classList.add('hidden');
+    $('analysis-progress').textContent = '';
   }
   const cell = (attrs, v) => '<td class="mono" ' + attrs + ' data-value="' + v + '">' + fmt(v) + '</td>';
   let html = '<table class="query"><tr><th></th>' + (prob.length ? '<th>steady</th>' : '') +

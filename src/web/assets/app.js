@@ -647,8 +647,10 @@ function setupControls() {
   $('fit').addEventListener('click', fit);
   $('save-layout').addEventListener('click', saveLayout);
   $('analyze').addEventListener('click', analyse);
-  $('analysis-cancel').addEventListener('click', () =>
-    api('POST', '/api/analysis/cancel').then(showProgress).catch((e) => status(e.message)));
+  // The same button stops a running question (transient points) or the analysis.
+  $('analysis-cancel').addEventListener('click', () => (asking ?
+    api('POST', '/api/analysis/query/cancel').then(showQuestionProgress) :
+    api('POST', '/api/analysis/cancel').then(showProgress)).catch((e) => status(e.message)));
 }
 
 // ---- keys, theme, resize -----------------------------------------------------------------
