@@ -26,8 +26,8 @@
 //! | `POST /api/analysis/query/cancel` | stops a running question (the transient solver within one iteration); its progress |
 //! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`crate::runtime::journal::read_journal`]), or the token game |
 //! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
-//! | `GET /api/edit` | `{editable, reason, save_to, history {version, edits, undo, redo}}`: whether the net may be edited (not a live run, a replay, or a plan with a policy or rewards), where "save" writes, the labels of the edits undo and redo would take back or do again |
-//! | `POST /api/edit {op, ...}` | one edit of the net ([`edit`](self#editing)): `{net, history, state}` — the new net as `/api/net` gives it (with its `version`, also in every token-game state as `net_version`), the history, the token game restarted on it; 422 `{error}` when refused (the net is unchanged) |
+//! | `GET /api/edit` | `{editable, reason, save_to, history {version, edits, undo, redo}}`: whether the net may be edited (not a live run, a replay, or a policy or rewards without their plan file), where "save" writes, the labels of the edits undo and redo would take back or do again |
+//! | `POST /api/edit {op, ...}` | one edit of the net ([`edit`](self#editing)): `{net, history, state}` — the new net as `/api/net` gives it (with its `version`, also in every token-game state as `net_version`), the history, the token game restarted on it; 422 `{error}` when refused (the net is unchanged), also when the plan served would no longer load with the edited net |
 //! | `POST /api/edit/undo`, `POST /api/edit/redo` | back to the version before the last edit, on to the one after; as `POST /api/edit`; 409 when there is nothing to undo or redo |
 //! | `POST /api/edit/export {format: "pnpro"\|"pipe", places, transitions}` | `{text, file}`: the current net (with the page's positions) as a GreatSPN project or a PIPE net, to download |
 //! | `POST /api/edit/save {places, transitions}` | writes the current net to the file of `serve --save-to PATH` ([`WebState::saving_to`]) in its format; `{saved, format, bytes}`; 409 without one |
@@ -46,7 +46,11 @@
 //! arcs between a place and a transition, ...): a refused edit answers its reason and
 //! leaves the net as it was. Every version is kept (undo and redo move between them). The
 //! token game and the analysis panel then use the edited net, and every open page redraws
-//! it. Saving writes GreatSPN's PNPRO or PIPE XML through the same writers as
+//! it. The net of a plan ([`WebState::with_plan`]) is checked against the plan after every
+//! edit, undo and redo by the plan reader's own checks: an edit that would leave the policy
+//! or a reward (a role, the stop condition, the map) naming a node that is gone, or no
+//! longer of the kind it needs, is refused with the reader's message and the plan's line;
+//! an accepted one is played and analysed under the plan's policy resolved against it. Saving writes GreatSPN's PNPRO or PIPE XML through the same writers as
 //! `plan-runner convert`, to the file named on the command line only.
 //!
 //! # Security
@@ -413,10 +417,7 @@ impl WebState {
                 rewards: plan.rewards,
             })),
             Err(e) => Err(edit::EditError::BreaksPlan {
-                line: e
-                    .span
-                    .and_then(|s| text.line(s.line))
-                    .map(str::to_string),
+                line: e.span.and_then(|s| text.line(s.line)).map(str::to_string),
                 error: e.to_string(),
             }),
         }

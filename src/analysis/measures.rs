@@ -302,9 +302,12 @@ impl<'a> Solver<'a> {
         predicates: &[Predicate],
         monitor: &Monitor,
     ) -> Result<Vec<TransientPoint>, SolveError> {
-        let at =
-            self.chain()
-                .transient_monitored(self.space.initial(), times, TRANSIENT_EPS, monitor)?;
+        let at = self.chain().transient_monitored(
+            self.space.initial(),
+            times,
+            TRANSIENT_EPS,
+            monitor,
+        )?;
         Ok(self.points(at, times, predicates))
     }
 

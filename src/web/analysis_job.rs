@@ -196,10 +196,9 @@ impl AnalysisJob {
         plan: Option<(Option<Arc<Policy>>, Vec<RewardSpec>)>,
     ) -> AnalysisJob {
         let (policy, rewards) = match plan {
-            Some((policy, rewards)) => (
-                policy.unwrap_or_else(|| Arc::new(Policy::empty())),
-                rewards,
-            ),
+            Some((policy, rewards)) => {
+                (policy.unwrap_or_else(|| Arc::new(Policy::empty())), rewards)
+            }
             None => (self.policy.clone(), self.rewards.clone()),
         };
         AnalysisJob::new(net, policy, rewards, self.max_states)

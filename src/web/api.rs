@@ -303,8 +303,10 @@ pub(crate) async fn analysis_query(
         Answer::Refused(message) => error(StatusCode::BAD_REQUEST, message),
         Answer::Cancelled(progress) => (
             StatusCode::CONFLICT,
-            Json(json!({ "error": "the question was cancelled", "kind": "cancelled",
-                         "progress": progress })),
+            Json(
+                json!({ "error": "the question was cancelled", "kind": "cancelled",
+                         "progress": progress }),
+            ),
         )
             .into_response(),
         Answer::Failed(message) => error(StatusCode::INTERNAL_SERVER_ERROR, message),

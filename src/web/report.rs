@@ -151,9 +151,8 @@ pub(crate) fn query(
     let predicates = exprs
         .iter()
         .map(|p| {
-            Predicate::parse(net, p).map_err(|e| {
-                QueryError::Bad(format!("prob `{}`: {e}", crate::io::excerpt(p, 80)))
-            })
+            Predicate::parse(net, p)
+                .map_err(|e| QueryError::Bad(format!("prob `{}`: {e}", crate::io::excerpt(p, 80))))
         })
         .collect::<Result<Vec<_>, _>>()?;
     let solver = Solver::new(net, &kept.space);

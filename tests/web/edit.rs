@@ -582,10 +582,10 @@ async fn nets_that_cannot_be_edited_or_saved_say_so() {
         WebState::for_plan(plan.net.clone(), Some(plan.policy), plan.rewards, 0, 1000),
         WebState::for_replay(plan.net, Vec::new()),
     ];
-    for (state, why) in states
-        .iter()
-        .zip(["policy or rewards given without their plan file", "recorded run"])
-    {
+    for (state, why) in states.iter().zip([
+        "policy or rewards given without their plan file",
+        "recorded run",
+    ]) {
         let (_, s) = call(state, "GET", "/api/edit", None).await;
         assert_eq!(s["editable"], false);
         let (status, v) = edit(
@@ -643,7 +643,9 @@ fn assert_same_plan_analysis(page: &Value, cli: &Value) {
     assert_eq!(cli["analysed"], "net under plan policy");
     assert_same_analysis(page, cli);
     let (a, b) = (
-        page["steady"]["rewards"]["cleaning"]["rate"].as_f64().unwrap(),
+        page["steady"]["rewards"]["cleaning"]["rate"]
+            .as_f64()
+            .unwrap(),
         cli["steady_state"]["rewards"]["cleaning"]["rate"]
             .as_f64()
             .unwrap(),
@@ -653,7 +655,7 @@ fn assert_same_plan_analysis(page: &Value, cli: &Value) {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_net_of_a_plan_is_edited_under_its_policy_and_an_edit_that_breaks_the_plan_is_refused()
- {
+{
     let dir = tempfile::tempdir().unwrap();
     std::fs::copy(
         common::fixture("gspnr/home_n01/net.PNPRO"),
@@ -676,7 +678,10 @@ async fn the_net_of_a_plan_is_edited_under_its_policy_and_an_edit_that_breaks_th
     .saving_to(saved.clone())
     .unwrap();
     let (_, s) = call(&state, "GET", "/api/edit", None).await;
-    assert_eq!((s["editable"].clone(), s["reason"].clone()), (json!(true), Value::Null));
+    assert_eq!(
+        (s["editable"].clone(), s["reason"].clone()),
+        (json!(true), Value::Null)
+    );
     let cli_before = analyze_json(&plan_path);
     let (status, before) = call(&state, "GET", "/api/analysis", None).await;
     assert_eq!(status, StatusCode::OK, "{before}");
@@ -763,6 +768,22 @@ async fn the_net_of_a_plan_is_edited_under_its_policy_and_an_edit_that_breaks_th
     assert_eq!(status, StatusCode::OK, "{v}");
     let (_, redone) = call(&state, "GET", "/api/analysis", None).await;
     assert_same_plan_analysis(&redone, &cli_after);
+
+    // `serve PLAN --save-to` without a path saves to the net file the plan names (refused
+    // here, before it listens, for the non-loopback address: the message names the file).
+    let out = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .args(["serve", plan_path.to_str().unwrap()])
+        .args(["--addr", "0.0.0.0:0", "--allow-remote", "--save-to"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    let net_file = dir.path().join("net.PNPRO");
+    assert!(
+        err.contains(&format!("could overwrite {}", net_file.display())),
+        "{err}"
+    );
 }
 
 // ---- in the browser ------------------------------------------------------------------------

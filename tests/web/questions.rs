@@ -261,7 +261,10 @@ async fn question_progress(state: &WebState, ok: impl Fn(&Value) -> bool) -> Val
         if ok(&p) {
             return p;
         }
-        assert!(Instant::now() < deadline, "the question's progress stays {p}");
+        assert!(
+            Instant::now() < deadline,
+            "the question's progress stays {p}"
+        );
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
 }
@@ -277,15 +280,26 @@ fn assert_same_question(page: &Value, cli: &Value, exprs: &[&str]) {
         let tokens = b["mean_tokens"].as_object().unwrap();
         assert!(!tokens.is_empty());
         for (name, v) in tokens {
-            let (x, y) = (a["mean_tokens"][name].as_f64().unwrap(), v.as_f64().unwrap());
-            assert!((x - y).abs() < 1e-9, "E[{name}] at {}: page {x}, analyze {y}", b["t"]);
+            let (x, y) = (
+                a["mean_tokens"][name].as_f64().unwrap(),
+                v.as_f64().unwrap(),
+            );
+            assert!(
+                (x - y).abs() < 1e-9,
+                "E[{name}] at {}: page {x}, analyze {y}",
+                b["t"]
+            );
         }
         for e in exprs {
             let (x, y) = (
                 a["probability"][e].as_f64().unwrap(),
                 b["probability"][e].as_f64().unwrap(),
             );
-            assert!((x - y).abs() < 1e-9, "P({e}) at {}: page {x}, analyze {y}", b["t"]);
+            assert!(
+                (x - y).abs() < 1e-9,
+                "P({e}) at {}: page {x}, analyze {y}",
+                b["t"]
+            );
         }
     }
 }
@@ -312,7 +326,10 @@ async fn a_long_question_shows_its_progress_is_cancelled_and_the_next_is_answere
     })
     .await;
     assert_eq!(p["phase"], format!("transient t={LONG_T}"), "{p}");
-    assert_eq!((p["point"].clone(), p["points"].clone()), (json!(1), json!(1)));
+    assert_eq!(
+        (p["point"].clone(), p["points"].clone()),
+        (json!(1), json!(1))
+    );
     // Uniformisation: about Λ·t iterations (Λ the largest exit rate), each a pass over the
     // generator's entries: over 10^10 multiply-adds, many seconds on any machine.
     let planned = p["of"].as_u64().unwrap();
@@ -324,7 +341,10 @@ async fn a_long_question_shows_its_progress_is_cancelled_and_the_next_is_answere
     let sent = Instant::now();
     let (status, c) = call(&state, "POST", "/api/analysis/query/cancel", None).await;
     assert_eq!(status, StatusCode::OK, "{c}");
-    assert!(c["state"] == "cancelling" || c["state"] == "cancelled", "{c}");
+    assert!(
+        c["state"] == "cancelling" || c["state"] == "cancelled",
+        "{c}"
+    );
     let (status, v) = asking.await.unwrap();
     let latency = sent.elapsed();
     println!(
@@ -336,7 +356,10 @@ async fn a_long_question_shows_its_progress_is_cancelled_and_the_next_is_answere
     assert_eq!(status, StatusCode::CONFLICT, "{v}");
     assert_eq!(v["kind"], "cancelled", "{v}");
     assert_eq!(v["progress"]["state"], "cancelled", "{v}");
-    assert!(v["progress"]["iterations"].as_u64().unwrap() < planned, "{v}");
+    assert!(
+        v["progress"]["iterations"].as_u64().unwrap() < planned,
+        "{v}"
+    );
     let (_, p) = call(&state, "GET", "/api/analysis/query/progress", None).await;
     assert_eq!(p, v["progress"]);
 
@@ -352,7 +375,14 @@ async fn a_long_question_shows_its_progress_is_cancelled_and_the_next_is_answere
     assert_eq!(status, StatusCode::OK, "{v}");
     let cli = analyze_json_with(
         &crate::support::fixture(KANBAN2),
-        &["--transient", "2,0.5", "--prob", exprs[0], "--prob", exprs[1]],
+        &[
+            "--transient",
+            "2,0.5",
+            "--prob",
+            exprs[0],
+            "--prob",
+            exprs[1],
+        ],
     );
     assert_same_question(&v, &cli, &exprs);
     let (_, p) = call(&state, "GET", "/api/analysis/query/progress", None).await;
@@ -408,6 +438,11 @@ async fn the_cancel_button_stops_a_question_on_the_page() {
         )
         .await;
     assert_eq!(hidden, json!(true));
+    b.js(
+        "document.querySelector('#analysis .query').scrollIntoView({block: 'start'});",
+        vec![],
+    )
+    .await;
     b.screenshot(&screenshot_path("analysis-question-cancelled.png"))
         .await;
     b.close().await;

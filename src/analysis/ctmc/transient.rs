@@ -54,7 +54,9 @@ impl Ctmc {
     pub fn transient(&self, initial: &[(u32, f64)], times: &[f64], eps: f64) -> Vec<Vec<f64>> {
         match self.transient_monitored(initial, times, eps, &Monitor::new()) {
             Ok(at) => at,
-            Err(_) => unreachable!("only a cancel stops the solver, and nothing holds this monitor"),
+            Err(_) => {
+                unreachable!("only a cancel stops the solver, and nothing holds this monitor")
+            }
         }
     }
 
@@ -94,7 +96,7 @@ impl Ctmc {
         order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
         // The Poisson weights of every step first, for the number of iterations planned.
         let mut now = 0.0;
-        let steps: Vec<(usize, Option<(usize, Vec<f64>)>)> = order
+        let steps: Vec<_> = order
             .into_iter()
             .map(|idx| {
                 let t = times[idx].max(0.0);
@@ -119,8 +121,14 @@ impl Ctmc {
         for (point, (idx, weights)) in steps.into_iter().enumerate() {
             monitor.set_transient_point(point);
             if let Some((first, weights)) = weights {
-                current =
-                    self.uniformize(&current, &exit, lambda, (first, &weights), monitor, &mut done)?;
+                current = self.uniformize(
+                    &current,
+                    &exit,
+                    lambda,
+                    (first, &weights),
+                    monitor,
+                    &mut done,
+                )?;
             }
             out[idx] = current.clone();
         }

@@ -199,10 +199,10 @@ async function ask() {
     return;
   } finally {
     polling = false;
-    await poll;
     asking = false;
     out.classList.remove('stale');
     $('analysis-cancel').classList.add('hidden');
+    await poll;
     $('analysis-progress').textContent = '';
   }
   const cell = (attrs, v) => '<td class="mono" ' + attrs + ' data-value="' + v + '">' + fmt(v) + '</td>';

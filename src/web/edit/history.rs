@@ -145,10 +145,9 @@ mod tests {
         assert_eq!(h.version(), 3);
         // So does an edit, an undo or a redo the check refuses (the plan it would break).
         let no = |_: &Net| Err::<(), _>(EditError::Nothing);
-        let other: Edit = serde_json::from_value(
-            json!({"op": "add_place", "name": "P5", "x": 0, "y": 0}),
-        )
-        .unwrap();
+        let other: Edit =
+            serde_json::from_value(json!({"op": "add_place", "name": "P5", "x": 0, "y": 0}))
+                .unwrap();
         assert_eq!(h.apply(&other, no).unwrap_err(), EditError::Nothing);
         assert_eq!(h.undo(no).unwrap_err(), EditError::Nothing);
         assert_eq!(h.json(), before);
