@@ -226,15 +226,20 @@ pub(crate) async fn analysis(State(state): State<WebState>) -> Response {
             };
             (status, Json(Value::clone(&value))).into_response()
         }
-        Outcome::Cancelled(progress) => (
-            StatusCode::CONFLICT,
-            Json(
-                json!({ "error": "the analysis was cancelled", "kind": "cancelled",
-                         "progress": progress }),
-            ),
-        )
-            .into_response(),
+        Outcome::Cancelled(progress) => cancelled("the analysis", progress),
     }
+}
+
+/// 409 `{error: "WHAT was cancelled", kind: "cancelled", progress}`.
+fn cancelled(what: &str, progress: Value) -> Response {
+    (
+        StatusCode::CONFLICT,
+        Json(
+            json!({ "error": format!("{what} was cancelled"), "kind": "cancelled",
+                     "progress": progress }),
+        ),
+    )
+        .into_response()
 }
 
 /// Body of `POST /api/analysis/start`.
@@ -301,14 +306,7 @@ pub(crate) async fn analysis_query(
     match job.ask(net, kept, b.transient, b.prob).await {
         Answer::Done(v) => Json(v).into_response(),
         Answer::Refused(message) => error(StatusCode::BAD_REQUEST, message),
-        Answer::Cancelled(progress) => (
-            StatusCode::CONFLICT,
-            Json(
-                json!({ "error": "the question was cancelled", "kind": "cancelled",
-                         "progress": progress }),
-            ),
-        )
-            .into_response(),
+        Answer::Cancelled(progress) => cancelled("the question", progress),
         Answer::Failed(message) => error(StatusCode::INTERNAL_SERVER_ERROR, message),
     }
 }

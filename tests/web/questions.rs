@@ -431,13 +431,7 @@ async fn the_cancel_button_stops_a_question_on_the_page() {
     );
     let p = crate::browser::http_get(addr, "/api/analysis/query/progress").await;
     assert_eq!(p["state"], "cancelled");
-    let hidden = b
-        .js(
-            "return document.getElementById('analysis-cancel').classList.contains('hidden');",
-            vec![],
-        )
-        .await;
-    assert_eq!(hidden, json!(true));
+    crate::browser::assert_cancel_hidden(&b).await;
     b.js(
         "document.querySelector('#analysis .query').scrollIntoView({block: 'start'});",
         vec![],
