@@ -157,6 +157,14 @@ async fn questions_need_a_finished_analysis_and_valid_times_and_predicates() {
     let (status, v) = ask(json!({ "transient": [-1.0] })).await;
     assert_eq!(status, StatusCode::BAD_REQUEST);
     assert_eq!(v["error"], "transient: -1 is not a time ≥ 0");
+    // A time no uniformisation could reach (Λ·t iterations) is refused before it starts.
+    let (status, v) = ask(json!({ "transient": [1.0, 1e300] })).await;
+    assert_eq!(status, StatusCode::BAD_REQUEST, "{v}");
+    let e = v["error"].as_str().unwrap();
+    assert!(
+        e.starts_with("transient: t = 1e300 needs about ") && e.contains("at most 1e11"),
+        "{e}"
+    );
     let (status, v) = ask(json!({ "prob": ["p4:Wait_L1 >"] })).await;
     assert_eq!(status, StatusCode::BAD_REQUEST);
     assert!(
