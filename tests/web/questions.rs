@@ -397,6 +397,51 @@ async fn a_long_question_shows_its_progress_is_cancelled_and_the_next_is_answere
     assert_eq!(p["state"], "done", "{p}");
 }
 
+/// Asks `LONG_T` on the page and waits for its progress in the element `progress`.
+async fn ask_long(b: &Browser, progress: &str) -> String {
+    b.js(
+        "document.getElementById('query-times').value = arguments[0];\
+         document.getElementById('query-prob').value = 'P1 > 0';\
+         document.getElementById('query').click();",
+        vec![json!(LONG_T.to_string())],
+    )
+    .await;
+    let shown = b
+        .wait_js(
+            &format!(
+                "const t = document.getElementById('{progress}').textContent;\
+                 return /^question running \\(transient t=1000000\\), [1-9][0-9,]* of \
+                 [0-9,]+ iterations, /.test(t) && t;"
+            ),
+            WAIT,
+            "the question's progress",
+        )
+        .await;
+    shown.as_str().unwrap().to_string()
+}
+
+/// Waits for the panel to say the question was cancelled (a finished question: the result
+/// is no longer stale and `ask` works again), as the server says; its text and the
+/// server's progress.
+async fn cancelled_on_page(b: &Browser, addr: std::net::SocketAddr) -> (String, Value) {
+    let shown = b
+        .wait_js(
+            "const e = document.querySelector('#query-result:not(.stale) [data-cancelled]');\
+             return e && !document.getElementById('query').disabled && e.textContent;",
+            WAIT,
+            "the cancel",
+        )
+        .await;
+    let shown = shown.as_str().unwrap().to_string();
+    assert!(
+        shown.starts_with("question cancelled (transient t=1000000) after "),
+        "{shown}"
+    );
+    let p = crate::browser::http_get(addr, "/api/analysis/query/progress").await;
+    assert_eq!(p["state"], "cancelled");
+    (shown, p)
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_cancel_button_stops_a_question_on_the_page() {
     let _one = BROWSER.lock().await;
@@ -405,48 +450,43 @@ async fn the_cancel_button_stops_a_question_on_the_page() {
     let b = Browser::start(1280, 900).await;
     open(&b, addr).await;
     analyse_on_page(&b).await;
-    b.js(
-        "document.getElementById('query-times').value = arguments[0];\
-         document.getElementById('query-prob').value = 'P1 > 0';\
-         document.getElementById('query').click();",
-        vec![json!(LONG_T.to_string())],
-    )
-    .await;
-    let progress = b
-        .wait_js(
-            "const t = document.getElementById('analysis-progress').textContent;\
-             return /^question running \\(transient t=1000000\\), [1-9][0-9,]* of [0-9,]+ iterations, /.test(t) && t;",
-            WAIT,
-            "the question's progress",
-        )
-        .await;
-    assert!(progress.as_str().unwrap().ends_with(" s"), "{progress}");
-    b.screenshot(&screenshot_path("analysis-question-progress.png"))
-        .await;
-    b.click("#analysis-cancel").await;
-    let shown = b
-        .wait_js(
-            "const e = document.querySelector('#query-result [data-cancelled]');\
-             return e && e.textContent;",
-            WAIT,
-            "the cancel",
-        )
-        .await;
-    let shown = shown.as_str().unwrap();
-    assert!(
-        shown.starts_with("question cancelled (transient t=1000000) after "),
-        "{shown}"
-    );
-    let p = crate::browser::http_get(addr, "/api/analysis/query/progress").await;
-    assert_eq!(p["state"], "cancelled");
-    crate::browser::assert_cancel_hidden(&b).await;
+    // The form's own cancel button, beside the progress shown there.
     b.js(
         "document.querySelector('#analysis .query').scrollIntoView({block: 'start'});",
         vec![],
     )
     .await;
+    let progress = ask_long(&b, "query-progress").await;
+    assert!(progress.ends_with(" s"), "{progress}");
+    b.screenshot(&screenshot_path("analysis-question-progress.png"))
+        .await;
+    b.click("#query-cancel").await;
+    let (shown, p) = cancelled_on_page(&b, addr).await;
+    assert!(
+        shown.ends_with(&format!(" of {} iterations", fmt_thousands(&p["of"]))),
+        "{shown} vs {p}"
+    );
+    crate::browser::assert_cancel_hidden(&b).await;
     b.screenshot(&screenshot_path("analysis-question-cancelled.png"))
         .await;
+
+    // The panel header's cancel button stops a question too.
+    ask_long(&b, "analysis-progress").await;
+    b.click("#analysis-cancel").await;
+    cancelled_on_page(&b, addr).await;
     b.close().await;
     server.abort();
+}
+
+/// `1234567` as the page writes it, `1,234,567`.
+fn fmt_thousands(v: &Value) -> String {
+    let digits = v.as_u64().unwrap().to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
 }

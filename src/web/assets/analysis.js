@@ -118,7 +118,10 @@ async function analyse() {
   for (const li of out.querySelectorAll('[data-dead]')) {
     li.addEventListener('click', () => replay(a.dead_markings[Number(li.dataset.dead)].path));
   }
-  if (a.steady) $('query').addEventListener('click', ask);
+  if (a.steady) {
+    $('query').addEventListener('click', ask);
+    $('query-cancel').addEventListener('click', cancelQuestion);
+  }
 }
 
 // The questions' form: times (comma-separated) and predicates (one per line).
@@ -128,23 +131,32 @@ function queryForm() {
     '<label>P( … ) <textarea id="query-prob" class="mono" rows="2" ' +
     'placeholder="one predicate per line, e.g. P1 > 0 &amp;&amp; P2 == 0"></textarea></label>' +
     '<button id="query" title="probabilities and expected tokens, as plan-runner analyze --prob --transient">ask</button>' +
+    '<button id="query-cancel" class="hidden" title="stop the question">cancel</button>' +
+    '<span id="query-progress" class="mono"></span>' +
     '</div><div id="query-result"></div>';
+}
+
+// Stops the running question (the header's cancel button does the same while one runs).
+function cancelQuestion() {
+  api('POST', '/api/analysis/query/cancel').then(showQuestionProgress).catch((e) => status(e.message));
 }
 
 let asking = false;
 
 // The question's progress line: its phase (the time point the transient solver works
 // towards), the point of the times asked, the solver's iterations done of planned.
+// Shown in the panel's header and beside the form's buttons.
 function showQuestionProgress(p) {
-  if (p.state === 'done' || p.state === 'idle') {
-    $('analysis-progress').textContent = '';
-    return;
+  let text = '';
+  if (p.state !== 'done' && p.state !== 'idle') {
+    const it = p.of ? ', ' + p.iterations.toLocaleString('en') + ' of ' +
+      p.of.toLocaleString('en') + ' iterations' : '';
+    const pt = p.points > 1 ? ', point ' + p.point + ' of ' + p.points : '';
+    text = 'question ' + p.state + ' (' + p.phase + pt + ')' + it + ', ' +
+      fmt(Math.round(p.seconds * 10) / 10) + ' s';
   }
-  const it = p.of ? ', ' + p.iterations.toLocaleString('en') + ' of ' + p.of.toLocaleString('en') +
-    ' iterations' : '';
-  const pt = p.points > 1 ? ', point ' + p.point + ' of ' + p.points : '';
-  $('analysis-progress').textContent = 'question ' + p.state + ' (' + p.phase + pt + ')' + it +
-    ', ' + fmt(Math.round(p.seconds * 10) / 10) + ' s';
+  $('analysis-progress').textContent = text;
+  if ($('query-progress')) $('query-progress').textContent = text;
 }
 
 // Asks the server the form's questions and shows a table: a row per predicate (steady state,
@@ -164,6 +176,8 @@ async function ask() {
   asking = true;
   out.classList.add('stale');
   $('analysis-cancel').classList.remove('hidden');
+  $('query-cancel').classList.remove('hidden');
+  $('query').disabled = true;
   let q;
   let polling = true;
   const poll = (async () => {
@@ -202,8 +216,10 @@ async function ask() {
     asking = false;
     out.classList.remove('stale');
     $('analysis-cancel').classList.add('hidden');
+    $('query-cancel').classList.add('hidden');
+    $('query').disabled = false;
     await poll;
-    $('analysis-progress').textContent = '';
+    showQuestionProgress({ state: 'done' });
   }
   const cell = (attrs, v) => '<td class="mono" ' + attrs + ' data-value="' + v + '">' + fmt(v) + '</td>';
   let html = '<table class="query"><tr><th></th>' + (prob.length ? '<th>steady</th>' : '') +

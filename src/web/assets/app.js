@@ -648,9 +648,8 @@ function setupControls() {
   $('save-layout').addEventListener('click', saveLayout);
   $('analyze').addEventListener('click', analyse);
   // The same button stops a running question (transient points) or the analysis.
-  $('analysis-cancel').addEventListener('click', () => (asking ?
-    api('POST', '/api/analysis/query/cancel').then(showQuestionProgress) :
-    api('POST', '/api/analysis/cancel').then(showProgress)).catch((e) => status(e.message)));
+  $('analysis-cancel').addEventListener('click', () => (asking ? cancelQuestion() :
+    api('POST', '/api/analysis/cancel').then(showProgress).catch((e) => status(e.message))));
 }
 
 // ---- keys, theme, resize -----------------------------------------------------------------
