@@ -786,6 +786,92 @@ async fn the_net_of_a_plan_is_edited_under_its_policy_and_an_edit_that_breaks_th
     );
 }
 
+/// `plan-runner serve`, killed when dropped.
+struct Served(std::process::Child);
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn serve_plan_save_to_writes_the_net_file_the_plan_names() {
+    use crate::security::{JSON, request};
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let net_file = dir.path().join("net.PNPRO");
+    std::fs::copy(common::fixture("gspnr/home_n01/net.PNPRO"), &net_file).unwrap();
+    let plan_path = dir.path().join("plan.toml");
+    std::fs::write(&plan_path, HOME_PLAN).unwrap();
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("plan-runner"))
+        .args(["serve", plan_path.to_str().unwrap()])
+        .args(["--addr", "127.0.0.1:0", "--save-to"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (out, err) = (child.stdout.take().unwrap(), child.stderr.take().unwrap());
+    let served = Served(child);
+    let mut warning = String::new();
+    BufReader::new(err).read_line(&mut warning).unwrap();
+    assert!(
+        warning.starts_with(&format!(
+            "warning: `save` replaces {} itself",
+            net_file.display()
+        )),
+        "{warning}"
+    );
+    let mut url = String::new();
+    BufReader::new(out).read_line(&mut url).unwrap();
+    let addr: std::net::SocketAddr = url
+        .trim()
+        .rsplit_once("http://")
+        .and_then(|(_, a)| a.trim_end_matches('/').parse().ok())
+        .unwrap_or_else(|| panic!("no address in {url:?}"));
+
+    let post = |path: &'static str, body: Value| async move {
+        let (status, _, v) = request(addr, "POST", path, &[JSON], &body.to_string()).await;
+        (status, v)
+    };
+    let (status, v) = post(
+        "/api/edit",
+        json!({"op": "set_transition", "transition": "FinishedMop_L2", "rate": 0.5}),
+    )
+    .await;
+    assert_eq!(status, 200, "{v}");
+    let (status, v) = post(
+        "/api/edit",
+        json!({"op": "delete", "node": {"transition": "Mop_L3"}}),
+    )
+    .await;
+    assert_eq!(status, 422, "{v}");
+    assert!(
+        v["error"]
+            .as_str()
+            .unwrap()
+            .contains("plan.toml:17:12: transition `Mop_L3` does not exist"),
+        "{v}"
+    );
+    let (status, _, page) = request(addr, "GET", "/api/analysis", &[], "").await;
+    assert_eq!(status, 200, "{page}");
+    let (status, v) = post("/api/edit/save", json!({})).await;
+    assert_eq!(status, 200, "{v}");
+    assert_eq!(v["saved"], net_file.display().to_string());
+    drop(served);
+    // The plan itself now reads the edited net: `analyze PLAN` gives the page's numbers.
+    let saved = read_net(&net_file, &ReadOptions::default()).unwrap().net;
+    assert_eq!(
+        timing(&saved, "FinishedMop_L2"),
+        Timing::Exponential {
+            rate: 0.5,
+            servers: Servers::Single
+        }
+    );
+    assert_same_plan_analysis(&page, &analyze_json(&plan_path));
+}
+
 // ---- in the browser ------------------------------------------------------------------------
 
 use crate::browser::{BROWSER, WAIT, analyse_on_page, http_get, open, screenshot_path};
