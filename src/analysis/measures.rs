@@ -128,6 +128,36 @@ pub struct TransientPoint {
     pub probabilities: Vec<f64>,
 }
 
+/// Most iterations of uniformisation (Λ·t, Λ the largest exit rate) a transient point may
+/// need: 10^11 products with the generator, hours even on the smallest chain, with Poisson
+/// weights over about 14·√(Λ·t) counts. A time past it is refused ([`Solver::too_far`])
+/// rather than left to run for days or, for t = 1e300, to fill the memory.
+pub const MAX_UNIFORMISATION: f64 = 1e11;
+
+/// A transient time past [`MAX_UNIFORMISATION`] ([`Solver::too_far`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TooFar {
+    /// The time.
+    pub t: f64,
+    /// The chain's uniformisation rate Λ (its largest exit rate).
+    pub lambda: f64,
+}
+
+impl std::fmt::Display for TooFar {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "t = {:e} needs about {:.3e} iterations of uniformisation (Λ·t, Λ = {}, the largest \
+             exit rate); at most {MAX_UNIFORMISATION:e}: ask a smaller time, or the steady state",
+            self.t,
+            self.lambda * self.t,
+            self.lambda
+        )
+    }
+}
+
+impl std::error::Error for TooFar {}
+
 /// The first of `times` that is not a time ≥ 0 (a transient point needs one).
 pub fn bad_time(times: &[f64]) -> Option<f64> {
     times
@@ -284,6 +314,16 @@ impl<'a> Solver<'a> {
     /// π(t) at each time, from the initial marking (uniformization, error ≤ `eps` each).
     pub fn transient(&self, times: &[f64], eps: f64) -> Vec<Vec<f64>> {
         self.chain().transient(self.space.initial(), times, eps)
+    }
+
+    /// The largest of `times` when uniformisation would need more than
+    /// [`MAX_UNIFORMISATION`] iterations to reach it (ask before [`Solver::transient`]:
+    /// past it the Poisson weights alone may not fit in memory).
+    pub fn too_far(&self, times: &[f64]) -> Option<TooFar> {
+        let t = times.iter().copied().max_by(f64::total_cmp)?;
+        let chain = self.chain();
+        let lambda = (0..chain.n).map(|s| chain.exit_rate(s)).fold(0.0, f64::max);
+        (lambda * t > MAX_UNIFORMISATION).then_some(TooFar { t, lambda })
     }
 
     /// The state at each of `times` from the initial marking: its measures and the

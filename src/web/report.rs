@@ -124,10 +124,6 @@ pub(crate) fn analyse(
     }
 }
 
-/// Most iterations of uniformisation (Λ·t) a question may ask for: 10^11 products with the
-/// generator, hours on the smallest chain.
-const MAX_UNIFORMISATION: f64 = 1e11;
-
 /// Why a question got no answer.
 #[derive(Debug)]
 pub(crate) enum QueryError {
@@ -160,23 +156,8 @@ pub(crate) fn query(
         })
         .collect::<Result<Vec<_>, _>>()?;
     let solver = Solver::new(net, &kept.space);
-    if let Some(&t) = times.iter().max_by(|a, b| a.total_cmp(b)) {
-        // Uniformisation takes about Λ·t products with the generator (Λ the largest exit
-        // rate) and Poisson weights over ~14·√(Λ·t) counts: past the limit the question
-        // could never finish, and its weights alone would not fit in memory.
-        let lambda = solver
-            .chain()
-            .exit_rates()
-            .into_iter()
-            .fold(0.0f64, f64::max);
-        if lambda * t > MAX_UNIFORMISATION {
-            return Err(QueryError::Bad(format!(
-                "transient: t = {t:e} needs about {:.3e} iterations of uniformisation (Λ·t, Λ = \
-                 {lambda}, the largest exit rate); at most {MAX_UNIFORMISATION:e}: ask a smaller \
-                 time, or the steady state",
-                lambda * t
-            )));
-        }
+    if let Some(e) = solver.too_far(times) {
+        return Err(QueryError::Bad(format!("transient: {e}")));
     }
     let transient: Vec<MeasuresReport> = solver
         .transient_points_monitored(times, &predicates, monitor)
