@@ -105,6 +105,61 @@ pub struct Plan {
     pub action_spans: Vec<Option<Span>>,
     /// Where each transition is defined in the net file ([`Loaded::transition_at`]).
     pub transition_at: Vec<Span>,
+    /// The plan file's text as it was read, to check the plan again against an edited net
+    /// ([`PlanText::check`]); `None` for a bare net ([`Plan::for_net`]).
+    pub text: Option<PlanText>,
+}
+
+/// A plan file's text as [`read_plan`] read it, kept to check the plan again against
+/// another version of its net (the viewer's editor does after every edit) with the reader's
+/// own checks ([`PlanFile::resolve`]): every place and transition its roles, policy, stop
+/// condition, rewards, map and ROS 2 places name must exist and be of the kind it needs.
+#[derive(Clone, Debug)]
+pub struct PlanText {
+    path: PathBuf,
+    text: std::sync::Arc<str>,
+}
+
+impl PlanText {
+    /// The plan checked against `net` exactly as [`read_plan`] checks it against the net
+    /// file it names, with its names resolved to `net`'s ids; or the reader's error, at the
+    /// plan's line and column, naming what is missing (`transition `t3` does not exist`).
+    ///
+    /// ```
+    /// use gspn::io::ReadOptions;
+    /// use gspn::net::{NetBuilder, Servers};
+    /// # let dir = tempfile::tempdir().unwrap();
+    /// # let plan = dir.path().join("plan.toml");
+    /// # std::fs::write(dir.path().join("n.PNPRO"), r#"<project name="n" version="121"><gspn name="n"><nodes>
+    /// #   <place marking="1" name="p" x="1" y="1"/><transition name="go" type="IMM" weight="1" x="3" y="1"/>
+    /// # </nodes><edges><arc head="go" kind="INPUT" tail="p"/></edges></gspn></project>"#).unwrap();
+    /// std::fs::write(&plan, "net = \"n.PNPRO\"\n[[policy]]\nmarking = { p = 1 }\nchoose = { go = 1.0 }\n")
+    ///     .unwrap();
+    /// let read = gspn::plan::read_plan(&plan, &ReadOptions::default()).unwrap();
+    /// let text = read.text.clone().unwrap();
+    /// assert!(!text.check(read.net.clone()).unwrap().policy.is_empty());
+    /// let mut b = NetBuilder::new("n");
+    /// let p = b.place("p", 1);
+    /// let stay = b.exponential("stay", 1.0, Servers::Single);
+    /// b.input(p, stay, 1);
+    /// let e = text.check(b.build().unwrap()).unwrap_err();
+    /// assert!(e.to_string().ends_with(":4:12: transition `go` does not exist"), "{e}");
+    /// ```
+    pub fn check(&self, net: Net) -> Result<Plan, LoadError> {
+        PlanFile::parse(&self.path, &self.text)?.resolve(&self.path, &self.text, net)
+    }
+
+    /// The plan file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Line `line` (from 1) of the plan, without its indentation: the entry an error of
+    /// [`PlanText::check`] points at.
+    pub fn line(&self, line: u32) -> Option<&str> {
+        let i = usize::try_from(line).ok()?.checked_sub(1)?;
+        self.text.lines().nth(i).map(str::trim)
+    }
 }
 
 impl Plan {
@@ -133,6 +188,7 @@ impl Plan {
             programs: Vec::new(),
             action_spans: vec![None; n],
             transition_at: loaded.transition_at,
+            text: None,
         }
     }
 
@@ -240,6 +296,10 @@ pub(crate) fn read_plan_with(
         None => read_plan_net(path, opts, &text, &file, &net_path, &net_opts)?,
     };
     let mut plan = file.resolve(path, &text, loaded.net)?;
+    plan.text = Some(PlanText {
+        path: path.to_path_buf(),
+        text: text.into(),
+    });
     plan.net_path = net_path;
     plan.transition_at = loaded.transition_at;
     plan.page = page;

@@ -21,11 +21,13 @@
 //! | `POST /api/analysis/start` | starts the analysis on a blocking thread (unless it is running or done); the progress |
 //! | `GET /api/analysis/progress` | `{state: idle\|running\|cancelling\|cancelled\|done, phase: "state space"\|"properties"\|"steady state", markings, seconds}`: markings found so far by the state-space search |
 //! | `POST /api/analysis/cancel` | stops a running analysis (the search within one block of ~1,000 markings, the steady-state solver at its next sweep, the properties before they start); the progress |
-//! | `POST /api/analysis/query {transient: [t], prob: [expr]}` | on the finished analysis's state space, as `plan-runner analyze --json --transient t,.. --prob expr ..`: `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens, throughput, probability}]}`; 409 before an analysis finished, 400 for a bad time or predicate |
+//! | `POST /api/analysis/query {transient: [t], prob: [expr]}` | on the finished analysis's state space, as `plan-runner analyze --json --transient t,.. --prob expr ..`: `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens, throughput, probability}]}`; 409 before an analysis finished, 400 for a bad time or predicate, 409 `{kind: "cancelled", progress}` when the question is cancelled (by `/api/analysis/query/cancel`, a newer question, an edit, or its request going away) |
+//! | `GET /api/analysis/query/progress` | the question's `{state: idle\|running\|cancelling\|cancelled\|done, phase: "transient t=…"\|"probabilities", point, points, iterations, of, seconds}`: the time point the transient solver works towards (of the times asked, earliest first) and its iterations (products with the generator) done of planned |
+//! | `POST /api/analysis/query/cancel` | stops a running question (the transient solver within one iteration); its progress |
 //! | `GET /api/mode` | `{"live": bool, "replay": bool}`: a running plan ([`LiveRun`]), a journal ([`crate::runtime::journal::read_journal`]), or the token game |
 //! | `POST /api/layout {places: [[x, y]], transitions: [[x, y]]}` | `{"pnpro": "..."}`: the net with these positions as a GreatSPN project ("save layout") |
-//! | `GET /api/edit` | `{editable, reason, save_to, history {version, edits, undo, redo}}`: whether the net may be edited (not a live run, a replay, or a plan with a policy or rewards), where "save" writes, the labels of the edits undo and redo would take back or do again |
-//! | `POST /api/edit {op, ...}` | one edit of the net ([`edit`](self#editing)): `{net, history, state}` — the new net as `/api/net` gives it (with its `version`, also in every token-game state as `net_version`), the history, the token game restarted on it; 422 `{error}` when refused (the net is unchanged) |
+//! | `GET /api/edit` | `{editable, reason, save_to, history {version, edits, undo, redo}}`: whether the net may be edited (not a live run, a replay, or a policy or rewards without their plan file), where "save" writes, the labels of the edits undo and redo would take back or do again |
+//! | `POST /api/edit {op, ...}` | one edit of the net ([`edit`](self#editing)): `{net, history, state}` — the new net as `/api/net` gives it (with its `version`, also in every token-game state as `net_version`), the history, the token game restarted on it; 422 `{error}` when refused (the net is unchanged), also when the plan served would no longer load with the edited net |
 //! | `POST /api/edit/undo`, `POST /api/edit/redo` | back to the version before the last edit, on to the one after; as `POST /api/edit`; 409 when there is nothing to undo or redo |
 //! | `POST /api/edit/export {format: "pnpro"\|"pipe", places, transitions}` | `{text, file}`: the current net (with the page's positions) as a GreatSPN project or a PIPE net, to download |
 //! | `POST /api/edit/save {places, transitions}` | writes the current net to the file of `serve --save-to PATH` ([`WebState::saving_to`]) in its format; `{saved, format, bytes}`; 409 without one |
@@ -44,7 +46,11 @@
 //! arcs between a place and a transition, ...): a refused edit answers its reason and
 //! leaves the net as it was. Every version is kept (undo and redo move between them). The
 //! token game and the analysis panel then use the edited net, and every open page redraws
-//! it. Saving writes GreatSPN's PNPRO or PIPE XML through the same writers as
+//! it. The net of a plan ([`WebState::with_plan`]) is checked against the plan after every
+//! edit, undo and redo by the plan reader's own checks: an edit that would leave the policy
+//! or a reward (a role, the stop condition, the map) naming a node that is gone, or no
+//! longer of the kind it needs, is refused with the reader's message and the plan's line;
+//! an accepted one is played and analysed under the plan's policy resolved against it. Saving writes GreatSPN's PNPRO or PIPE XML through the same writers as
 //! `plan-runner convert`, to the file named on the command line only.
 //!
 //! # Security
@@ -201,9 +207,11 @@ struct Inner {
     analysis: Mutex<Arc<analysis_job::AnalysisJob>>,
     /// The versions of the net the page edited, the current one last.
     editor: Mutex<edit::History>,
-    /// Why this net cannot be edited, when it cannot (a plan whose policy or rewards name
-    /// its nodes).
+    /// Why this net cannot be edited, when it cannot: a policy or rewards given without
+    /// their plan ([`WebState::with_plan`]), which could not be checked against an edit.
     not_editable: Option<String>,
+    /// The plan served, checked again after every edit ([`WebState::with_plan`]).
+    plan: OnceLock<crate::plan::PlanText>,
     /// Where the editor saves (`serve --save-to`).
     save_to: OnceLock<std::path::PathBuf>,
     live: OnceLock<LiveRun>,
@@ -247,8 +255,8 @@ impl WebState {
         let net = Arc::new(net);
         let policy = policy.filter(|p| !p.is_empty()).map(Arc::new);
         let not_editable = (policy.is_some() || !rewards.is_empty()).then(|| {
-            "the net of a plan with a policy or rewards cannot be edited here (they name its \
-             places and transitions): serve the net file to edit it"
+            "a policy or rewards given without their plan file cannot be checked against an \
+             edited net (gspn::web::WebState::with_plan)"
                 .to_string()
         });
         let session = Session::new(net.clone(), policy.clone(), seed);
@@ -266,6 +274,7 @@ impl WebState {
                 analysis: Mutex::new(analysis),
                 editor: Mutex::new(edit::History::new(Arc::clone(&net))),
                 not_editable,
+                plan: OnceLock::new(),
                 save_to: OnceLock::new(),
                 live: OnceLock::new(),
                 replay: OnceLock::new(),
@@ -321,6 +330,18 @@ impl WebState {
         self
     }
 
+    /// The net is the one of the plan `text` (whose policy and rewards this viewer was made
+    /// with, [`WebState::for_plan`]): the page may edit it, and every edit, undo and redo is
+    /// checked against the plan as the plan reader checks it ([`crate::plan::PlanText::check`]);
+    /// one that would leave the policy, a reward, a role, the stop condition or the map
+    /// naming a node that no longer exists (or is no longer of the kind it needs) is refused
+    /// with the reader's message. The token game and the analysis then play the edited net
+    /// under the plan's policy resolved against it.
+    pub fn with_plan(self, text: crate::plan::PlanText) -> WebState {
+        let _ = self.inner.plan.set(text);
+        self
+    }
+
     /// The editor's "save" writes the edited net to `path` (a GreatSPN project `.PNPRO` or
     /// a PIPE net `.xml`, by its extension), replacing it; without it the page downloads
     /// the net. A request never names the file.
@@ -365,15 +386,17 @@ impl WebState {
         self.inner.source.get().filter(|_| !self.editor().edited())
     }
 
-    /// Whether the page may edit the net: not a live run, a replay, or a plan whose policy
-    /// or rewards name its nodes.
+    /// Whether the page may edit the net: not a live run, a replay, or a policy or rewards
+    /// without their plan.
     fn editable(&self) -> Result<(), edit::EditError> {
         let why = if self.live().is_some() {
             Some("a live run's net cannot be edited")
         } else if self.inner.replay.get().is_some() {
             Some("a recorded run's net cannot be edited")
-        } else {
+        } else if self.inner.plan.get().is_none() {
             self.inner.not_editable.as_deref()
+        } else {
+            None
         };
         match why {
             Some(w) => Err(edit::EditError::NotEditable(w.to_string())),
@@ -381,17 +404,46 @@ impl WebState {
         }
     }
 
-    /// Changes the net's history with `f` (an edit, an undo, a redo) and, when it gives a
-    /// new current net, plays and analyses that one: the token game starts again from its
-    /// initial marking, a running analysis is cancelled, and the other pages are told.
+    /// The plan's policy and rewards resolved against `net` by the plan reader's checks
+    /// ([`crate::plan::PlanText::check`]); `None` without a plan; its error, with the
+    /// plan's line, when `net` does not fit the plan.
+    fn fit_plan(&self, net: &Net) -> Result<Option<PlanFit>, edit::EditError> {
+        let Some(text) = self.inner.plan.get() else {
+            return Ok(None);
+        };
+        match text.check(Net::clone(net)) {
+            Ok(plan) => Ok(Some(PlanFit {
+                policy: (!plan.policy.is_empty()).then(|| Arc::new(plan.policy)),
+                rewards: plan.rewards,
+            })),
+            Err(e) => Err(edit::EditError::BreaksPlan {
+                line: e.span.and_then(|s| text.line(s.line)).map(str::to_string),
+                error: e.to_string(),
+            }),
+        }
+    }
+
+    /// Changes the net's history with `f` (an edit, an undo, a redo; it is given the check
+    /// against the plan, [`WebState::fit_plan`]) and, when it gives a new current net, plays
+    /// and analyses that one (under the plan's policy resolved against it): the token game
+    /// starts again from its initial marking, a running analysis or question is cancelled,
+    /// and the other pages are told.
     fn change(
         &self,
-        f: impl FnOnce(&mut edit::History) -> Result<Arc<Net>, edit::EditError>,
+        f: impl FnOnce(
+            &mut edit::History,
+            &dyn Fn(&Net) -> Result<Option<PlanFit>, edit::EditError>,
+        ) -> Result<(Arc<Net>, Option<PlanFit>), edit::EditError>,
     ) -> Result<(), edit::EditError> {
         self.editable()?;
         let mut history = self.editor();
-        let net = f(&mut history)?;
-        self.session().replace_net(net.clone());
+        let (net, fit) = f(&mut history, &|n| self.fit_plan(n))?;
+        // Without a plan there is no policy or reward (else the net is not editable).
+        let (policy, plan) = match fit {
+            Some(PlanFit { policy, rewards }) => (policy.clone(), Some((policy, rewards))),
+            None => (None, None),
+        };
+        self.session().replace_net(net.clone(), policy);
         {
             let mut job = self
                 .inner
@@ -399,7 +451,8 @@ impl WebState {
                 .lock()
                 .unwrap_or_else(|poisoned| poisoned.into_inner());
             job.cancel();
-            *job = Arc::new(job.with_net(net));
+            job.cancel_question();
+            *job = Arc::new(job.with_net(net, plan));
         }
         drop(history);
         self.sim_changed();
@@ -473,6 +526,13 @@ impl WebState {
     }
 }
 
+/// A plan's policy (`None` when it has none) and rewards, resolved against an edited net.
+#[derive(Debug)]
+struct PlanFit {
+    policy: Option<Arc<Policy>>,
+    rewards: Vec<RewardSpec>,
+}
+
 /// The viewer's routes: the assets and the [JSON API](self#api), for a server whose address
 /// is not known here: the `Host` of a request must then be `localhost`, `127.0.0.1` or
 /// `[::1]` (any port). [`serve`] uses [`router_on`] with the listener's address instead.
@@ -507,6 +567,8 @@ fn routes(state: WebState, bound: guard::Bound) -> Router {
         .route("/api/analysis/progress", get(api::analysis_progress))
         .route("/api/analysis/cancel", post(api::analysis_cancel))
         .route("/api/analysis/query", post(api::analysis_query))
+        .route("/api/analysis/query/progress", get(api::query_progress))
+        .route("/api/analysis/query/cancel", post(api::query_cancel))
         .route("/api/mode", get(mode))
         .route("/api/layout", post(api::save_layout))
         .route(

@@ -33,7 +33,7 @@
 use std::sync::OnceLock;
 
 use crate::analysis::ctmc::{Columns, Ctmc, Limiting, Method, SolveError, SteadyOptions};
-use crate::analysis::state_space::StateSpace;
+use crate::analysis::state_space::{Monitor, StateSpace};
 use crate::net::Net;
 use crate::net::predicate::Predicate;
 
@@ -127,6 +127,36 @@ pub struct TransientPoint {
     /// P(predicate) at `t`, in the order asked.
     pub probabilities: Vec<f64>,
 }
+
+/// Most iterations of uniformisation (Λ·t, Λ the largest exit rate) a transient point may
+/// need: 10^11 products with the generator, hours even on the smallest chain, with Poisson
+/// weights over about 14·√(Λ·t) counts. A time past it is refused ([`Solver::too_far`])
+/// rather than left to run for days or, for t = 1e300, to fill the memory.
+pub const MAX_UNIFORMISATION: f64 = 1e11;
+
+/// A transient time past [`MAX_UNIFORMISATION`] ([`Solver::too_far`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TooFar {
+    /// The time.
+    pub t: f64,
+    /// The chain's uniformisation rate Λ (its largest exit rate).
+    pub lambda: f64,
+}
+
+impl std::fmt::Display for TooFar {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "t = {:e} needs about {:.3e} iterations of uniformisation (Λ·t, Λ = {}, the largest \
+             exit rate); at most {MAX_UNIFORMISATION:e}: ask a smaller time, or the steady state",
+            self.t,
+            self.lambda * self.t,
+            self.lambda
+        )
+    }
+}
+
+impl std::error::Error for TooFar {}
 
 /// The first of `times` that is not a time ≥ 0 (a transient point needs one).
 pub fn bad_time(times: &[f64]) -> Option<f64> {
@@ -286,12 +316,48 @@ impl<'a> Solver<'a> {
         self.chain().transient(self.space.initial(), times, eps)
     }
 
+    /// The largest of `times` when uniformisation would need more than
+    /// [`MAX_UNIFORMISATION`] iterations to reach it (ask before [`Solver::transient`]:
+    /// past it the Poisson weights alone may not fit in memory).
+    pub fn too_far(&self, times: &[f64]) -> Option<TooFar> {
+        let t = times.iter().copied().max_by(f64::total_cmp)?;
+        let chain = self.chain();
+        let lambda = (0..chain.n).map(|s| chain.exit_rate(s)).fold(0.0, f64::max);
+        (lambda * t > MAX_UNIFORMISATION).then_some(TooFar { t, lambda })
+    }
+
     /// The state at each of `times` from the initial marking: its measures and the
     /// probability of each predicate (error ≤ [`TRANSIENT_EPS`] each) — what `plan-runner
     /// analyze --transient T --prob EXPR` reports and the viewer's panel shows.
     pub fn transient_points(&self, times: &[f64], predicates: &[Predicate]) -> Vec<TransientPoint> {
-        self.transient(times, TRANSIENT_EPS)
-            .into_iter()
+        self.points(self.transient(times, TRANSIENT_EPS), times, predicates)
+    }
+
+    /// [`Solver::transient_points`] watched by `monitor` from another thread (the viewer's
+    /// questions): its progress and cancel as [`Ctmc::transient_monitored`]'s; stops with
+    /// [`SolveError::Cancelled`] within one iteration of [`Monitor::cancel`].
+    pub fn transient_points_monitored(
+        &self,
+        times: &[f64],
+        predicates: &[Predicate],
+        monitor: &Monitor,
+    ) -> Result<Vec<TransientPoint>, SolveError> {
+        let at = self.chain().transient_monitored(
+            self.space.initial(),
+            times,
+            TRANSIENT_EPS,
+            monitor,
+        )?;
+        Ok(self.points(at, times, predicates))
+    }
+
+    fn points(
+        &self,
+        at: Vec<Vec<f64>>,
+        times: &[f64],
+        predicates: &[Predicate],
+    ) -> Vec<TransientPoint> {
+        at.into_iter()
             .zip(times)
             .map(|(pi, &t)| TransientPoint {
                 t,

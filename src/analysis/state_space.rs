@@ -136,11 +136,15 @@ pub enum AnalysisError {
     },
 }
 
-/// Watches a [`StateSpace::build_monitored`] from another thread: how many markings the
-/// search has found so far, and a flag that makes it give up ([`AnalysisError::Cancelled`]).
+/// Watches a long computation from another thread — a [`StateSpace::build_monitored`] or a
+/// transient solution ([`Ctmc::transient_monitored`](crate::analysis::ctmc::Ctmc::transient_monitored))
+/// — and stops it: how many markings the search has found so far, how far the transient
+/// solver is (the time point it works towards, its iterations done of planned), and a flag
+/// that makes either give up ([`AnalysisError::Cancelled`], [`SolveError::Cancelled`](crate::analysis::ctmc::SolveError::Cancelled)).
 ///
 /// The search reads the flag and publishes its count once per block of about a thousand
-/// markings, so a cancel takes effect within milliseconds and costs nothing measurable.
+/// markings, the transient solver once per iteration (one product with the generator), so a
+/// cancel takes effect within milliseconds and costs nothing measurable.
 ///
 /// ```
 /// use gspn::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
@@ -160,6 +164,12 @@ pub enum AnalysisError {
 pub struct Monitor {
     markings: AtomicUsize,
     cancelled: Arc<AtomicBool>,
+    /// The transient solver's time point (index in increasing time order).
+    point: AtomicUsize,
+    /// Its iterations done, over all time points.
+    iterations: AtomicUsize,
+    /// Its iterations planned, over all time points.
+    iterations_planned: AtomicUsize,
 }
 
 impl Monitor {
@@ -192,6 +202,29 @@ impl Monitor {
 
     fn set_markings(&self, n: usize) {
         self.markings.store(n, Ordering::Relaxed);
+    }
+
+    /// The transient solver's progress: the time point it works towards (0 for the
+    /// earliest of the times asked), and its iterations (products with the generator) done
+    /// and planned over all the time points.
+    pub fn transient_progress(&self) -> (usize, usize, usize) {
+        (
+            self.point.load(Ordering::Relaxed),
+            self.iterations.load(Ordering::Relaxed),
+            self.iterations_planned.load(Ordering::Relaxed),
+        )
+    }
+
+    pub(crate) fn set_transient_plan(&self, iterations: usize) {
+        self.iterations_planned.store(iterations, Ordering::Relaxed);
+    }
+
+    pub(crate) fn set_transient_point(&self, point: usize) {
+        self.point.store(point, Ordering::Relaxed);
+    }
+
+    pub(crate) fn set_transient_iterations(&self, done: usize) {
+        self.iterations.store(done, Ordering::Relaxed);
     }
 }
 

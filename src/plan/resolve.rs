@@ -208,6 +208,7 @@ impl PlanFile {
             programs: programs.list,
             action_spans,
             transition_at: Vec::new(),
+            text: None,
         })
     }
 }

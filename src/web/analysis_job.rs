@@ -5,6 +5,12 @@
 //! States: `idle` → `running` → `done` (the result is kept) or, after a cancel,
 //! `cancelling` → `cancelled` (start it again to retry). A result that is an error of the net
 //! (unbounded, too many states) is `done` too: the panel shows it.
+//!
+//! A question on the finished analysis (transient points, predicates: [`AnalysisJob::ask`])
+//! is a phase of its own, one at a time, with the same states: its progress is the time
+//! point the transient solver works towards and its iterations done of planned (the same
+//! [`Monitor`]), and a cancel stops the solver within one iteration. A new question cancels
+//! a running one; so does the page that asked it going away.
 
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -17,7 +23,7 @@ use crate::analysis::decision::RewardSpec;
 use crate::analysis::state_space::Monitor;
 use crate::net::Net;
 use crate::policy::Policy;
-use crate::web::report::Kept;
+use crate::web::report::{Kept, QueryError};
 
 /// What the analysis is doing, for the progress line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -103,6 +109,56 @@ pub(crate) struct AnalysisJob {
     state: Mutex<State>,
     /// Bumped whenever the job ends (done or cancelled).
     ended: watch::Sender<u64>,
+    /// The last question asked of the finished analysis.
+    question: Mutex<Question>,
+}
+
+/// A question on the finished analysis: under way, or how it ended.
+#[derive(Debug)]
+enum Question {
+    Idle,
+    Running {
+        monitor: Arc<Monitor>,
+        /// The transient times asked, in the order the solver reaches them.
+        times: Vec<f64>,
+        started: Instant,
+    },
+    Done {
+        seconds: f64,
+    },
+    Cancelled {
+        progress: Value,
+    },
+}
+
+/// How a question ended.
+pub(crate) enum Answer {
+    /// `{steady_state: {probability}, transient}` ([`crate::web::report::query`]).
+    Done(Value),
+    /// A bad time or predicate: the message names it.
+    Refused(String),
+    /// Cancelled before it finished: the progress as it stopped.
+    Cancelled(Value),
+    /// Its thread failed (a bug).
+    Failed(String),
+}
+
+/// Cancels the question it watches when dropped before [`Self::finish`]: a request that
+/// goes away (the page reloaded) stops its question.
+struct CancelOnDrop(Option<Arc<Monitor>>);
+
+impl CancelOnDrop {
+    fn finish(mut self) {
+        self.0 = None;
+    }
+}
+
+impl Drop for CancelOnDrop {
+    fn drop(&mut self) {
+        if let Some(m) = &self.0 {
+            m.cancel();
+        }
+    }
 }
 
 /// How a wait for the result ended.
@@ -127,18 +183,25 @@ impl AnalysisJob {
             max_states,
             state: Mutex::new(State::Idle),
             ended: watch::channel(0).0,
+            question: Mutex::new(Question::Idle),
         }
     }
 
-    /// A job for `net` (an edited version of this job's net) with this job's policy,
-    /// rewards and limit; not started.
-    pub(crate) fn with_net(&self, net: Arc<Net>) -> AnalysisJob {
-        AnalysisJob::new(
-            net,
-            self.policy.clone(),
-            self.rewards.clone(),
-            self.max_states,
-        )
+    /// A job for `net` (an edited version of this job's net) with this job's limit, and
+    /// `plan`'s policy (none: the bare net) and rewards resolved against it — or this job's
+    /// without `plan`; not started.
+    pub(crate) fn with_net(
+        &self,
+        net: Arc<Net>,
+        plan: Option<(Option<Arc<Policy>>, Vec<RewardSpec>)>,
+    ) -> AnalysisJob {
+        let (policy, rewards) = match plan {
+            Some((policy, rewards)) => {
+                (policy.unwrap_or_else(|| Arc::new(Policy::empty())), rewards)
+            }
+            None => (self.policy.clone(), self.rewards.clone()),
+        };
+        AnalysisJob::new(net, policy, rewards, self.max_states)
     }
 
     fn lock(&self) -> MutexGuard<'_, State> {
@@ -235,6 +298,88 @@ impl AnalysisJob {
         }
     }
 
+    fn question(&self) -> MutexGuard<'_, Question> {
+        self.question
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Asks the finished analysis `kept` (of `net`, from [`AnalysisJob::kept`]) for the
+    /// transient points at `times` and the probabilities of `prob` on a blocking thread, and
+    /// waits for the answer; a running question is cancelled first. Call inside a tokio
+    /// runtime.
+    pub(crate) async fn ask(
+        &self,
+        net: Arc<Net>,
+        kept: Arc<Kept>,
+        times: Vec<f64>,
+        prob: Vec<String>,
+    ) -> Answer {
+        let monitor = Arc::new(Monitor::new());
+        let mut sorted = times.clone();
+        sorted.sort_by(f64::total_cmp);
+        let started = Instant::now();
+        {
+            let mut q = self.question();
+            if let Question::Running { monitor: old, .. } = &*q {
+                old.cancel();
+            }
+            *q = Question::Running {
+                monitor: monitor.clone(),
+                times: sorted.clone(),
+                started,
+            };
+        }
+        let guard = CancelOnDrop(Some(monitor.clone()));
+        let m = monitor.clone();
+        let answer = tokio::task::spawn_blocking(move || {
+            crate::web::report::query(&net, &kept, &times, &prob, &m)
+        })
+        .await;
+        guard.finish();
+        let answer = match answer {
+            Ok(Ok(v)) => Answer::Done(v),
+            Ok(Err(QueryError::Bad(message))) => Answer::Refused(message),
+            Ok(Err(QueryError::Cancelled)) => {
+                let mut progress = running_json(&monitor, &sorted, started);
+                progress["state"] = json!("cancelled");
+                Answer::Cancelled(progress)
+            }
+            Err(e) => Answer::Failed(format!("the question failed: {e}")),
+        };
+        let mut q = self.question();
+        // A newer question has replaced this one's progress: leave it.
+        if matches!(&*q, Question::Running { monitor: m, .. } if Arc::ptr_eq(m, &monitor)) {
+            *q = match &answer {
+                Answer::Cancelled(progress) => Question::Cancelled {
+                    progress: progress.clone(),
+                },
+                _ => Question::Done {
+                    seconds: started.elapsed().as_secs_f64(),
+                },
+            };
+        }
+        answer
+    }
+
+    /// Asks a running question to stop; its progress (`cancelling` until its thread has
+    /// stopped, then `cancelled`).
+    pub(crate) fn cancel_question(&self) -> Value {
+        let q = self.question();
+        if let Question::Running { monitor, .. } = &*q {
+            monitor.cancel();
+        }
+        question_json(&q)
+    }
+
+    /// The question's progress: `state` (`idle`, `running`, `cancelling`, `cancelled`,
+    /// `done`) and, while it runs or as it stopped, `phase` (`transient t=…` or
+    /// `probabilities`), `point` of `points` (the time points, 1 for the earliest),
+    /// `iterations` done `of` planned, `seconds`.
+    pub(crate) fn question_progress(&self) -> Value {
+        question_json(&self.question())
+    }
+
     /// Starts the analysis if needed and waits for it to end.
     pub(crate) async fn result(self: &Arc<Self>) -> Outcome {
         let mut ended = self.ended.subscribe();
@@ -255,6 +400,38 @@ impl AnalysisJob {
             }
         }
     }
+}
+
+/// The progress of question `q`.
+fn question_json(q: &Question) -> Value {
+    match q {
+        Question::Idle => json!({ "state": "idle" }),
+        Question::Done { seconds } => json!({ "state": "done", "seconds": seconds }),
+        Question::Cancelled { progress } => progress.clone(),
+        Question::Running {
+            monitor,
+            times,
+            started,
+        } => running_json(monitor, times, *started),
+    }
+}
+
+/// The progress of a question watched by `monitor`, on the transient `times` (sorted).
+fn running_json(monitor: &Monitor, times: &[f64], started: Instant) -> Value {
+    let (point, iterations, planned) = monitor.transient_progress();
+    let phase = match times.get(point) {
+        Some(t) => format!("transient t={t}"),
+        None => "probabilities".to_string(),
+    };
+    json!({
+        "state": if monitor.is_cancelled() { "cancelling" } else { "running" },
+        "phase": phase,
+        "point": (point + 1).min(times.len()),
+        "points": times.len(),
+        "iterations": iterations,
+        "of": planned,
+        "seconds": started.elapsed().as_secs_f64(),
+    })
 }
 
 /// The progress of `s`; `max_states` is the limit an idle job would run with.

@@ -9,7 +9,7 @@ use serde_json::{Value, json};
 
 use crate::net::{ArcKind, Net, Servers, Timing};
 use crate::web::WebState;
-use crate::web::analysis_job::Outcome;
+use crate::web::analysis_job::{Answer, Outcome};
 use crate::web::greatspn::Source;
 use crate::web::layout::layout;
 use crate::web::session::SessionError;
@@ -226,15 +226,20 @@ pub(crate) async fn analysis(State(state): State<WebState>) -> Response {
             };
             (status, Json(Value::clone(&value))).into_response()
         }
-        Outcome::Cancelled(progress) => (
-            StatusCode::CONFLICT,
-            Json(
-                json!({ "error": "the analysis was cancelled", "kind": "cancelled",
-                         "progress": progress }),
-            ),
-        )
-            .into_response(),
+        Outcome::Cancelled(progress) => cancelled("the analysis", progress),
     }
+}
+
+/// 409 `{error: "WHAT was cancelled", kind: "cancelled", progress}`.
+fn cancelled(what: &str, progress: Value) -> Response {
+    (
+        StatusCode::CONFLICT,
+        Json(
+            json!({ "error": format!("{what} was cancelled"), "kind": "cancelled",
+                     "progress": progress }),
+        ),
+    )
+        .into_response()
 }
 
 /// Body of `POST /api/analysis/start`.
@@ -275,12 +280,15 @@ pub(crate) struct QueryBody {
 /// state space, `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens,
 /// throughput, probability}]}` as `plan-runner analyze --json --transient … --prob …` gives
 /// them. 409 before an analysis has finished, 422 when it found no steady state to ask about,
-/// 400 for a bad time or predicate (the message names it).
+/// 400 for a bad time or predicate (the message names it), 409 `{error, kind: "cancelled",
+/// progress}` when the question was cancelled (`/api/analysis/query/cancel`, a newer
+/// question, an edit of the net). Its progress is at `/api/analysis/query/progress`.
 pub(crate) async fn analysis_query(
     State(state): State<WebState>,
     Json(b): Json<QueryBody>,
 ) -> Response {
-    let (net, kept) = match state.analysis().kept() {
+    let job = state.analysis();
+    let (net, kept) = match job.kept() {
         None => {
             return error(
                 StatusCode::CONFLICT,
@@ -295,15 +303,24 @@ pub(crate) async fn analysis_query(
         }
         Some(Some(k)) => k,
     };
-    let answer = tokio::task::spawn_blocking(move || {
-        crate::web::report::query(&net, &kept, &b.transient, &b.prob)
-    })
-    .await;
-    match answer {
-        Ok(Ok(v)) => Json(v).into_response(),
-        Ok(Err(message)) => error(StatusCode::BAD_REQUEST, message),
-        Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
+    match job.ask(net, kept, b.transient, b.prob).await {
+        Answer::Done(v) => Json(v).into_response(),
+        Answer::Refused(message) => error(StatusCode::BAD_REQUEST, message),
+        Answer::Cancelled(progress) => cancelled("the question", progress),
+        Answer::Failed(message) => error(StatusCode::INTERNAL_SERVER_ERROR, message),
     }
+}
+
+/// `GET /api/analysis/query/progress`: the question's `{state, phase, point, points,
+/// iterations, of, seconds}`.
+pub(crate) async fn query_progress(State(state): State<WebState>) -> Json<Value> {
+    Json(state.analysis().question_progress())
+}
+
+/// `POST /api/analysis/query/cancel`: stops a running question (the transient solver within
+/// one iteration); its progress.
+pub(crate) async fn query_cancel(State(state): State<WebState>) -> Json<Value> {
+    Json(state.analysis().cancel_question())
 }
 
 /// `GET /api/analysis/progress`: `{state, phase, markings, seconds}`.

@@ -11,7 +11,7 @@ use crate::analysis::invariants::{p_invariants, t_invariants};
 use crate::analysis::measures::{Solver, SolverOptions, bad_time};
 use crate::analysis::properties::Properties;
 use crate::analysis::report::{MeasuresReport, Panel};
-use crate::analysis::state_space::{AnalysisError, Options, StateSpace};
+use crate::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
 use crate::analysis::under_policy::{self, Regime};
 use crate::net::Net;
 use crate::net::predicate::Predicate;
@@ -124,34 +124,51 @@ pub(crate) fn analyse(
     }
 }
 
+/// Why a question got no answer.
+#[derive(Debug)]
+pub(crate) enum QueryError {
+    /// A bad time or predicate: the message names it.
+    Bad(String),
+    /// Its monitor was cancelled.
+    Cancelled,
+}
+
 /// The panel's questions on a finished analysis (`POST /api/analysis/query`): the
 /// predicates' steady-state probabilities and the state at each of `times`, computed as
 /// `plan-runner analyze --prob EXPR --transient T --json` computes them
-/// ([`Solver::probabilities`], [`Solver::transient_points`]) and in its JSON form
-/// (`steady_state.probability`, `transient`). A bad time or predicate is the error text.
+/// ([`Solver::probabilities`], [`Solver::transient_points_monitored`]) and in its JSON form
+/// (`steady_state.probability`, `transient`), watched by `monitor` (progress, cancel).
 pub(crate) fn query(
     net: &Net,
     kept: &Kept,
     times: &[f64],
     exprs: &[String],
-) -> Result<Value, String> {
+    monitor: &Monitor,
+) -> Result<Value, QueryError> {
     if let Some(t) = bad_time(times) {
-        return Err(format!("transient: {t} is not a time ≥ 0"));
+        return Err(QueryError::Bad(format!("transient: {t} is not a time ≥ 0")));
     }
     let predicates = exprs
         .iter()
         .map(|p| {
             Predicate::parse(net, p)
-                .map_err(|e| format!("prob `{}`: {e}", crate::io::excerpt(p, 80)))
+                .map_err(|e| QueryError::Bad(format!("prob `{}`: {e}", crate::io::excerpt(p, 80))))
         })
         .collect::<Result<Vec<_>, _>>()?;
     let solver = Solver::new(net, &kept.space);
-    let steady = solver.probabilities(&kept.steady, &predicates);
+    if let Some(e) = solver.too_far(times) {
+        return Err(QueryError::Bad(format!("transient: {e}")));
+    }
     let transient: Vec<MeasuresReport> = solver
-        .transient_points(times, &predicates)
+        .transient_points_monitored(times, &predicates, monitor)
+        .map_err(|e| match e {
+            SolveError::Cancelled { .. } => QueryError::Cancelled,
+            e => QueryError::Bad(e.to_string()),
+        })?
         .iter()
         .map(|p| MeasuresReport::point(net, p, exprs))
         .collect();
+    let steady = solver.probabilities(&kept.steady, &predicates);
     let probability: serde_json::Map<String, Value> = exprs
         .iter()
         .zip(steady)

@@ -105,10 +105,11 @@ impl Session {
         );
     }
 
-    /// Plays `net` from now on (an edited version of the net): back to its initial marking
-    /// at time 0, with the same seed.
-    pub(crate) fn replace_net(&mut self, net: Arc<Net>) {
+    /// Plays `net` from now on (an edited version of the net) under `policy` (the plan's,
+    /// resolved against it): back to its initial marking at time 0, with the same seed.
+    pub(crate) fn replace_net(&mut self, net: Arc<Net>, policy: Option<Arc<Policy>>) {
         self.net = net;
+        self.policy = policy;
         self.reset(None);
     }
 

@@ -130,6 +130,17 @@ fn bad_input_exits_2() {
     assert!(err.contains("Nope"), "{err}");
     let (code, _, _) = analyze(&[f.to_str().unwrap(), "--transient", "-1"]);
     assert_eq!(code, 2);
+    // A time uniformisation could never reach (Λ = 3: Λ·t iterations), refused before its
+    // Poisson weights are allocated.
+    let (code, _, err) = analyze(&[f.to_str().unwrap(), "--transient", "0.5,1e300"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains(
+            "--transient: t = 1e300 needs about 3.000e300 iterations of uniformisation (Λ·t, \
+             Λ = 3, the largest exit rate); at most 1e11"
+        ),
+        "{err}"
+    );
     let (code, _, _) = analyze(&["/nonexistent/net.xml"]);
     assert_eq!(code, 2);
 }

@@ -31,6 +31,7 @@ pub(crate) fn patrol_plan() -> Plan {
 
 /// The viewer of `plan` as `plan-runner serve PLAN` builds it.
 pub(crate) fn plan_state(plan: Plan) -> WebState {
+    let text = plan.text.clone().expect("read from its file");
     WebState::for_plan(
         plan.net,
         Some(plan.policy),
@@ -38,6 +39,7 @@ pub(crate) fn plan_state(plan: Plan) -> WebState {
         0,
         DEFAULT_MAX_STATES,
     )
+    .with_plan(text)
 }
 
 /// `plan-runner analyze FILE --json`.

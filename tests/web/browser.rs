@@ -66,6 +66,17 @@ pub(crate) async fn http_get(addr: SocketAddr, path: &str) -> Value {
     serde_json::from_str(&body).unwrap()
 }
 
+/// The analysis panel's cancel button is hidden (nothing runs).
+pub(crate) async fn assert_cancel_hidden(b: &Browser) {
+    let hidden = b
+        .js(
+            "return document.getElementById('analysis-cancel').classList.contains('hidden');",
+            vec![],
+        )
+        .await;
+    assert_eq!(hidden, json!(true));
+}
+
 /// Clicks `analyse` and waits for the panel's result.
 pub(crate) async fn analyse_on_page(b: &Browser) {
     b.click("#analyze").await;
@@ -702,13 +713,7 @@ async fn a_long_analysis_shows_its_progress_on_the_page_and_can_be_cancelled() {
         shown.starts_with(&format!("cancelled after {} markings", p["markings"])),
         "{shown} vs {p}"
     );
-    let hidden = b
-        .js(
-            "return document.getElementById('analysis-cancel').classList.contains('hidden');",
-            vec![],
-        )
-        .await;
-    assert_eq!(hidden, json!(true));
+    assert_cancel_hidden(&b).await;
     b.close().await;
     server.abort();
 }

@@ -570,7 +570,8 @@ async fn nets_that_cannot_be_edited_or_saved_say_so() {
         "net.dot: the editor saves GreatSPN projects (.PNPRO) and PIPE nets (.xml)"
     );
 
-    // A plan whose policy names the net's transitions; a recorded run.
+    // A policy given without its plan file (it cannot be checked against an edit); a
+    // recorded run.
     let plan = gspn::plan::open(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("plans/temperature_patrol.toml"),
         &ReadOptions::default(),
@@ -581,7 +582,10 @@ async fn nets_that_cannot_be_edited_or_saved_say_so() {
         WebState::for_plan(plan.net.clone(), Some(plan.policy), plan.rewards, 0, 1000),
         WebState::for_replay(plan.net, Vec::new()),
     ];
-    for (state, why) in states.iter().zip(["policy or rewards", "recorded run"]) {
+    for (state, why) in states.iter().zip([
+        "policy or rewards given without their plan file",
+        "recorded run",
+    ]) {
         let (_, s) = call(state, "GET", "/api/edit", None).await;
         assert_eq!(s["editable"], false);
         let (status, v) = edit(
@@ -606,6 +610,266 @@ async fn nets_that_cannot_be_edited_or_saved_say_so() {
         err.contains("out.dot: the editor saves GreatSPN projects"),
         "{err}"
     );
+}
+
+/// A plan over the GSPNR home model (one robot, `gspnr/home_n01`) whose policy chooses in
+/// each room and whose rewards name places and a decision transition.
+const HOME_PLAN: &str = r#"net = "net.PNPRO"
+seed = 3
+
+[[policy]]
+marking = { L1 = 1 }
+partial = true
+choose = { Mop_L1 = 0.7, Vacuum_L1 = 0.1, Go_L1_L2 = 0.2 }
+
+[[policy]]
+marking = { L2 = 1 }
+partial = true
+choose = { Mop_L2 = 0.5, Vacuum_L2 = 0.2, Go_L2_L1 = 0.1, Go_L2_L3 = 0.2 }
+
+[[policy]]
+marking = { L3 = 1 }
+partial = true
+choose = { Mop_L3 = 0.3, Vacuum_L3 = 0.3, Go_L3_L2 = 0.4 }
+
+[rewards.cleaning]
+marked = { Mopping_L1 = 1.0, Mopping_L2 = 1.0, Mopping_L3 = 1.0, Vacuuming_L1 = 0.5, Vacuuming_L2 = 0.5, Vacuuming_L3 = 0.5 }
+transitions = { Mop_L2 = 2.0 }
+"#;
+
+/// The panel's numbers equal `analyze PLAN`'s under the plan's policy, its reward too.
+fn assert_same_plan_analysis(page: &Value, cli: &Value) {
+    assert_eq!(page["analysed"], "net under plan policy", "{page}");
+    assert_eq!(cli["analysed"], "net under plan policy");
+    assert_same_analysis(page, cli);
+    let (a, b) = (
+        page["steady"]["rewards"]["cleaning"]["rate"]
+            .as_f64()
+            .unwrap(),
+        cli["steady_state"]["rewards"]["cleaning"]["rate"]
+            .as_f64()
+            .unwrap(),
+    );
+    assert!((a - b).abs() < 1e-9, "reward: page {a}, analyze {b}");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_net_of_a_plan_is_edited_under_its_policy_and_an_edit_that_breaks_the_plan_is_refused()
+{
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        common::fixture("gspnr/home_n01/net.PNPRO"),
+        dir.path().join("net.PNPRO"),
+    )
+    .unwrap();
+    let plan_path = dir.path().join("plan.toml");
+    std::fs::write(&plan_path, HOME_PLAN).unwrap();
+    let plan = gspn::plan::read_plan(&plan_path, &ReadOptions::default()).unwrap();
+    let saved = dir.path().join("edited.PNPRO");
+    let state = WebState::for_plan(
+        plan.net.clone(),
+        Some(plan.policy.clone()),
+        plan.rewards.clone(),
+        0,
+        gspn::web::DEFAULT_MAX_STATES,
+    )
+    .with_source(&plan.net_path)
+    .with_plan(plan.text.clone().unwrap())
+    .saving_to(saved.clone())
+    .unwrap();
+    let (_, s) = call(&state, "GET", "/api/edit", None).await;
+    assert_eq!(
+        (s["editable"].clone(), s["reason"].clone()),
+        (json!(true), Value::Null)
+    );
+    let cli_before = analyze_json(&plan_path);
+    let (status, before) = call(&state, "GET", "/api/analysis", None).await;
+    assert_eq!(status, StatusCode::OK, "{before}");
+    assert_same_plan_analysis(&before, &cli_before);
+
+    // An edit that keeps the policy and the rewards valid: mopping L2 ends 5 times faster.
+    edit_ok(
+        &state,
+        json!({"op": "set_transition", "transition": "FinishedMop_L2", "rate": 0.5}),
+    )
+    .await;
+    // The token game plays the edited net under the plan's policy: in L1 it chooses as the
+    // first rule says.
+    let (_, s) = call(&state, "GET", "/api/sim/state", None).await;
+    assert_eq!(s["vanishing"], true, "{s}");
+    assert_eq!(
+        s["choice"]["probabilities"],
+        json!({"Mop_L1": 0.7, "Vacuum_L1": 0.1, "Go_L1_L2": 0.2}),
+        "{s}"
+    );
+
+    // Edits that would break the plan are refused with the plan reader's message: the
+    // plan's line and column, the node, and that line of the plan.
+    let refused = [
+        (
+            json!({"op": "delete", "node": {"transition": "Mop_L3"}}),
+            "plan.toml:17:12: transition `Mop_L3` does not exist \
+             (`choose = { Mop_L3 = 0.3, Vacuum_L3 = 0.3, Go_L3_L2 = 0.4 }`)",
+        ),
+        (
+            json!({"op": "set_transition", "transition": "Go_L3_L2", "kind": "exponential", "rate": 1}),
+            "plan.toml:17:43: policy chooses `Go_L3_L2`, an exponential transition: a policy \
+             chooses among immediate transitions",
+        ),
+        (
+            json!({"op": "set_place", "place": "Vacuuming_L2", "name": "Vac_L2"}),
+            "plan.toml:20:86: place `Vacuuming_L2` does not exist",
+        ),
+        (
+            json!({"op": "delete", "node": {"transition": "Mop_L2"}}),
+            "plan.toml:12:12: transition `Mop_L2` does not exist",
+        ),
+    ];
+    for (op, want) in refused {
+        let (status, v) = edit(&state, op.clone()).await;
+        assert_eq!(status, StatusCode::UNPROCESSABLE_ENTITY, "{op} -> {v}");
+        let e = v["error"].as_str().unwrap();
+        assert!(e.starts_with("the plan would no longer load: "), "{e}");
+        assert!(e.contains(want), "{op}: {e}\n  wanted: {want}");
+    }
+    let (_, s) = call(&state, "GET", "/api/edit", None).await;
+    assert_eq!(s["history"]["edits"], 1, "{s}");
+    assert!(state.current_net().transition_by_name("Mop_L3").is_some());
+
+    // The analysis is the edited net's under the policy: `analyze` of a copy of the plan
+    // whose net file is the saved one.
+    let (status, after) = call(&state, "GET", "/api/analysis", None).await;
+    assert_eq!(status, StatusCode::OK, "{after}");
+    let (status, v) = call(&state, "POST", "/api/edit/save", None).await;
+    assert_eq!(status, StatusCode::OK, "{v}");
+    let copy = dir.path().join("edited-plan.toml");
+    std::fs::write(
+        &copy,
+        HOME_PLAN.replace("net = \"net.PNPRO\"", "net = \"edited.PNPRO\""),
+    )
+    .unwrap();
+    let cli_after = analyze_json(&copy);
+    assert_same_plan_analysis(&after, &cli_after);
+    let reward = |a: &Value| a["steady"]["rewards"]["cleaning"]["rate"].as_f64().unwrap();
+    assert!(
+        (reward(&after) - reward(&before)).abs() > 1e-3,
+        "{} vs {}",
+        reward(&after),
+        reward(&before)
+    );
+
+    // Undo takes the edit back (the analysis is the plan's own again); redo does it again.
+    let (status, v) = call(&state, "POST", "/api/edit/undo", None).await;
+    assert_eq!(status, StatusCode::OK, "{v}");
+    assert!(state.current_net().diff(&plan.net).is_empty());
+    let (_, undone) = call(&state, "GET", "/api/analysis", None).await;
+    assert_same_plan_analysis(&undone, &cli_before);
+    let (status, v) = call(&state, "POST", "/api/edit/redo", None).await;
+    assert_eq!(status, StatusCode::OK, "{v}");
+    let (_, redone) = call(&state, "GET", "/api/analysis", None).await;
+    assert_same_plan_analysis(&redone, &cli_after);
+
+    // `serve PLAN --save-to` without a path saves to the net file the plan names (refused
+    // here, before it listens, for the non-loopback address: the message names the file).
+    let out = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .args(["serve", plan_path.to_str().unwrap()])
+        .args(["--addr", "0.0.0.0:0", "--allow-remote", "--save-to"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    let net_file = dir.path().join("net.PNPRO");
+    assert!(
+        err.contains(&format!("could overwrite {}", net_file.display())),
+        "{err}"
+    );
+}
+
+/// `plan-runner serve`, killed when dropped.
+struct Served(std::process::Child);
+
+impl Drop for Served {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn serve_plan_save_to_writes_the_net_file_the_plan_names() {
+    use crate::security::{JSON, request};
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let net_file = dir.path().join("net.PNPRO");
+    std::fs::copy(common::fixture("gspnr/home_n01/net.PNPRO"), &net_file).unwrap();
+    let plan_path = dir.path().join("plan.toml");
+    std::fs::write(&plan_path, HOME_PLAN).unwrap();
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("plan-runner"))
+        .args(["serve", plan_path.to_str().unwrap()])
+        .args(["--addr", "127.0.0.1:0", "--save-to"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (out, err) = (child.stdout.take().unwrap(), child.stderr.take().unwrap());
+    let served = Served(child);
+    let mut warning = String::new();
+    BufReader::new(err).read_line(&mut warning).unwrap();
+    assert!(
+        warning.starts_with(&format!(
+            "warning: `save` replaces {} itself",
+            net_file.display()
+        )),
+        "{warning}"
+    );
+    let mut url = String::new();
+    BufReader::new(out).read_line(&mut url).unwrap();
+    let addr: std::net::SocketAddr = url
+        .trim()
+        .rsplit_once("http://")
+        .and_then(|(_, a)| a.trim_end_matches('/').parse().ok())
+        .unwrap_or_else(|| panic!("no address in {url:?}"));
+
+    let post = |path: &'static str, body: Value| async move {
+        let (status, _, v) = request(addr, "POST", path, &[JSON], &body.to_string()).await;
+        (status, v)
+    };
+    let (status, v) = post(
+        "/api/edit",
+        json!({"op": "set_transition", "transition": "FinishedMop_L2", "rate": 0.5}),
+    )
+    .await;
+    assert_eq!(status, 200, "{v}");
+    let (status, v) = post(
+        "/api/edit",
+        json!({"op": "delete", "node": {"transition": "Mop_L3"}}),
+    )
+    .await;
+    assert_eq!(status, 422, "{v}");
+    assert!(
+        v["error"]
+            .as_str()
+            .unwrap()
+            .contains("plan.toml:17:12: transition `Mop_L3` does not exist"),
+        "{v}"
+    );
+    let (status, _, page) = request(addr, "GET", "/api/analysis", &[], "").await;
+    assert_eq!(status, 200, "{page}");
+    let (status, v) = post("/api/edit/save", json!({})).await;
+    assert_eq!(status, 200, "{v}");
+    assert_eq!(v["saved"], net_file.display().to_string());
+    drop(served);
+    // The plan itself now reads the edited net: `analyze PLAN` gives the page's numbers.
+    let saved = read_net(&net_file, &ReadOptions::default()).unwrap().net;
+    assert_eq!(
+        timing(&saved, "FinishedMop_L2"),
+        Timing::Exponential {
+            rate: 0.5,
+            servers: Servers::Single
+        }
+    );
+    assert_same_plan_analysis(&page, &analyze_json(&plan_path));
 }
 
 // ---- in the browser ------------------------------------------------------------------------

@@ -1,8 +1,9 @@
 //! Questions in the analysis panel: `--prob`-style predicates (steady state and at times t)
 //! and expected tokens at times t, on the analysed state space (for a plan: the net under its
 //! policy) — the numbers of `plan-runner analyze PLAN --json --transient … --prob …` to
-//! 1e-9; bad questions refused naming what is wrong. And the panel's dead markings replay
-//! their firing sequences on the net.
+//! 1e-9; bad questions refused naming what is wrong; a long question shows its progress and
+//! is cancelled (409 `cancelled`), and the next one is answered. And the panel's dead
+//! markings replay their firing sequences on the net.
 #![cfg(feature = "web")]
 
 use crate::analysis::{analyze_json_with, patrol_plan, patrol_plan_path, plan_state};
@@ -13,9 +14,12 @@ use crate::browser::{
 use crate::support::browser::Browser;
 use crate::support::start_server;
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use axum::http::StatusCode;
+use gspn::analysis::measures::Solver;
+use gspn::analysis::state_space::{Options, StateSpace};
+use gspn::io::{ReadOptions, read_net};
 use gspn::net::{NetBuilder, Servers};
 use gspn::web::WebState;
 use serde_json::{Value, json};
@@ -153,6 +157,14 @@ async fn questions_need_a_finished_analysis_and_valid_times_and_predicates() {
     let (status, v) = ask(json!({ "transient": [-1.0] })).await;
     assert_eq!(status, StatusCode::BAD_REQUEST);
     assert_eq!(v["error"], "transient: -1 is not a time ≥ 0");
+    // A time no uniformisation could reach (Λ·t iterations) is refused before it starts.
+    let (status, v) = ask(json!({ "transient": [1.0, 1e300] })).await;
+    assert_eq!(status, StatusCode::BAD_REQUEST, "{v}");
+    let e = v["error"].as_str().unwrap();
+    assert!(
+        e.starts_with("transient: t = 1e300 needs about ") && e.contains("at most 1e11"),
+        "{e}"
+    );
     let (status, v) = ask(json!({ "prob": ["p4:Wait_L1 >"] })).await;
     assert_eq!(status, StatusCode::BAD_REQUEST);
     assert!(
@@ -228,4 +240,253 @@ async fn a_dead_marking_in_the_panel_replays_its_firing_sequence_on_the_net() {
         .await;
     b.close().await;
     server.abort();
+}
+
+const KANBAN2: &str = "kanban/kanban_gspn_N2.pnml";
+
+/// A time so large that the transient solver's work (iterations planned × the chain's
+/// entries, one multiply-add each) is far beyond a second: asserted from the numbers, not
+/// from a clock.
+const LONG_T: f64 = 1e6;
+
+/// The viewer of Kanban N = 2 (4,600 tangible markings), and the work of one iteration of
+/// the transient solver on it (the generator's entries).
+fn kanban2() -> (WebState, usize) {
+    let net = read_net(&crate::support::fixture(KANBAN2), &ReadOptions::default())
+        .unwrap()
+        .net;
+    let ss = StateSpace::build(&net, &Options::default()).unwrap();
+    assert_eq!(ss.tangible_count(), 4600);
+    let nnz = Solver::new(&net, &ss).chain().nnz();
+    (WebState::new(net, None, 0), nnz)
+}
+
+/// Polls `/api/analysis/query/progress` until `ok` holds.
+async fn question_progress(state: &WebState, ok: impl Fn(&Value) -> bool) -> Value {
+    let deadline = Instant::now() + WAIT;
+    loop {
+        let (_, p) = call(state, "GET", "/api/analysis/query/progress", None).await;
+        if ok(&p) {
+            return p;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the question's progress stays {p}"
+        );
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+}
+
+fn assert_same_question(page: &Value, cli: &Value, exprs: &[&str]) {
+    let (page, cli) = (
+        page["transient"].as_array().unwrap(),
+        cli["transient"].as_array().unwrap(),
+    );
+    assert_eq!(page.len(), cli.len());
+    for (a, b) in page.iter().zip(cli) {
+        assert_eq!(a["t"], b["t"]);
+        let tokens = b["mean_tokens"].as_object().unwrap();
+        assert!(!tokens.is_empty());
+        for (name, v) in tokens {
+            let (x, y) = (
+                a["mean_tokens"][name].as_f64().unwrap(),
+                v.as_f64().unwrap(),
+            );
+            assert!(
+                (x - y).abs() < 1e-9,
+                "E[{name}] at {}: page {x}, analyze {y}",
+                b["t"]
+            );
+        }
+        for e in exprs {
+            let (x, y) = (
+                a["probability"][e].as_f64().unwrap(),
+                b["probability"][e].as_f64().unwrap(),
+            );
+            assert!(
+                (x - y).abs() < 1e-9,
+                "P({e}) at {}: page {x}, analyze {y}",
+                b["t"]
+            );
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_long_question_shows_its_progress_is_cancelled_and_the_next_is_answered() {
+    let (state, nnz) = kanban2();
+    let (status, a) = call(&state, "GET", "/api/analysis", None).await;
+    assert_eq!(status, StatusCode::OK, "{a}");
+    let asking = tokio::spawn({
+        let state = state.clone();
+        async move {
+            call(
+                &state,
+                "POST",
+                "/api/analysis/query",
+                Some(json!({ "transient": [LONG_T], "prob": ["P1 > 0"] })),
+            )
+            .await
+        }
+    });
+    let p = question_progress(&state, |p| {
+        p["state"] == "running" && p["iterations"].as_u64().unwrap_or(0) > 0
+    })
+    .await;
+    assert_eq!(p["phase"], format!("transient t={LONG_T}"), "{p}");
+    assert_eq!(
+        (p["point"].clone(), p["points"].clone()),
+        (json!(1), json!(1))
+    );
+    // Uniformisation: about Λ·t iterations (Λ the largest exit rate), each a pass over the
+    // generator's entries: over 10^10 multiply-adds, many seconds on any machine.
+    let planned = p["of"].as_u64().unwrap();
+    assert!(planned >= 1_000_000, "{p}");
+    assert!(
+        planned as f64 * nnz as f64 > 1e10,
+        "{planned} iterations × {nnz} entries"
+    );
+    let sent = Instant::now();
+    let (status, c) = call(&state, "POST", "/api/analysis/query/cancel", None).await;
+    assert_eq!(status, StatusCode::OK, "{c}");
+    assert!(
+        c["state"] == "cancelling" || c["state"] == "cancelled",
+        "{c}"
+    );
+    let (status, v) = asking.await.unwrap();
+    let latency = sent.elapsed();
+    println!(
+        "question cancelled {:.1} ms after the cancel was sent (test profile), at {} of {planned} \
+         iterations",
+        latency.as_secs_f64() * 1e3,
+        v["progress"]["iterations"]
+    );
+    assert_eq!(status, StatusCode::CONFLICT, "{v}");
+    assert_eq!(v["kind"], "cancelled", "{v}");
+    assert_eq!(v["progress"]["state"], "cancelled", "{v}");
+    assert!(
+        v["progress"]["iterations"].as_u64().unwrap() < planned,
+        "{v}"
+    );
+    let (_, p) = call(&state, "GET", "/api/analysis/query/progress", None).await;
+    assert_eq!(p, v["progress"]);
+
+    // The next question is answered, with the numbers of `analyze --transient`.
+    let exprs = ["P1 > 0", "Pout4 >= 1 && P2 == 0"];
+    let (status, v) = call(
+        &state,
+        "POST",
+        "/api/analysis/query",
+        Some(json!({ "transient": [2.0, 0.5], "prob": exprs })),
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK, "{v}");
+    let cli = analyze_json_with(
+        &crate::support::fixture(KANBAN2),
+        &[
+            "--transient",
+            "2,0.5",
+            "--prob",
+            exprs[0],
+            "--prob",
+            exprs[1],
+        ],
+    );
+    assert_same_question(&v, &cli, &exprs);
+    let (_, p) = call(&state, "GET", "/api/analysis/query/progress", None).await;
+    assert_eq!(p["state"], "done", "{p}");
+}
+
+/// Asks `LONG_T` on the page and waits for its progress in the element `progress`.
+async fn ask_long(b: &Browser, progress: &str) -> String {
+    b.js(
+        "document.getElementById('query-times').value = arguments[0];\
+         document.getElementById('query-prob').value = 'P1 > 0';\
+         document.getElementById('query').click();",
+        vec![json!(LONG_T.to_string())],
+    )
+    .await;
+    let shown = b
+        .wait_js(
+            &format!(
+                "const t = document.getElementById('{progress}').textContent;\
+                 return /^question running \\(transient t=1000000\\), [1-9][0-9,]* of \
+                 [0-9,]+ iterations, /.test(t) && t;"
+            ),
+            WAIT,
+            "the question's progress",
+        )
+        .await;
+    shown.as_str().unwrap().to_string()
+}
+
+/// Waits for the panel to say the question was cancelled (a finished question: the result
+/// is no longer stale and `ask` works again), as the server says; its text and the
+/// server's progress.
+async fn cancelled_on_page(b: &Browser, addr: std::net::SocketAddr) -> (String, Value) {
+    let shown = b
+        .wait_js(
+            "const e = document.querySelector('#query-result:not(.stale) [data-cancelled]');\
+             return e && !document.getElementById('query').disabled && e.textContent;",
+            WAIT,
+            "the cancel",
+        )
+        .await;
+    let shown = shown.as_str().unwrap().to_string();
+    assert!(
+        shown.starts_with("question cancelled (transient t=1000000) after "),
+        "{shown}"
+    );
+    let p = crate::browser::http_get(addr, "/api/analysis/query/progress").await;
+    assert_eq!(p["state"], "cancelled");
+    (shown, p)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_cancel_button_stops_a_question_on_the_page() {
+    let _one = BROWSER.lock().await;
+    let (state, _) = kanban2();
+    let (addr, server) = start_server(state).await;
+    let b = Browser::start(1280, 900).await;
+    open(&b, addr).await;
+    analyse_on_page(&b).await;
+    // The form's own cancel button, beside the progress shown there.
+    b.js(
+        "document.querySelector('#analysis .query').scrollIntoView({block: 'start'});",
+        vec![],
+    )
+    .await;
+    let progress = ask_long(&b, "query-progress").await;
+    assert!(progress.ends_with(" s"), "{progress}");
+    b.screenshot(&screenshot_path("analysis-question-progress.png"))
+        .await;
+    b.click("#query-cancel").await;
+    let (shown, p) = cancelled_on_page(&b, addr).await;
+    assert!(
+        shown.ends_with(&format!(" of {} iterations", fmt_thousands(&p["of"]))),
+        "{shown} vs {p}"
+    );
+    crate::browser::assert_cancel_hidden(&b).await;
+    b.screenshot(&screenshot_path("analysis-question-cancelled.png"))
+        .await;
+
+    // The panel header's cancel button stops a question too.
+    ask_long(&b, "analysis-progress").await;
+    b.click("#analysis-cancel").await;
+    cancelled_on_page(&b, addr).await;
+    b.close().await;
+    server.abort();
+}
+
+/// `1234567` as the page writes it, `1,234,567`.
+fn fmt_thousands(v: &Value) -> String {
+    let digits = v.as_u64().unwrap().to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
 }

@@ -22,7 +22,7 @@ use tokio_tungstenite::tungstenite;
 use tokio_tungstenite::tungstenite::client::IntoClientRequest;
 
 /// One HTTP/1.1 request over TCP; the status, the lower-cased head, the body as JSON.
-async fn request(
+pub(crate) async fn request(
     addr: SocketAddr,
     method: &str,
     path: &str,
@@ -50,7 +50,7 @@ async fn request(
     )
 }
 
-const JSON: (&str, &str) = ("Content-Type", "application/json");
+pub(crate) const JSON: (&str, &str) = ("Content-Type", "application/json");
 const FORM: (&str, &str) = ("Content-Type", "application/x-www-form-urlencoded");
 
 /// A token-game viewer on a free loopback port.
@@ -136,6 +136,8 @@ async fn every_state_changing_route_refuses_strangers_and_serves_its_page() {
         ("/api/sim/fire", r#"{"transition": "T1"}"#),
         ("/api/analysis/start", "{}"),
         ("/api/analysis/cancel", "{}"),
+        ("/api/analysis/query", r#"{"transient": [1]}"#),
+        ("/api/analysis/query/cancel", "{}"),
         ("/api/layout", r#"{"places": [], "transitions": []}"#),
     ];
     for (route, body) in routes {
@@ -156,6 +158,8 @@ async fn every_state_changing_route_refuses_strangers_and_serves_its_page() {
     // Nothing moved the token game, and the analysis was never started.
     assert_eq!(firings(addr).await, 0);
     let (_, _, p) = request(addr, "GET", "/api/analysis/progress", &[], "").await;
+    assert_eq!(p["state"], "idle", "{p}");
+    let (_, _, p) = request(addr, "GET", "/api/analysis/query/progress", &[], "").await;
     assert_eq!(p["state"], "idle", "{p}");
 
     // The page itself: same origin, JSON.

@@ -64,10 +64,12 @@ pub enum SolveError {
         /// Its final `‖πQ‖∞`.
         residual: f64,
     },
-    /// [`SteadyOptions::cancel`] was raised.
-    #[error("the steady-state solver was cancelled after {iterations} sweeps")]
+    /// [`SteadyOptions::cancel`] was raised, or the transient solver's
+    /// [`Monitor`](crate::analysis::state_space::Monitor) was cancelled
+    /// ([`Ctmc::transient_monitored`](super::Ctmc::transient_monitored)).
+    #[error("the solver was cancelled after {iterations} iterations")]
     Cancelled {
-        /// Sweeps done.
+        /// Sweeps (steady state) or products with the generator (transient) done.
         iterations: usize,
     },
     /// The sparse LU failed (a singular or non-finite system).

@@ -1,7 +1,8 @@
 //! Transient distribution π(t) by uniformization, with Fox–Glynn truncation of the Poisson
 //! weights.
 
-use super::Ctmc;
+use super::{Ctmc, SolveError};
+use crate::analysis::state_space::Monitor;
 
 /// Poisson(`qt`) weights truncated so that the mass left out is at most `eps`, normalised to
 /// sum 1 (Fox–Glynn: computed relative to the mode, so nothing underflows for large `qt`).
@@ -51,6 +52,39 @@ impl Ctmc {
     /// π(t) for each time in `times` (any order, ≥ 0) from the initial distribution
     /// `initial` (`(state, probability)` pairs), with total error at most `eps` per time.
     pub fn transient(&self, initial: &[(u32, f64)], times: &[f64], eps: f64) -> Vec<Vec<f64>> {
+        match self.transient_monitored(initial, times, eps, &Monitor::new()) {
+            Ok(at) => at,
+            Err(_) => {
+                unreachable!("only a cancel stops the solver, and nothing holds this monitor")
+            }
+        }
+    }
+
+    /// [`Ctmc::transient`] watched by `monitor` (from another thread): it publishes the time
+    /// point it works towards (in increasing time order) and its iterations done of planned
+    /// ([`Monitor::transient_progress`]), and stops within one iteration (one product with
+    /// the generator) of [`Monitor::cancel`] with [`SolveError::Cancelled`].
+    ///
+    /// ```
+    /// use gspn::analysis::ctmc::{Ctmc, SolveError};
+    /// use gspn::analysis::state_space::Monitor;
+    /// let c = Ctmc::from_triplets(2, vec![(0, 1, 1.0), (1, 0, 2.0)]);
+    /// let monitor = Monitor::new();
+    /// let at = c.transient_monitored(&[(0, 1.0)], &[2.0, 0.5], 1e-12, &monitor).unwrap();
+    /// assert_eq!(at, c.transient(&[(0, 1.0)], &[2.0, 0.5], 1e-12));
+    /// let (point, done, planned) = monitor.transient_progress();
+    /// assert_eq!((point, done), (1, planned));
+    /// monitor.cancel();
+    /// let r = c.transient_monitored(&[(0, 1.0)], &[1e6], 1e-12, &monitor);
+    /// assert!(matches!(r, Err(SolveError::Cancelled { iterations: 0 })));
+    /// ```
+    pub fn transient_monitored(
+        &self,
+        initial: &[(u32, f64)],
+        times: &[f64],
+        eps: f64,
+        monitor: &Monitor,
+    ) -> Result<Vec<Vec<f64>>, SolveError> {
         let n = self.n;
         let mut start = vec![0.0; n];
         for &(s, p) in initial {
@@ -60,25 +94,59 @@ impl Ctmc {
         let lambda = exit.iter().fold(0.0f64, |m, &x| m.max(x));
         let mut order: Vec<usize> = (0..times.len()).collect();
         order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
-        let mut out = vec![Vec::new(); times.len()];
+        // The Poisson weights of every step first, for the number of iterations planned.
         let mut now = 0.0;
+        let steps: Vec<_> = order
+            .into_iter()
+            .map(|idx| {
+                let t = times[idx].max(0.0);
+                let dt = t - now;
+                now = t.max(now);
+                (
+                    idx,
+                    (dt > 0.0 && lambda > 0.0).then(|| poisson_weights(lambda * dt, eps)),
+                )
+            })
+            .collect();
+        let planned = steps
+            .iter()
+            .filter_map(|(_, w)| w.as_ref())
+            .map(|(first, weights)| first + weights.len() - 1)
+            .sum();
+        monitor.set_transient_plan(planned);
+        monitor.set_transient_iterations(0);
+        let mut done = 0;
+        let mut out = vec![Vec::new(); times.len()];
         let mut current = start;
-        for idx in order {
-            let t = times[idx].max(0.0);
-            let dt = t - now;
-            if dt > 0.0 && lambda > 0.0 {
-                current = self.uniformize(&current, &exit, lambda, dt, eps);
+        for (point, (idx, weights)) in steps.into_iter().enumerate() {
+            monitor.set_transient_point(point);
+            if let Some((first, weights)) = weights {
+                current = self.uniformize(
+                    &current,
+                    &exit,
+                    lambda,
+                    (first, &weights),
+                    monitor,
+                    &mut done,
+                )?;
             }
-            now = t.max(now);
             out[idx] = current.clone();
         }
-        out
+        Ok(out)
     }
 
-    /// One uniformization step over `dt` from `v`.
-    fn uniformize(&self, v: &[f64], exit: &[f64], lambda: f64, dt: f64, eps: f64) -> Vec<f64> {
+    /// One uniformization step from `v` with `(first, weights)`, the Poisson weights of the
+    /// counts from `first` on; `done` counts the iterations of every step, for `monitor`.
+    fn uniformize(
+        &self,
+        v: &[f64],
+        exit: &[f64],
+        lambda: f64,
+        (first, weights): (usize, &[f64]),
+        monitor: &Monitor,
+        done: &mut usize,
+    ) -> Result<Vec<f64>, SolveError> {
         let n = self.n;
-        let (first, weights) = poisson_weights(lambda * dt, eps);
         let mut acc = vec![0.0; n];
         let mut cur = v.to_vec();
         let mut next = vec![0.0; n];
@@ -91,6 +159,9 @@ impl Ctmc {
             }
             if k == last {
                 break;
+            }
+            if monitor.is_cancelled() {
+                return Err(SolveError::Cancelled { iterations: *done });
             }
             for ((x, &c), &q) in next.iter_mut().zip(&cur).zip(exit) {
                 *x = c * (1.0 - q * inv);
@@ -105,7 +176,9 @@ impl Ctmc {
                 }
             }
             std::mem::swap(&mut cur, &mut next);
+            *done += 1;
+            monitor.set_transient_iterations(*done);
         }
-        acc
+        Ok(acc)
     }
 }

@@ -142,6 +142,9 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         let probs = solver.probabilities(&l.pi, &predicates);
         (l.ergodic, m, probs, rewards)
     });
+    if let Some(e) = solver.too_far(&args.transient) {
+        return Err(BadInput(format!("--transient: {e}")).into());
+    }
     let transient = solver.transient_points(&args.transient, &predicates);
     if args.json {
         let report = Report {

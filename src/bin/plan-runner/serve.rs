@@ -1,5 +1,5 @@
-//! `plan-runner serve FILE [--addr 127.0.0.1:PORT] [--seed S] [--save-to PATH]`: the viewer
-//! (and editor) for a net or a plan.
+//! `plan-runner serve FILE [--addr 127.0.0.1:PORT] [--seed S] [--save-to [PATH]]`: the
+//! viewer (and editor) for a net or a plan.
 //!
 //! Draws the net in the browser (positions from the file, else an automatic layout), plays
 //! its seeded token game (a plan's policy and seed apply) and shows its analysis. Every asset
@@ -39,16 +39,21 @@ pub(crate) struct Args {
     max_states: usize,
     /// Where the editor's "save" writes the edited net: a GreatSPN project (.PNPRO) or a
     /// PIPE net (.xml), replaced whole (expressions, constants and templates of the opened
-    /// file are written as their values). Without it the page downloads the net.
-    #[arg(long, value_name = "PATH")]
-    save_to: Option<PathBuf>,
+    /// file are written as their values). `--save-to` without PATH: the net file opened —
+    /// for a plan, the net file it names. Without it the page downloads the net.
+    #[arg(long, value_name = "PATH", num_args = 0..=1)]
+    save_to: Option<Option<PathBuf>>,
     #[command(flatten)]
     net: NetArgs,
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     check_bind(args.addr, args.allow_remote)?;
-    if let Some(path) = &args.save_to
+    let plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
+    let save_to = args
+        .save_to
+        .map(|path| path.unwrap_or_else(|| plan.net_path.clone()));
+    if let Some(path) = &save_to
         && !args.addr.ip().is_loopback()
     {
         return Err(BadInput(format!(
@@ -58,7 +63,6 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
-    let plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     for w in &plan.warnings {
         eprintln!("warning: {w}");
     }
@@ -70,7 +74,9 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         .into());
     }
     // The panel analyses the net under the plan's policy, with its rewards (the bare net
-    // for a net file), as `plan-runner analyze` does.
+    // for a net file), as `plan-runner analyze` does; the editor checks every edit against
+    // the plan as the plan reader does.
+    let text = plan.text;
     let state = WebState::for_plan(
         plan.net,
         Some(plan.policy),
@@ -79,7 +85,11 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         args.max_states,
     )
     .with_source(&plan.net_path);
-    let state = match args.save_to {
+    let state = match text {
+        Some(text) => state.with_plan(text),
+        None => state,
+    };
+    let state = match save_to {
         Some(path) => {
             let real = |p: &std::path::Path| std::fs::canonicalize(p).ok();
             if real(&path).is_some() && real(&path) == real(&plan.net_path) {

@@ -5,7 +5,8 @@
 // markings (click one to replay its firing sequence on the net); then questions on the
 // analysed state space: probabilities of `--prob`-style predicates (steady state and at
 // times t) and the expected tokens at those times, computed by the server exactly as
-// `plan-runner analyze --prob EXPR --transient T` computes them.
+// `plan-runner analyze --prob EXPR --transient T` computes them, with their progress (the
+// time point, the solver's iterations) and the same cancel button.
 'use strict';
 
 // ---- analysis --------------------------------------------------------------------------
@@ -117,7 +118,10 @@ async function analyse() {
   for (const li of out.querySelectorAll('[data-dead]')) {
     li.addEventListener('click', () => replay(a.dead_markings[Number(li.dataset.dead)].path));
   }
-  if (a.steady) $('query').addEventListener('click', ask);
+  if (a.steady) {
+    $('query').addEventListener('click', ask);
+    $('query-cancel').addEventListener('click', cancelQuestion);
+  }
 }
 
 // The questions' form: times (comma-separated) and predicates (one per line).
@@ -127,12 +131,38 @@ function queryForm() {
     '<label>P( … ) <textarea id="query-prob" class="mono" rows="2" ' +
     'placeholder="one predicate per line, e.g. P1 > 0 &amp;&amp; P2 == 0"></textarea></label>' +
     '<button id="query" title="probabilities and expected tokens, as plan-runner analyze --prob --transient">ask</button>' +
+    '<button id="query-cancel" class="hidden" title="stop the question">cancel</button>' +
+    '<span id="query-progress" class="mono"></span>' +
     '</div><div id="query-result"></div>';
+}
+
+// Stops the running question (the header's cancel button does the same while one runs).
+function cancelQuestion() {
+  api('POST', '/api/analysis/query/cancel').then(showQuestionProgress).catch((e) => status(e.message));
+}
+
+let asking = false;
+
+// The question's progress line: its phase (the time point the transient solver works
+// towards), the point of the times asked, the solver's iterations done of planned.
+// Shown in the panel's header and beside the form's buttons.
+function showQuestionProgress(p) {
+  let text = '';
+  if (p.state !== 'done' && p.state !== 'idle') {
+    const it = p.of ? ', ' + p.iterations.toLocaleString('en') + ' of ' +
+      p.of.toLocaleString('en') + ' iterations' : '';
+    const pt = p.points > 1 ? ', point ' + p.point + ' of ' + p.points : '';
+    text = 'question ' + p.state + ' (' + p.phase + pt + ')' + it + ', ' +
+      fmt(Math.round(p.seconds * 10) / 10) + ' s';
+  }
+  $('analysis-progress').textContent = text;
+  if ($('query-progress')) $('query-progress').textContent = text;
 }
 
 // Asks the server the form's questions and shows a table: a row per predicate (steady state,
 // then each time) and per place (expected tokens at each time). Each number's cell carries
-// its full value in data-value.
+// its full value in data-value. While the server computes, the progress line shows how far
+// the transient solver is and the cancel button stops it.
 async function ask() {
   const out = $('query-result');
   const text = $('query-times').value.trim();
@@ -142,13 +172,54 @@ async function ask() {
     out.innerHTML = '<p class="error">times: numbers separated by commas</p>';
     return;
   }
+  if (asking) return;
+  asking = true;
+  out.classList.add('stale');
+  $('analysis-cancel').classList.remove('hidden');
+  $('query-cancel').classList.remove('hidden');
+  $('query').disabled = true;
   let q;
+  let polling = true;
+  const poll = (async () => {
+    while (polling) {
+      await new Promise((r) => setTimeout(r, 200));
+      if (!polling) break;
+      try {
+        showQuestionProgress(await api('GET', '/api/analysis/query/progress'));
+      } catch (e) {
+        break;
+      }
+    }
+  })();
   try {
-    q = await api('POST', '/api/analysis/query', { transient: times, prob });
+    const res = await fetch('/api/analysis/query', {
+      method: 'POST',
+      headers: { 'Content-Type': 'application/json' },
+      body: JSON.stringify({ transient: times, prob }),
+    });
+    const data = await res.json();
+    if (res.status === 409 && data.kind === 'cancelled') {
+      const p = data.progress;
+      out.innerHTML = '<p class="error" data-cancelled="' + p.iterations + '">question cancelled (' +
+        escapeHtml(p.phase) + ') after ' + p.iterations.toLocaleString('en') + ' of ' +
+        p.of.toLocaleString('en') + ' iterations</p>';
+      return;
+    }
+    if (!res.ok) throw new Error(data.error || res.statusText);
+    q = data;
   } catch (e) {
     if (unreachable(e)) offline(e);
     out.innerHTML = '<p class="error">' + escapeHtml(e.message) + '</p>';
     return;
+  } finally {
+    polling = false;
+    asking = false;
+    out.classList.remove('stale');
+    $('analysis-cancel').classList.add('hidden');
+    $('query-cancel').classList.add('hidden');
+    $('query').disabled = false;
+    await poll;
+    showQuestionProgress({ state: 'done' });
   }
   const cell = (attrs, v) => '<td class="mono" ' + attrs + ' data-value="' + v + '">' + fmt(v) + '</td>';
   let html = '<table class="query"><tr><th></th>' + (prob.length ? '<th>steady</th>' : '') +

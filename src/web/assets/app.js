@@ -647,8 +647,9 @@ function setupControls() {
   $('fit').addEventListener('click', fit);
   $('save-layout').addEventListener('click', saveLayout);
   $('analyze').addEventListener('click', analyse);
-  $('analysis-cancel').addEventListener('click', () =>
-    api('POST', '/api/analysis/cancel').then(showProgress).catch((e) => status(e.message)));
+  // The same button stops a running question (transient points) or the analysis.
+  $('analysis-cancel').addEventListener('click', () => (asking ? cancelQuestion() :
+    api('POST', '/api/analysis/cancel').then(showProgress).catch((e) => status(e.message))));
 }
 
 // ---- keys, theme, resize -----------------------------------------------------------------

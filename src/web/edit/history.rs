@@ -48,9 +48,15 @@ impl History {
         self.version
     }
 
-    /// Applies `edit` to the current net; the versions after it (undone ones) are dropped.
-    pub(crate) fn apply(&mut self, edit: &Edit) -> Result<&Arc<Net>, EditError> {
+    /// Applies `edit` to the current net, if `check` accepts the result (what it says of
+    /// it comes back with the new net); the versions after it (undone ones) are dropped.
+    pub(crate) fn apply<T>(
+        &mut self,
+        edit: &Edit,
+        check: impl FnOnce(&Net) -> Result<T, EditError>,
+    ) -> Result<(Arc<Net>, T), EditError> {
         let (net, label) = apply(&positioned(self.net()), edit)?;
+        let checked = check(&net)?;
         self.versions.truncate(self.at + 1);
         self.versions.push((Arc::new(net), label));
         if self.versions.len() > KEPT + 1 {
@@ -58,27 +64,40 @@ impl History {
         }
         self.at = self.versions.len() - 1;
         self.version += 1;
-        Ok(self.net())
+        Ok((self.net().clone(), checked))
     }
 
-    /// Back to the version before the last edit.
-    pub(crate) fn undo(&mut self) -> Result<&Arc<Net>, EditError> {
+    /// Back to the version before the last edit, if `check` accepts it.
+    pub(crate) fn undo<T>(
+        &mut self,
+        check: impl FnOnce(&Net) -> Result<T, EditError>,
+    ) -> Result<(Arc<Net>, T), EditError> {
         if self.at == 0 {
             return Err(EditError::NothingToUndo);
         }
-        self.at -= 1;
-        self.version += 1;
-        Ok(self.net())
+        self.go_to(self.at - 1, check)
     }
 
-    /// On to the version the last undo left.
-    pub(crate) fn redo(&mut self) -> Result<&Arc<Net>, EditError> {
+    /// On to the version the last undo left, if `check` accepts it.
+    pub(crate) fn redo<T>(
+        &mut self,
+        check: impl FnOnce(&Net) -> Result<T, EditError>,
+    ) -> Result<(Arc<Net>, T), EditError> {
         if self.at + 1 == self.versions.len() {
             return Err(EditError::NothingToRedo);
         }
-        self.at += 1;
+        self.go_to(self.at + 1, check)
+    }
+
+    fn go_to<T>(
+        &mut self,
+        at: usize,
+        check: impl FnOnce(&Net) -> Result<T, EditError>,
+    ) -> Result<(Arc<Net>, T), EditError> {
+        let checked = check(&self.versions[at].0)?;
+        self.at = at;
         self.version += 1;
-        Ok(self.net())
+        Ok((self.net().clone(), checked))
     }
 
     /// `{version, edits, undo, redo}`: the labels of the edit an undo would take back and of
@@ -108,20 +127,32 @@ mod tests {
             json!({"op": "add_place", "name": "P4", "tokens": 1, "x": 0, "y": 0}),
         )
         .unwrap();
-        h.apply(&add).unwrap();
+        let ok = |_: &Net| Ok(());
+        h.apply(&add, ok).unwrap();
         assert_eq!(h.net().place_count(), 4);
         assert_eq!(h.json()["undo"], "add place P4");
-        h.undo().unwrap();
+        h.undo(ok).unwrap();
         assert!(h.net().diff(&net).is_empty() && !h.edited());
         assert_eq!(h.json()["redo"], "add place P4");
-        assert_eq!(h.undo().unwrap_err(), EditError::NothingToUndo);
-        h.redo().unwrap();
+        assert_eq!(h.undo(ok).unwrap_err(), EditError::NothingToUndo);
+        h.redo(ok).unwrap();
         assert_eq!(h.net().place_count(), 4);
-        assert_eq!(h.redo().unwrap_err(), EditError::NothingToRedo);
+        assert_eq!(h.redo(ok).unwrap_err(), EditError::NothingToRedo);
         // A refused edit leaves everything as it was.
         let before = h.json();
-        assert!(h.apply(&add).is_err());
+        assert!(h.apply(&add, ok).is_err());
         assert_eq!(h.json(), before);
         assert_eq!(h.version(), 3);
+        // So does an edit, an undo or a redo the check refuses (the plan it would break).
+        let no = |_: &Net| Err::<(), _>(EditError::Nothing);
+        let other: Edit =
+            serde_json::from_value(json!({"op": "add_place", "name": "P5", "x": 0, "y": 0}))
+                .unwrap();
+        assert_eq!(h.apply(&other, no).unwrap_err(), EditError::Nothing);
+        assert_eq!(h.undo(no).unwrap_err(), EditError::Nothing);
+        assert_eq!(h.json(), before);
+        h.undo(ok).unwrap();
+        assert_eq!(h.redo(no).unwrap_err(), EditError::Nothing);
+        assert!(!h.edited());
     }
 }

@@ -219,9 +219,19 @@ pub(crate) enum EditError {
     /// Redo at the last version.
     #[error("nothing to redo")]
     NothingToRedo,
-    /// The viewer shows a live run, a replay or a plan whose policy names the net's nodes.
+    /// The viewer shows a live run, a replay, or a policy or rewards without their plan.
     #[error("{0}")]
     NotEditable(String),
+    /// The edited net no longer fits the plan served with it: the plan reader's own error
+    /// (the plan's file, line and column, the name it cannot find or the kind it needs) and
+    /// that line of the plan.
+    #[error("the plan would no longer load: {error}{}", .line.as_ref().map(|l| format!(" (`{l}`)")).unwrap_or_default())]
+    BreaksPlan {
+        /// The reader's message.
+        error: String,
+        /// The plan's line it points at.
+        line: Option<String>,
+    },
 }
 
 impl From<NetError> for EditError {

@@ -110,7 +110,7 @@ pub(crate) async fn edit(State(state): State<WebState>, Json(body): Json<Value>)
         Ok(e) => e,
         Err(e) => return error(StatusCode::BAD_REQUEST, format!("not an edit: {e}")),
     };
-    if let Err(e) = state.change(|h| h.apply(&edit).cloned()) {
+    if let Err(e) = state.change(|h, check| h.apply(&edit, check)) {
         return refusal(&e);
     }
     changed(&state)
@@ -118,7 +118,7 @@ pub(crate) async fn edit(State(state): State<WebState>, Json(body): Json<Value>)
 
 /// `POST /api/edit/undo`.
 pub(crate) async fn undo(State(state): State<WebState>) -> Response {
-    match state.change(|h| h.undo().cloned()) {
+    match state.change(|h, check| h.undo(check)) {
         Ok(()) => changed(&state),
         Err(e) => refusal(&e),
     }
@@ -126,7 +126,7 @@ pub(crate) async fn undo(State(state): State<WebState>) -> Response {
 
 /// `POST /api/edit/redo`.
 pub(crate) async fn redo(State(state): State<WebState>) -> Response {
-    match state.change(|h| h.redo().cloned()) {
+    match state.change(|h, check| h.redo(check)) {
         Ok(()) => changed(&state),
         Err(e) => refusal(&e),
     }
