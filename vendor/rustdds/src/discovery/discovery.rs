@@ -1865,50 +1865,72 @@ impl Discovery {
     }
   }
 
+  // The two below copy what they need out of the DiscoveryDB and release its
+  // lock before they publish or notify (gspn patch). They held the read lock
+  // across `send_discovery_notification`, a blocking send into a bounded
+  // channel that the DP event loop drains: with the channel full, the event
+  // loop waiting for the read lock behind an application thread waiting for
+  // the write lock (create_datawriter; std's RwLock makes new readers wait for a
+  // waiting writer), the three threads deadlocked. Seen in a supervisor
+  // creating 64 action clients: its event loop stopped for good.
   fn add_local_writer(&self, guid: GUID) {
     // Get writer data from db
-    let db = discovery_db_read(&self.discovery_db);
-    let writer_data = match db.get_local_topic_writer(guid) {
-      Some(d) => d,
-      None => {
-        warn!("Did not find a local writer {guid:?}");
-        return;
-      }
+    let (writer_data, existing_readers) = {
+      let db = discovery_db_read(&self.discovery_db);
+      let writer_data = match db.get_local_topic_writer(guid) {
+        Some(d) => d.clone(),
+        None => {
+          warn!("Did not find a local writer {guid:?}");
+          return;
+        }
+      };
+      let readers: Vec<DiscoveredReaderData> = db
+        .readers_on_topic(writer_data.publication_topic_data.topic_name())
+        .into_iter()
+        .cloned()
+        .collect();
+      (writer_data, readers)
     };
 
     // Publish it to SEDP (if needed)
-    self.sedp_publish_single_user_writer(writer_data);
+    self.sedp_publish_single_user_writer(&writer_data);
 
     // Send the ReaderUpdated notification on any existing readers on the writer's
     // topic This will result in matching the endpoints if possible
-    let existing_readers = db.readers_on_topic(writer_data.publication_topic_data.topic_name());
     for reader in existing_readers {
       self.send_discovery_notification(DiscoveryNotificationType::ReaderUpdated {
-        discovered_reader_data: reader.clone(),
+        discovered_reader_data: reader,
       });
     }
   }
 
   fn add_local_reader(&self, guid: GUID) {
     // Get reader data from db
-    let db = discovery_db_read(&self.discovery_db);
-    let reader_data = match db.get_local_topic_reader(guid) {
-      Some(d) => d,
-      None => {
-        warn!("Did not find a local reader {guid:?}");
-        return;
-      }
+    let (reader_data, existing_writers) = {
+      let db = discovery_db_read(&self.discovery_db);
+      let reader_data = match db.get_local_topic_reader(guid) {
+        Some(d) => d.clone(),
+        None => {
+          warn!("Did not find a local reader {guid:?}");
+          return;
+        }
+      };
+      let writers: Vec<DiscoveredWriterData> = db
+        .writers_on_topic(reader_data.subscription_topic_data.topic_name())
+        .into_iter()
+        .cloned()
+        .collect();
+      (reader_data, writers)
     };
 
     // Publish it to SEDP (if needed)
-    self.sedp_publish_single_user_reader(reader_data);
+    self.sedp_publish_single_user_reader(&reader_data);
 
     // Send the WriterUpdated notification on any existing writers on the readers's
     // topic This will result in matching the endpoints if possible
-    let existing_writers = db.writers_on_topic(reader_data.subscription_topic_data.topic_name());
     for writer in existing_writers {
       self.send_discovery_notification(DiscoveryNotificationType::WriterUpdated {
-        discovered_writer_data: writer.clone(),
+        discovered_writer_data: writer,
       });
     }
   }
