@@ -7,7 +7,8 @@
 //! 64 fit 2 cores because robots' participants ignore each other (DdsConfig::context): before
 //! that, every participant matched every other and the reliable built-in endpoints'
 //! HEARTBEAT/ACKNACK traffic grew with the square of the fleet; 40 robots were ready after
-//! 18–34 s or never, 64 never.
+//! 18–34 s or never, 64 never. After that, 3 runs in 11 still hung: a RustDDS deadlock in the
+//! supervisor creating its 64 action clients (fixed in vendor/rustdds; docs/ros2.md).
 #![cfg(feature = "ros2")]
 
 use crate::ros2_support as support;

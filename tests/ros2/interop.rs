@@ -67,11 +67,16 @@ async fn cyclone_dds_in_python_receives_every_firing_with_its_fields() {
         .iter()
         .map(|r| robot(dir.path(), r, d))
         .collect();
-    // The 3 robots and the Cyclone reader subscribe to /gspn/firings.
+    // The 3 robots and the Cyclone reader subscribe to /gspn/firings. The supervisor waits
+    // up to 10 s (not the default 0.5 s) for every firing to be acknowledged: on a loaded
+    // 2-core machine, beside the 64-robot fleet test, the Python reader once had not
+    // acknowledged the 40th when the supervisor left, and never got it.
     let sup = supervisor(
         dir.path(),
         d,
         &[
+            "--ros2-linger",
+            "10",
             "--max-firings",
             &N.to_string(),
             "--ros2-wait-subscribers",
