@@ -45,6 +45,8 @@ pub struct Ros2Backend {
     places: RemotePlaces,
     watch: RobotWatch,
     run_state: RunStatePublisher,
+    /// The `/rosout` forwarder, when asked (ends with the backend).
+    _rosout: Option<AbortOnDrop>,
 }
 
 impl std::fmt::Debug for Ros2Backend {
@@ -84,6 +86,12 @@ impl Ros2Backend {
         subscribers: usize,
     ) -> Result<Ros2Backend, Ros2Error> {
         let mut node = cfg.node("supervisor")?;
+        // From here on the ROS 2 layer's warnings reach /rosout too, when asked.
+        let rosout = cfg
+            .rosout
+            .then(|| super::rosout::forward(&mut node))
+            .transpose()?
+            .map(AbortOnDrop);
         let spinner = node.spinner().map_err(Ros2Error::dds)?;
         let spin = tokio::spawn(async move {
             if let Err(e) = spinner.spin().await {
@@ -170,6 +178,7 @@ impl Ros2Backend {
             task: None,
             places: RemotePlaces::new(servers, links),
             watch,
+            _rosout: rosout,
         })
     }
 

@@ -194,6 +194,11 @@ pub async fn serve(
 ) -> Result<RobotStats, Ros2Error> {
     let node_name = format!("robot_{}", sanitize(&opts.id));
     let mut node = cfg.node(&node_name)?;
+    // From here on the ROS 2 layer's warnings reach /rosout too, when asked.
+    let rosout = cfg
+        .rosout
+        .then(|| super::rosout::forward(&mut node))
+        .transpose()?;
     let spinner = node.spinner().map_err(Ros2Error::dds)?;
     let spin = tokio::spawn(spinner.spin());
     let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;
@@ -257,6 +262,9 @@ pub async fn serve(
     }
     beat.abort();
     spin.abort();
+    if let Some(r) = rosout {
+        r.abort();
+    }
     let mut stats = shared
         .stats
         .lock()
