@@ -77,8 +77,7 @@ async fn kill_r2(dir: &std::path::Path, d: u16, extra: &[&str]) -> (Proc, Vec<Pr
 }
 
 /// The supervisor's stderr line of the heartbeat watch's warning (unchanged by the flag).
-const WARNING_ON_STDERR: &str =
-    "WARN gspn::ros2::heartbeat: robot `r2`: no heartbeat for 1s: lost";
+const WARNING_ON_STDERR: &str = "WARN gspn::ros2::heartbeat: robot `r2`: no heartbeat for 1s: lost";
 
 /// The warning's message on /rosout.
 const WARNING: &str = "robot `r2`: no heartbeat for 1s: lost";

@@ -253,7 +253,7 @@ fn ros2_mistakes_are_refused_at_their_position() {
     refused(
         "net = \"n.xml\"\n[ros2]\nrosout = \"yes\"\n",
         (3, 10),
-        "",
+        "boolean",
     );
     refused(
         "net = \"n.xml\"\n[ros2]\ndomian_id = 3\n",
