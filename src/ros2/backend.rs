@@ -85,7 +85,7 @@ impl Ros2Backend {
         cfg: &DdsConfig,
         subscribers: usize,
     ) -> Result<Ros2Backend, Ros2Error> {
-        let mut node = cfg.node("supervisor")?;
+        let mut node = cfg.node("supervisor", None)?;
         // From here on the ROS 2 layer's warnings reach /rosout too, when asked.
         let rosout = cfg
             .rosout

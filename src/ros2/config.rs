@@ -17,6 +17,10 @@ use ros2_client::{Context, NodeName, NodeOptions};
 
 use super::settings::Ros2Settings;
 
+/// The start of the DDS entity name of every gspn robot's participant (`gspn robot r3`):
+/// robots ignore the participants whose name starts with it.
+pub const ROBOT_PARTICIPANT: &str = "gspn robot ";
+
 /// How a process joins DDS and how the supervisor watches robots.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DdsConfig {
@@ -156,20 +160,29 @@ impl DdsConfig {
     }
 
     /// A ROS 2 context (one DDS participant) with these settings: every socket bound to the
-    /// configured address.
-    pub fn context(&self) -> Result<Context, ConfigError> {
+    /// configured address. A `robot`'s participant announces the entity name
+    /// `gspn robot <id>` ([`ROBOT_PARTICIPANT`]) and ignores every other participant that
+    /// announces one: robots talk only to the supervisor (and to tools and listeners), so
+    /// a fleet's discovery traffic grows with the number of robots instead of its square.
+    pub fn context(&self, robot: Option<&str>) -> Result<Context, ConfigError> {
         let mut b = DomainParticipantBuilder::new(self.domain_id)
             .localhost_peer_count(self.localhost_peers);
         if let Some(a) = self.bind_address()? {
             b = b.with_only_networks([a]).bind_address(a);
         }
+        if let Some(id) = robot {
+            b = b
+                .entity_name(format!("{ROBOT_PARTICIPANT}{id}"))
+                .ignore_participants_named(ROBOT_PARTICIPANT);
+        }
         let dp = b.build().map_err(|e| ConfigError::Dds(format!("{e:?}")))?;
         Context::from_domain_participant(dp).map_err(|e| ConfigError::Dds(format!("{e:?}")))
     }
 
-    /// A node named `name` in namespace `/gspn`, in a new context.
-    pub fn node(&self, name: &str) -> Result<ros2_client::Node, ConfigError> {
-        let ctx = self.context()?;
+    /// A node named `name` in namespace `/gspn`, in a new context (robot `robot`'s, see
+    /// [`DdsConfig::context`]).
+    pub fn node(&self, name: &str, robot: Option<&str>) -> Result<ros2_client::Node, ConfigError> {
+        let ctx = self.context(robot)?;
         let name = NodeName::new("/gspn", name).map_err(|e| ConfigError::Dds(format!("{e:?}")))?;
         ctx.new_node(name, NodeOptions::new().enable_rosout(false))
             .map_err(|e| ConfigError::Dds(format!("{e:?}")))

@@ -193,7 +193,7 @@ pub async fn serve(
     stop: impl Future<Output = ()>,
 ) -> Result<RobotStats, Ros2Error> {
     let node_name = format!("robot_{}", sanitize(&opts.id));
-    let mut node = cfg.node(&node_name)?;
+    let mut node = cfg.node(&node_name, Some(&opts.id))?;
     // From here on the ROS 2 layer's warnings reach /rosout too, when asked.
     let rosout = cfg
         .rosout

@@ -51,6 +51,16 @@ async fn cyclone_dds_in_python_receives_every_firing_with_its_fields() {
         Ok(Err(e)) => panic!("the Cyclone listener failed:\n{e}"),
         Err(_) => panic!("the Cyclone listener did not start within 60 s"),
     }
+    // The rest of its stderr (a Python traceback, Cyclone's own errors), read as it comes so
+    // a full pipe never blocks it, and shown if it fails.
+    let stderr = tokio::spawn(async move {
+        let mut rest = String::new();
+        while let Ok(Some(l)) = err.next_line().await {
+            rest.push_str(&l);
+            rest.push('\n');
+        }
+        rest
+    });
 
     let journal = dir.path().join("journal.jsonl");
     let _robots: Vec<_> = ["r1", "r2", "r3"]
@@ -86,7 +96,13 @@ async fn cyclone_dds_in_python_receives_every_firing_with_its_fields() {
         .lines()
         .map(|l| serde_json::from_str(l).expect("one JSON firing per line"))
         .collect();
-    assert_eq!(got.status.code(), Some(0), "received {}", lines.len());
+    let stderr = stderr.await.unwrap_or_default();
+    assert_eq!(
+        got.status.code(),
+        Some(0),
+        "received {}; its stderr:\n{stderr}",
+        lines.len()
+    );
     assert_eq!(lines.len(), N);
 
     // What the supervisor recorded, firing by firing.

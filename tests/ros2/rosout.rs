@@ -25,7 +25,9 @@ fn rosout(domain: u16) -> mpsc::UnboundedReceiver<Log> {
         domain_id: domain,
         ..DdsConfig::default()
     };
-    let mut node = cfg.node("test_rosout").expect("a DDS node on loopback");
+    let mut node = cfg
+        .node("test_rosout", None)
+        .expect("a DDS node on loopback");
     let topic = node
         .create_topic(
             &Name::parse("/rosout").unwrap(),

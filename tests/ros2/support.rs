@@ -209,7 +209,9 @@ pub fn listen(
         domain_id: domain,
         ..DdsConfig::default()
     };
-    let mut node = cfg.node("test_listener").expect("a DDS node on loopback");
+    let mut node = cfg
+        .node("test_listener", None)
+        .expect("a DDS node on loopback");
     let listener = FiringListener::new(&mut node).expect("subscriptions");
     let (ftx, frx) = mpsc::unbounded_channel();
     let (mtx, mrx) = mpsc::unbounded_channel();

@@ -33,7 +33,7 @@ use crate::{
     typedesc::TypeDesc,
   },
   discovery::{
-    discovery::{Discovery, DiscoveryCommand},
+    discovery::{Discovery, DiscoveryCommand, ParticipantNaming},
     discovery_db::DiscoveryDB,
     sedp_messages::{DiscoveredReaderData, DiscoveredTopicData, DiscoveredWriterData},
   },
@@ -86,6 +86,8 @@ pub struct DomainParticipantBuilder {
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
 
+  naming: ParticipantNaming, // the ENTITY_NAME announced; the names of participants ignored
+
   #[cfg(feature = "security")]
   security_plugins: Option<SecurityPlugins>,
   #[cfg(feature = "security")]
@@ -102,6 +104,7 @@ impl DomainParticipantBuilder {
       localhost_peer_count: SPDP_LOCALHOST_PEER_COUNT,
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
+      naming: ParticipantNaming::default(),
       #[cfg(feature = "security")]
       security_plugins: None,
       #[cfg(feature = "security")]
@@ -162,6 +165,26 @@ impl DomainParticipantBuilder {
   /// hosts with more participants.
   pub fn localhost_peer_count(mut self, count: u16) -> Self {
     self.localhost_peer_count = count.min(120);
+    self
+  }
+
+  /// The participant's name, announced in its SPDP data (`PID_ENTITY_NAME`;
+  /// default: none).
+  pub fn entity_name(mut self, name: impl Into<String>) -> Self {
+    self.naming.entity_name = Some(name.into());
+    self
+  }
+
+  /// Ignore every other participant whose announced entity name starts with
+  /// `prefix`, as DDS `ignore_participant` does, decided on its SPDP data:
+  /// no built-in or user endpoint of it is matched, so no discovery or user
+  /// traffic flows between the two. Participants that all announce a name
+  /// with `prefix` and all ignore it talk only to the others (e.g. a
+  /// supervisor): discovery traffic grows with their number instead of its
+  /// square. Both sides must ignore each other: a participant that does not
+  /// would keep heartbeating readers that never answer.
+  pub fn ignore_participants_named(mut self, prefix: impl Into<String>) -> Self {
+    self.naming.ignored_prefix = Some(prefix.into());
     self
   }
 
@@ -396,6 +419,7 @@ impl DomainParticipantBuilder {
     // Construct and start background thread
     let dp_clone = dp.weak_clone();
     let disc_db_clone = dp.discovery_db();
+    let naming = self.naming;
     let discovery_handle = thread::Builder::new()
       .name("RustDDS discovery thread".to_string())
       .spawn(move || {
@@ -410,6 +434,7 @@ impl DomainParticipantBuilder {
           security_plugins_handle,
           discovery_waker,
           discovery_sample_receiver,
+          naming,
         ) {
           discovery.discovery_event_loop(); // run the event loop
         }

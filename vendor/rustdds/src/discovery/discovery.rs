@@ -239,6 +239,9 @@ pub(crate) struct Discovery {
   // timer to periodically announce our presence
   dcps_participant: with_key::DiscoveryTopicPlCdr<SpdpDiscoveredParticipantData>,
 
+  // The entity name announced in our SPDP data, and the names of the participants ignored.
+  naming: ParticipantNaming,
+
   // Topic "DCPSSubscription" - announcing and detecting Readers
   dcps_subscription: with_key::DiscoveryTopicPlCdr<DiscoveredReaderData>,
 
@@ -298,6 +301,28 @@ pub(crate) struct Discovery {
   spdp_quick_response_sent: std::collections::HashSet<GuidPrefix>,
 }
 
+/// The entity name a participant announces, and which other participants it
+/// ignores by theirs (`DomainParticipantBuilder::entity_name`,
+/// `DomainParticipantBuilder::ignore_participants_named`).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ParticipantNaming {
+  pub(crate) entity_name: Option<String>,
+  pub(crate) ignored_prefix: Option<String>,
+}
+
+impl ParticipantNaming {
+  /// True for another participant whose announced name starts with the
+  /// ignored prefix (never for ourselves).
+  fn ignores(&self, data: &SpdpDiscoveredParticipantData, own: GuidPrefix) -> bool {
+    match (&self.ignored_prefix, &data.entity_name) {
+      (Some(prefix), Some(name)) => {
+        data.participant_guid.prefix != own && name.starts_with(prefix.as_str())
+      }
+      _ => false,
+    }
+  }
+}
+
 impl Discovery {
   const PARTICIPANT_CLEANUP_PERIOD: StdDuration = StdDuration::from_secs(2);
   const TOPIC_CLEANUP_PERIOD: StdDuration = StdDuration::from_secs(60); // timer for cleaning up inactive topics
@@ -318,6 +343,7 @@ impl Discovery {
     security_plugins_opt: Option<SecurityPluginsHandle>,
     waker: LoopWaker,
     discovery_samples: ReadyReceiver<Token>,
+    naming: ParticipantNaming,
   ) -> CreateResult<Self> {
     // helper macro to handle initialization failures.
     macro_rules! try_construct {
@@ -656,6 +682,7 @@ impl Discovery {
 
     Ok(Self {
       poll,
+      naming,
       domain_participant,
       discovery_db,
       discovery_started_sender,
@@ -959,11 +986,12 @@ impl Discovery {
       return;
     };
 
-    let participant_data = SpdpDiscoveredParticipantData::from_local_participant(
+    let mut participant_data = SpdpDiscoveredParticipantData::from_local_participant(
       &dp,
       &self.security_opt,
       Duration::INFINITE,
     );
+    participant_data.entity_name = self.naming.entity_name.clone();
 
     // Initialize our own participant data into the Discovery DB, so we can talk to
     // ourself.
@@ -1005,7 +1033,14 @@ impl Discovery {
             match ds.value {
               Sample::Value(participant_data) => {
                 debug!("spdp_receive discovered {:?}", participant_data);
-                self.process_discovered_participant_data(&participant_data);
+                if self.naming.ignores(
+                  &participant_data,
+                  self.domain_participant.guid().prefix,
+                ) {
+                  trace!("spdp_receive: ignored {:?}", participant_data.entity_name);
+                } else {
+                  self.process_discovered_participant_data(&participant_data);
+                }
               }
               // Sample::Dispose means that DomainParticipant was disposed
               Sample::Dispose(participant_guid) => {
@@ -1445,11 +1480,12 @@ impl Discovery {
   fn spdp_publish(&self, local_dp: &DomainParticipant) {
     // setting 5 times the duration so lease doesn't break if update fails once or
     // twice
-    let data = SpdpDiscoveredParticipantData::from_local_participant(
+    let mut data = SpdpDiscoveredParticipantData::from_local_participant(
       local_dp,
       &self.security_opt,
       5.0 * Duration::from(Self::SPDP_PUBLISH_PERIOD),
     );
+    data.entity_name = self.naming.entity_name.clone();
 
     #[cfg(feature = "security")]
     if let Some(security) = self.security_opt.as_ref() {
@@ -1829,50 +1865,72 @@ impl Discovery {
     }
   }
 
+  // The two below copy what they need out of the DiscoveryDB and release its
+  // lock before they publish or notify (gspn patch). They held the read lock
+  // across `send_discovery_notification`, a blocking send into a bounded
+  // channel that the DP event loop drains: with the channel full, the event
+  // loop waiting for the read lock behind an application thread waiting for
+  // the write lock (create_datawriter; std's RwLock makes new readers wait for a
+  // waiting writer), the three threads deadlocked. Seen in a supervisor
+  // creating 64 action clients: its event loop stopped for good.
   fn add_local_writer(&self, guid: GUID) {
     // Get writer data from db
-    let db = discovery_db_read(&self.discovery_db);
-    let writer_data = match db.get_local_topic_writer(guid) {
-      Some(d) => d,
-      None => {
-        warn!("Did not find a local writer {guid:?}");
-        return;
-      }
+    let (writer_data, existing_readers) = {
+      let db = discovery_db_read(&self.discovery_db);
+      let writer_data = match db.get_local_topic_writer(guid) {
+        Some(d) => d.clone(),
+        None => {
+          warn!("Did not find a local writer {guid:?}");
+          return;
+        }
+      };
+      let readers: Vec<DiscoveredReaderData> = db
+        .readers_on_topic(writer_data.publication_topic_data.topic_name())
+        .into_iter()
+        .cloned()
+        .collect();
+      (writer_data, readers)
     };
 
     // Publish it to SEDP (if needed)
-    self.sedp_publish_single_user_writer(writer_data);
+    self.sedp_publish_single_user_writer(&writer_data);
 
     // Send the ReaderUpdated notification on any existing readers on the writer's
     // topic This will result in matching the endpoints if possible
-    let existing_readers = db.readers_on_topic(writer_data.publication_topic_data.topic_name());
     for reader in existing_readers {
       self.send_discovery_notification(DiscoveryNotificationType::ReaderUpdated {
-        discovered_reader_data: reader.clone(),
+        discovered_reader_data: reader,
       });
     }
   }
 
   fn add_local_reader(&self, guid: GUID) {
     // Get reader data from db
-    let db = discovery_db_read(&self.discovery_db);
-    let reader_data = match db.get_local_topic_reader(guid) {
-      Some(d) => d,
-      None => {
-        warn!("Did not find a local reader {guid:?}");
-        return;
-      }
+    let (reader_data, existing_writers) = {
+      let db = discovery_db_read(&self.discovery_db);
+      let reader_data = match db.get_local_topic_reader(guid) {
+        Some(d) => d.clone(),
+        None => {
+          warn!("Did not find a local reader {guid:?}");
+          return;
+        }
+      };
+      let writers: Vec<DiscoveredWriterData> = db
+        .writers_on_topic(reader_data.subscription_topic_data.topic_name())
+        .into_iter()
+        .cloned()
+        .collect();
+      (reader_data, writers)
     };
 
     // Publish it to SEDP (if needed)
-    self.sedp_publish_single_user_reader(reader_data);
+    self.sedp_publish_single_user_reader(&reader_data);
 
     // Send the WriterUpdated notification on any existing writers on the readers's
     // topic This will result in matching the endpoints if possible
-    let existing_writers = db.writers_on_topic(reader_data.subscription_topic_data.topic_name());
     for writer in existing_writers {
       self.send_discovery_notification(DiscoveryNotificationType::WriterUpdated {
-        discovered_writer_data: writer.clone(),
+        discovered_writer_data: writer,
       });
     }
   }
