@@ -260,11 +260,11 @@ pub async fn serve(
     for g in goals {
         g.abort();
     }
+    if let Some(r) = rosout {
+        r.finish(LEAVE_WAIT).await;
+    }
     beat.abort();
     spin.abort();
-    if let Some(r) = rosout {
-        r.abort();
-    }
     let mut stats = shared
         .stats
         .lock()

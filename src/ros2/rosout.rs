@@ -12,7 +12,8 @@
 //!   `[ros2] rosout = true`): a publisher on `rt/rosout` with rcl's QoS (reliable,
 //!   transient local, keep last 1000, lifespan 10 s) and a task that publishes every record
 //!   with the node's logger name (`gspn.supervisor`: the fully qualified name without the
-//!   leading `/`, `/` → `.`, as rcl names a node's logger). Events before that are not sent.
+//!   leading `/`, `/` → `.`, as rcl names a node's logger). Events before that are not sent;
+//!   [`Forwarder::finish`] sends the last ones before the process leaves.
 
 use std::cell::Cell;
 use std::fmt::Write as _;
@@ -190,10 +191,17 @@ pub fn qos() -> QosProfile {
     q
 }
 
+/// The node's side of `/rosout` ([`forward`]): its task publishes what [`RosoutLayer`]
+/// gives; dropped, the task is aborted.
+#[derive(Debug)]
+pub struct Forwarder {
+    task: Option<JoinHandle<()>>,
+}
+
 /// Starts publishing on `/rosout` what [`RosoutLayer`] gives from now on, with `node`'s
-/// logger name; the task ends when aborted (then nothing is forwarded any more). A second
-/// call replaces the first's channel.
-pub fn forward(node: &mut Node) -> Result<JoinHandle<()>, Ros2Error> {
+/// logger name, until [`Forwarder::finish`] (or the forwarder is dropped). A second call
+/// takes the records from the first.
+pub fn forward(node: &mut Node) -> Result<Forwarder, Ros2Error> {
     let name = Name::parse("/rosout").map_err(Ros2Error::dds)?;
     let topic = node
         .create_topic(&name, MessageTypeName::new("rcl_interfaces", "Log"), &qos())
@@ -207,7 +215,7 @@ pub fn forward(node: &mut Node) -> Result<JoinHandle<()>, Ros2Error> {
         *sink = Some(tx);
     }
     ACTIVE.store(true, Ordering::Relaxed);
-    Ok(tokio::spawn(Quiet(Box::pin(async move {
+    let task = tokio::spawn(Quiet(Box::pin(async move {
         while let Some(r) = rx.recv().await {
             let log = Log {
                 stamp: r.stamp,
@@ -221,7 +229,37 @@ pub fn forward(node: &mut Node) -> Result<JoinHandle<()>, Ros2Error> {
             // Not logged: a warning about /rosout would come back here.
             let _ = publisher.async_publish(log).await;
         }
-    }))))
+        // The queue is closed (`finish`): the subscribers get the last records before the
+        // process leaves (bounded by the caller).
+        let _ = publisher.async_wait_for_acknowledgments().await;
+    })));
+    Ok(Forwarder { task: Some(task) })
+}
+
+impl Forwarder {
+    /// Stops taking records, publishes those queued and waits (at most `limit`) until the
+    /// subscribers of `/rosout` acknowledged them: the warnings of a leaving process reach
+    /// `/rosout` before it exits.
+    pub async fn finish(mut self, limit: Duration) {
+        ACTIVE.store(false, Ordering::Relaxed);
+        if let Ok(mut sink) = SINK.lock() {
+            *sink = None;
+        }
+        if let Some(t) = self.task.take() {
+            let abort = t.abort_handle();
+            if tokio::time::timeout(limit, t).await.is_err() {
+                abort.abort();
+            }
+        }
+    }
+}
+
+impl Drop for Forwarder {
+    fn drop(&mut self) {
+        if let Some(t) = self.task.take() {
+            t.abort();
+        }
+    }
 }
 
 /// A future during whose polls [`RosoutLayer`] ignores the thread's events.
@@ -264,5 +302,49 @@ mod tests {
         assert_eq!(q.history, History::KeepLast { depth: 1000 });
         assert_eq!(q.durability, Durability::TransientLocal);
         assert_eq!(q.lifespan, Some(Duration::from_secs(10)));
+    }
+
+    #[test]
+    fn the_layer_queues_matching_events_without_blocking_and_counts_what_it_drops() {
+        use tracing_subscriber::layer::SubscriberExt as _;
+        let (tx, mut rx) = mpsc::channel::<Record>(3);
+        *SINK.lock().unwrap() = Some(tx);
+        ACTIVE.store(true, Ordering::Relaxed);
+        let dropped_before = dropped();
+        // RustDDS and ros2-client log through `log`, bridged as in `plan-runner`.
+        let _ = tracing_log::LogTracer::init();
+        let subscriber = tracing_subscriber::registry().with(RosoutLayer::filtered());
+        let (line, log_line) = tracing::subscriber::with_default(subscriber, || {
+            tracing::info!(target: "gspn::ros2::heartbeat", "not forwarded: info");
+            tracing::warn!(target: "gspn::runtime", "not forwarded: not the ROS 2 layer");
+            tracing::warn!(target: "rustdds::rtps", "not forwarded: a DDS warning");
+            let line = line!() + 1;
+            tracing::warn!(target: "gspn::ros2::heartbeat", robot = "r2", "lost {}", 1);
+            tracing::error!(target: "rustdds::rtps", "an error");
+            tracing_log::log::warn!(target: "rustdds::rtps", "not forwarded: a bridged warning");
+            let log_line = line!() + 1;
+            tracing_log::log::error!(target: "rustdds::rtps::writer", "a bridged error");
+            tracing::error!(target: "ros2_client::x", "a fourth: the queue (3) is full");
+            (line, log_line)
+        });
+        ACTIVE.store(false, Ordering::Relaxed);
+        *SINK.lock().unwrap() = None;
+        let first = rx.try_recv().unwrap();
+        assert_eq!(first.level, 30);
+        assert_eq!(first.msg, "lost 1 robot=r2");
+        assert!(first.file.ends_with("src/ros2/rosout.rs"), "{first:?}");
+        assert_eq!(first.line, line);
+        assert_eq!(first.function, "gspn::ros2::rosout::tests");
+        assert!(first.stamp.to_nanos() > 1_700_000_000_000_000_000);
+        let second = rx.try_recv().unwrap();
+        assert_eq!((second.level, second.msg.as_str()), (40, "an error"));
+        // A `log` record: its own target, file and line, not the bridge's.
+        let third = rx.try_recv().unwrap();
+        assert_eq!((third.level, third.msg.as_str()), (40, "a bridged error"));
+        assert_eq!(third.function, "gspn::ros2::rosout::tests");
+        assert!(third.file.ends_with("src/ros2/rosout.rs"), "{third:?}");
+        assert_eq!(third.line, log_line);
+        assert!(rx.try_recv().is_err());
+        assert_eq!(dropped() - dropped_before, 1);
     }
 }

@@ -6,6 +6,7 @@
 
 use crate::ros2_support as support;
 
+use std::path::Path;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use futures_util::StreamExt;
@@ -13,7 +14,9 @@ use gspn::ros2::DdsConfig;
 use gspn::ros2::rosout::qos;
 use ros2_client::log::Log;
 use ros2_client::{MessageTypeName, Name, Subscription};
-use support::{Proc, domain, finish, listen, robot, supervisor, take};
+use support::{
+    PLAN, Proc, assert_leaves, domain, finish, listen, robot, robot_with, supervisor, take,
+};
 use tokio::sync::mpsc;
 
 const ROBOTS: [&str; 3] = ["r1", "r2", "r3"];
@@ -143,4 +146,50 @@ async fn the_ros2_layer_s_warnings_reach_rosout_only_when_asked() {
         quiet.is_err(),
         "/rosout without --ros2-rosout received {quiet:?}"
     );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_robot_s_warning_reaches_rosout_under_its_own_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = domain(16);
+    let mut logs = rosout(d);
+    let (mut firings, _markings) = listen(d);
+    let r1 = robot_with(dir.path(), "r1", Path::new(PLAN), d, &["--ros2-rosout"]);
+    let others: Vec<_> = ["r2", "r3"]
+        .iter()
+        .map(|r| robot(dir.path(), r, d))
+        .collect();
+    let mut sup = supervisor(
+        dir.path(),
+        d,
+        &["--max-firings", "1000000", "--ros2-wait-subscribers", "4"],
+    );
+    let before = take(&mut firings, 20, Duration::from_secs(90)).await;
+    assert_eq!(before.len(), 20, "supervisor log:\n{}", sup.log());
+    // The supervisor killed (SIGKILL): r1's watch of its heartbeat warns, then r1 leaves.
+    sup.child.start_kill().expect("kill the supervisor");
+    let end = tokio::time::Instant::now() + Duration::from_secs(20);
+    let mut got = Vec::new();
+    let found = loop {
+        match tokio::time::timeout_at(end, logs.recv()).await {
+            Ok(Some(l)) if l.msg == "supervisor: no heartbeat for 1s: lost" => break Some(l),
+            Ok(Some(l)) => got.push(l),
+            _ => break None,
+        }
+    };
+    let log =
+        found.unwrap_or_else(|| panic!("no supervisor warning on /rosout; received: {got:?}"));
+    assert_eq!(log.level, Log::WARN);
+    assert_eq!(log.name, "gspn.robot_r1");
+    assert_eq!(log.function, "gspn::ros2::heartbeat");
+    for l in &got {
+        assert_eq!(l.name, "gspn.robot_r1", "only r1 was asked: {l:?}");
+    }
+    assert_leaves(
+        r1,
+        Duration::from_secs(20),
+        "the supervisor's heartbeat stopped",
+    )
+    .await;
+    drop(others);
 }
