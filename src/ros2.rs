@@ -10,6 +10,7 @@
 //!   `ros2` places with net-timed local actions.
 //! - [`heartbeat`]: robots' heartbeats and the supervisor's [`heartbeat::RobotWatch`], which
 //!   turns a silent robot into a failed action.
+//! - [`rosout`]: the ROS 2 layer's warnings and errors on `/rosout` when asked.
 //! - [`config`]: domain, networks (loopback by default), timings.
 //! - [`settings`]: what a plan tells the backend ([`Ros2Settings`]); compiled without the
 //!   feature too, so plans read the same everywhere.
@@ -32,6 +33,8 @@ pub mod msgs;
 pub mod remote_place;
 #[cfg(feature = "ros2")]
 pub mod robot;
+#[cfg(feature = "ros2")]
+pub mod rosout;
 
 #[cfg(feature = "ros2")]
 pub use backend::Ros2Backend;

@@ -39,6 +39,10 @@ pub struct Ros2File {
     /// rmw_cyclonedds_cpp does; for robots on Cyclone DDS).
     #[schemars(with = "Option<String>")]
     pub service_mapping: Option<Spanned<String>>,
+    /// Whether the process's ROS 2 node publishes the ROS 2 layer's warnings and errors on
+    /// `/rosout` (rcl_interfaces/msg/Log), as ROS 2 nodes do (default false;
+    /// `--ros2-rosout` turns it on too).
+    pub rosout: Option<bool>,
 }
 
 /// The `[ros2]` table and the `server` keys of the places.
@@ -87,6 +91,7 @@ pub(super) fn resolve_ros2(
                 )
             })?;
         }
+        s.rosout = f.rosout;
         for (key, v, slot) in [
             ("heartbeat", &f.heartbeat, &mut s.heartbeat),
             ("lost_after", &f.lost_after, &mut s.lost_after),

@@ -45,6 +45,8 @@ pub struct Ros2Backend {
     places: RemotePlaces,
     watch: RobotWatch,
     run_state: RunStatePublisher,
+    /// The `/rosout` forwarder, when asked.
+    rosout: Option<super::rosout::Forwarder>,
 }
 
 impl std::fmt::Debug for Ros2Backend {
@@ -84,6 +86,11 @@ impl Ros2Backend {
         subscribers: usize,
     ) -> Result<Ros2Backend, Ros2Error> {
         let mut node = cfg.node("supervisor", None)?;
+        // From here on the ROS 2 layer's warnings reach /rosout too, when asked.
+        let rosout = cfg
+            .rosout
+            .then(|| super::rosout::forward(&mut node))
+            .transpose()?;
         let spinner = node.spinner().map_err(Ros2Error::dds)?;
         let spin = tokio::spawn(async move {
             if let Err(e) = spinner.spin().await {
@@ -170,6 +177,7 @@ impl Ros2Backend {
             task: None,
             places: RemotePlaces::new(servers, links),
             watch,
+            rosout,
         })
     }
 
@@ -204,7 +212,8 @@ impl Ros2Backend {
     /// killed robot whose reader DDS still counts, costs the whole of it). The second wait
     /// has its own `linger`, not what the first left: the end of the run is written to the
     /// DDS event loop, which sends it after `publish` returns, so with no time left the
-    /// process could exit before the live robots were ever sent it.
+    /// process could exit before the live robots were ever sent it. The `/rosout` records
+    /// (`--ros2-rosout`) get a last `linger` too.
     pub async fn finish(mut self, linger: Duration, stopped: &str) -> Published {
         let mut published = match self.task.take() {
             Some(t) => t.await.unwrap_or_default(),
@@ -228,6 +237,9 @@ impl Ros2Backend {
             tracing::warn!(
                 "not every subscriber acknowledged the end of the run within {linger:?} (--ros2-linger)"
             );
+        }
+        if let Some(r) = self.rosout.take() {
+            r.finish(linger).await;
         }
         self.beat.0.abort();
         self.spin.abort();

@@ -43,6 +43,9 @@ pub struct DdsConfig {
     /// inline QoS; Fast DDS's ROS 2) or `Cyclone` (a header in the payload, as
     /// `rmw_cyclonedds_cpp` does; any DDS that cannot write inline QoS can speak it).
     pub service_mapping: ServiceMapping,
+    /// Whether the process's node publishes the ROS 2 layer's warnings and errors on
+    /// `/rosout` ([`super::rosout`]).
+    pub rosout: bool,
 }
 
 impl Default for DdsConfig {
@@ -55,6 +58,7 @@ impl Default for DdsConfig {
             lost_after: Duration::from_millis(1000),
             startup: Duration::from_secs(30),
             service_mapping: ServiceMapping::Enhanced,
+            rosout: false,
         }
     }
 }
@@ -129,6 +133,7 @@ impl DdsConfig {
             super::settings::ServiceMapping::Enhanced => ServiceMapping::Enhanced,
             super::settings::ServiceMapping::Cyclone => ServiceMapping::Cyclone,
         };
+        c.rosout = plan.rosout.unwrap_or(false);
         c.bind_address()?;
         Ok(c)
     }

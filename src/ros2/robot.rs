@@ -194,6 +194,11 @@ pub async fn serve(
 ) -> Result<RobotStats, Ros2Error> {
     let node_name = format!("robot_{}", sanitize(&opts.id));
     let mut node = cfg.node(&node_name, Some(&opts.id))?;
+    // From here on the ROS 2 layer's warnings reach /rosout too, when asked.
+    let rosout = cfg
+        .rosout
+        .then(|| super::rosout::forward(&mut node))
+        .transpose()?;
     let spinner = node.spinner().map_err(Ros2Error::dds)?;
     let spin = tokio::spawn(spinner.spin());
     let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;
@@ -254,6 +259,9 @@ pub async fn serve(
     let _ = tokio::time::timeout(LEAVE_WAIT, ended).await;
     for g in goals {
         g.abort();
+    }
+    if let Some(r) = rosout {
+        r.finish(LEAVE_WAIT).await;
     }
     beat.abort();
     spin.abort();

@@ -25,6 +25,9 @@ pub struct Ros2Settings {
     pub startup: Option<f64>,
     /// How ExecPlace's services carry request ids (default [`ServiceMapping::Enhanced`]).
     pub service_mapping: ServiceMapping,
+    /// Whether the process's node forwards the ROS 2 layer's warnings and errors to
+    /// `/rosout` (`None`: not said; the default is off; `--ros2-rosout` turns it on).
+    pub rosout: Option<bool>,
     /// Places whose action is `ros2`, with their ExecPlace server name, in net order.
     pub servers: Vec<(PlaceId, String)>,
 }

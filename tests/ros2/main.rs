@@ -21,4 +21,5 @@ mod lifecycle;
 mod multiprocess;
 mod netns;
 mod python_robot;
+mod rosout;
 mod security;

@@ -103,17 +103,25 @@ const DEFAULT_LOG: &str = "warn,gspn=info,rustdds::rtps::writer=error,\
 
 /// Warnings and errors of the library and of its dependencies (RustDDS and ros2-client log
 /// through `log`, bridged) go to stderr; `RUST_LOG` overrides the default filter
-/// (`DEFAULT_LOG`: the library's notices, everyone's warnings but three noisy ones).
+/// (`DEFAULT_LOG`: the library's notices, everyone's warnings but three noisy ones). With
+/// feature `ros2`, a second layer with its own filter hands the ROS 2 layer's warnings and
+/// errors to `/rosout` once a node forwards them (`--ros2-rosout`; it does nothing before).
 fn init_logging() {
+    use tracing_subscriber::Layer as _;
+    use tracing_subscriber::layer::SubscriberExt as _;
+    use tracing_subscriber::util::SubscriberInitExt as _;
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(DEFAULT_LOG));
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
+    let stderr = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .with_target(true)
         .without_time()
-        .try_init();
+        .with_filter(filter);
+    let registry = tracing_subscriber::registry().with(stderr);
+    #[cfg(feature = "ros2")]
+    let registry = registry.with(gspn::ros2::rosout::RosoutLayer::filtered());
+    let _ = registry.try_init();
 }
 
 /// Rust ignores SIGPIPE, so printing to a closed pipe (`plan-runner … | head`) would panic;

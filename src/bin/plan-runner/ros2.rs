@@ -29,6 +29,10 @@ pub(crate) struct DdsArgs {
     /// $GSPN_ROS2_NETWORKS, else 127.0.0.1; 0.0.0.0 = every interface].
     #[arg(long, value_name = "ADDRS")]
     ros2_networks: Option<String>,
+    /// Publish the ROS 2 layer's warnings and errors on /rosout (rcl_interfaces/msg/Log, as
+    /// ROS 2 nodes do), besides stderr [default: the plan's `[ros2] rosout`, else off].
+    #[arg(long)]
+    ros2_rosout: bool,
 }
 
 fn domain(s: &str) -> Result<u16, String> {
@@ -45,6 +49,7 @@ impl DdsArgs {
             c.networks = parse_networks(n)
                 .map_err(|why| BadInput(format!("--ros2-networks `{n}`: {why}")))?;
         }
+        c.rosout |= self.ros2_rosout;
         c.bind_address().map_err(|e| BadInput(e.to_string()))?;
         // The supervisor, the robots and a viewer or two on one host: any start order.
         Ok(c.for_fleet(robots(plan).len() + 2))

@@ -204,7 +204,7 @@ fn role_mistakes_are_refused() {
 fn ros2_places_and_settings_resolve() {
     let plan = load(
         "net = \"n.xml\"\n[ros2]\ndomain_id = 42\nnetworks = [\"127.0.0.1\"]\nlost_after = 0.5\n\
-         service_mapping = \"cyclone\"\n\
+         service_mapping = \"cyclone\"\nrosout = true\n\
          [places.P2]\naction = \"ros2\"\nserver = \"exec_p2\"\n[places.P3]\naction = \"ros2\"\n",
     )
     .unwrap();
@@ -216,6 +216,7 @@ fn ros2_places_and_settings_resolve() {
     assert_eq!(plan.ros2.lost_after, Some(0.5));
     assert_eq!(plan.ros2.heartbeat, None);
     assert_eq!(plan.ros2.service_mapping, ServiceMapping::Cyclone);
+    assert_eq!(plan.ros2.rosout, Some(true));
     assert_eq!(
         plan.ros2.servers,
         vec![
@@ -248,6 +249,11 @@ fn ros2_mistakes_are_refused_at_their_position() {
         "net = \"n.xml\"\n[ros2]\nservice_mapping = \"basic\"\n",
         (3, 19),
         "ros2.service_mapping: `basic` is not \"enhanced\" or \"cyclone\"",
+    );
+    refused(
+        "net = \"n.xml\"\n[ros2]\nrosout = \"yes\"\n",
+        (3, 10),
+        "boolean",
     );
     refused(
         "net = \"n.xml\"\n[ros2]\ndomian_id = 3\n",
