@@ -380,3 +380,57 @@ pub(crate) async fn save_layout(
         Some(Ok(n)) => Json(json!({ "pnpro": crate::io::pnpro::write(&n) })).into_response(),
     }
 }
+
+impl WebState {
+    /// The token game's state as JSON, with the last `trace` firings.
+    pub(crate) fn sim_json(&self, trace: usize) -> Value {
+        let version = *self.inner.sim_version.borrow();
+        let net_version = self.editor().version();
+        let s = self.session();
+        let net = s.net().clone();
+        let m = s.marking();
+        let enabled: Vec<&str> = net
+            .transition_ids()
+            .filter(|&t| net.is_enabled(m, t))
+            .map(|t| net.transition(t).name.as_str())
+            .collect();
+        let firable_ids = net.firable(m);
+        let firable: Vec<&str> = firable_ids
+            .iter()
+            .map(|&t| net.transition(t).name.as_str())
+            .collect();
+        // The plan's policy in a vanishing marking: its rule's choice among the firable
+        // immediate transitions (`null` when no rule applies: the net's weights choose).
+        let choice = s
+            .policy()
+            .filter(|_| net.is_vanishing(m))
+            .and_then(|p| {
+                p.rule_for(m, &firable_ids)
+                    .map(|(i, _)| i)
+                    .zip(p.distribution(m, &firable_ids))
+            })
+            .map(|(rule, dist)| {
+                let by_name: serde_json::Map<String, Value> = dist
+                    .iter()
+                    .map(|&(t, p)| (net.transition(t).name.clone(), json!(p)))
+                    .collect();
+                json!({ "rule": rule, "probabilities": by_name })
+            });
+        json!({
+            "version": version,
+            "net_version": net_version,
+            "choice": choice,
+            "seed": s.seed(),
+            "time": s.time(),
+            "firings": s.firings(),
+            "marking": crate::analysis::report::by_place(&net, m),
+            "tokens": m,
+            "text": net.format_marking(m),
+            "enabled": enabled,
+            "firable": firable,
+            "vanishing": net.is_vanishing(m),
+            "dead": firable.is_empty(),
+            "trace": s.trace_tail(trace),
+        })
+    }
+}

@@ -24,6 +24,7 @@
 mod history;
 mod op;
 pub(crate) mod routes;
+mod state;
 
 pub(crate) use history::History;
 pub(crate) use op::{ArcKindName, Edit, EditError, Kind, NodeRef};
