@@ -51,7 +51,8 @@ use crate::analysis::state_space::Options as SpaceOptions;
 use crate::net::{Net, PlaceId, Timing, TransitionId};
 use crate::policy::Policy;
 use crate::runtime::event::{Event, EventKind};
-use crate::sim::{Estimate, SimError, Simulator};
+use crate::sim::{SimError, Simulator};
+use crate::stats::Estimate;
 
 /// The significance level of every verdict.
 pub const ALPHA: f64 = 0.05;

@@ -4,7 +4,7 @@ use serde::Serialize;
 
 use super::*;
 use crate::net::{Net, Timing, TransitionId};
-use crate::sim::Estimate;
+use crate::stats::Estimate;
 
 /// What a row compares.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

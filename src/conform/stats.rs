@@ -1,104 +1,19 @@
-//! The statistics of conformance: batch means over one run, Poisson score intervals for rates,
+//! The tests of conformance: Student t against batch means, Poisson score intervals for rates,
 //! the Lilliefors-corrected Kolmogorov–Smirnov test of exponentiality, Pearson's chi-square
-//! for choices, and the distribution functions they need (normal, Student t, chi-square).
+//! for choices, one-way analysis of variance.
 //!
-//! Intervals are the 95% ones `simulate --runs` prints ([`Estimate`], Student t quantiles from
-//! [`t_quantile_975`]); here the observations are the batches of one run instead of
+//! The estimates they read and the distribution functions they are built from live at the
+//! bottom layer, [`crate::stats`] (re-exported here, where they used to be); intervals are the
+//! 95% ones `simulate --runs` prints, here over the batches of one run instead of
 //! independent runs.
 
+pub use crate::stats::{
+    BatchMeans, Estimate, Z975, erfc, estimate, gamma_q, ratio_estimate, student_t_two_sided,
+    t_quantile_975,
+};
+
 use crate::sample::ln;
-use crate::sim::{Estimate, t_quantile_975};
-
-/// The standard normal 0.975 quantile.
-pub const Z975: f64 = 1.959_963_984_540_054;
-
-/// Batch means over one run: the time axis `[0, end]` cut into `n` batches of equal length;
-/// each statistic is a time integral ([`BatchMeans::advance`]) or a count
-/// ([`BatchMeans::count`]), divided by the batch length.
-#[derive(Clone, Debug)]
-pub struct BatchMeans {
-    len: f64,
-    /// `sums[k][b]`: statistic `k` in batch `b`.
-    sums: Vec<Vec<f64>>,
-    last: f64,
-}
-
-impl BatchMeans {
-    /// `stats` statistics over `n` (≥ 2) batches of `[0, end]` (end > 0).
-    pub fn new(n: usize, end: f64, stats: usize) -> Self {
-        BatchMeans {
-            len: end / n as f64,
-            sums: vec![vec![0.0; n.max(2)]; stats],
-            last: 0.0,
-        }
-    }
-
-    fn batch(&self, t: f64) -> usize {
-        let n = self.sums.first().map_or(1, Vec::len);
-        ((t / self.len) as usize).min(n - 1)
-    }
-
-    /// Adds `values[k]` (held constant since the last call) integrated up to time `t`.
-    pub fn advance(&mut self, t: f64, values: &[f64]) {
-        let n = self.sums.first().map_or(1, Vec::len);
-        let mut from = self.last;
-        while from < t {
-            let b = self.batch(from);
-            let end = if b == n - 1 {
-                t
-            } else {
-                t.min((b + 1) as f64 * self.len)
-            };
-            for (k, v) in values.iter().enumerate() {
-                self.sums[k][b] += v * (end - from);
-            }
-            from = end;
-        }
-        self.last = self.last.max(t);
-    }
-
-    /// Adds `x` to count statistic `k` at time `t`.
-    pub fn count(&mut self, t: f64, k: usize, x: f64) {
-        let b = self.batch(t);
-        self.sums[k][b] += x;
-    }
-
-    /// Statistic `k` per batch, per unit of time.
-    pub fn batches(&self, k: usize) -> Vec<f64> {
-        self.sums[k].iter().map(|s| s / self.len).collect()
-    }
-
-    /// Statistic `k` per batch, as summed.
-    pub fn sums(&self, k: usize) -> &[f64] {
-        &self.sums[k]
-    }
-}
-
-/// Mean of the batches and the half-width of its 95% interval (Student t, `n − 1` degrees
-/// of freedom), as [`crate::sim::MonteCarlo`] gives over runs.
-pub fn estimate(xs: &[f64]) -> Estimate {
-    let n = xs.len() as f64;
-    let mean = xs.iter().sum::<f64>() / n;
-    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    Estimate {
-        mean,
-        half_width: t_quantile_975(xs.len() as u64 - 1) * (var.max(0.0) / n).sqrt(),
-    }
-}
-
-/// The ratio `Σ num / Σ den` of two batched counts with its 95% interval (ratio batch means:
-/// the residuals `num_b − r·den_b` give the variance).
-pub fn ratio_estimate(num: &[f64], den: &[f64]) -> Estimate {
-    let (sn, sd): (f64, f64) = (num.iter().sum(), den.iter().sum());
-    let r = sn / sd;
-    let b = num.len() as f64;
-    let res: Vec<f64> = num.iter().zip(den).map(|(n, d)| n - r * d).collect();
-    let var = res.iter().map(|x| x * x).sum::<f64>() / (b - 1.0);
-    Estimate {
-        mean: r,
-        half_width: t_quantile_975(num.len() as u64 - 1) * (var / b).sqrt() / (sd / b),
-    }
-}
+use crate::stats::beta_i;
 
 /// Two-sided p-value of `predicted` against batch means `est` with `df` degrees of freedom
 /// (the t statistic `(mean − predicted) / (half_width / t₀.₉₇₅)`); a zero-width interval gives
@@ -216,25 +131,6 @@ pub fn chi_square(counts: &[u64], probs: &[f64]) -> f64 {
     gamma_q((cells - 1) as f64 / 2.0, x2 / 2.0)
 }
 
-/// The complementary error function (Numerical Recipes' Chebyshev fit, relative error
-/// < 1.2e-7).
-pub fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87
-                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
-    if x >= 0.0 { r } else { 2.0 - r }
-}
-
 /// One-way analysis of variance: the p-value of "the groups have one mean" (Fisher's F with
 /// `G − 1` and `N − G` degrees of freedom). Groups of no value are left out; fewer than two
 /// groups, or no degree of freedom within them, give 1. Without spread within the groups the
@@ -266,140 +162,6 @@ pub fn anova_p(groups: &[&[f64]]) -> f64 {
     }
     let f = (between / d1) / (within / d2);
     beta_i(d2 / 2.0, d1 / 2.0, d2 / (d2 + d1 * f))
-}
-
-/// P(|T| ≥ t) for Student's t with `df` degrees of freedom.
-pub fn student_t_two_sided(t: f64, df: f64) -> f64 {
-    beta_i(df / 2.0, 0.5, df / (df + t * t))
-}
-
-fn ln_gamma(x: f64) -> f64 {
-    // Lanczos (g = 7, n = 9).
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    if x < 0.5 {
-        return ln(std::f64::consts::PI / (std::f64::consts::PI * x).sin()) - ln_gamma(1.0 - x);
-    }
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + 7.5;
-    for (i, &c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * ln(2.0 * std::f64::consts::PI) + (x + 0.5) * ln(t) - t + ln(a)
-}
-
-/// The regularised upper incomplete gamma function Q(a, x).
-pub fn gamma_q(a: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 1.0;
-    }
-    let gln = ln_gamma(a);
-    if x < a + 1.0 {
-        // Series for P.
-        let (mut ap, mut sum) = (a, 1.0 / a);
-        let mut del = sum;
-        for _ in 0..1000 {
-            ap += 1.0;
-            del *= x / ap;
-            sum += del;
-            if del.abs() < sum.abs() * 1e-15 {
-                break;
-            }
-        }
-        1.0 - sum * (-x + a * ln(x) - gln).exp()
-    } else {
-        // Continued fraction for Q (Lentz).
-        let tiny = 1e-300;
-        let mut b = x + 1.0 - a;
-        let mut c = 1.0 / tiny;
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..1000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            if d.abs() < tiny {
-                d = tiny;
-            }
-            c = b + an / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            d = 1.0 / d;
-            let del = d * c;
-            h *= del;
-            if (del - 1.0).abs() < 1e-15 {
-                break;
-            }
-        }
-        (-x + a * ln(x) - gln).exp() * h
-    }
-}
-
-/// The regularised incomplete beta function I_x(a, b).
-fn beta_i(a: f64, b: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    if x >= 1.0 {
-        return 1.0;
-    }
-    let front = (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * ln(x) + b * ln(1.0 - x)).exp();
-    if x < (a + 1.0) / (a + b + 2.0) {
-        front * beta_cf(a, b, x) / a
-    } else {
-        1.0 - front * beta_cf(b, a, 1.0 - x) / b
-    }
-}
-
-fn beta_cf(a: f64, b: f64, x: f64) -> f64 {
-    let tiny = 1e-300;
-    let (qab, qap, qam) = (a + b, a + 1.0, a - 1.0);
-    let mut c = 1.0;
-    let mut d = 1.0 - qab * x / qap;
-    if d.abs() < tiny {
-        d = tiny;
-    }
-    d = 1.0 / d;
-    let mut h = d;
-    // One step of the modified Lentz recurrence with coefficient `aa`.
-    let step = |aa: f64, c: &mut f64, d: &mut f64| -> f64 {
-        *d = 1.0 + aa * *d;
-        if d.abs() < tiny {
-            *d = tiny;
-        }
-        *c = 1.0 + aa / *c;
-        if c.abs() < tiny {
-            *c = tiny;
-        }
-        *d = 1.0 / *d;
-        *d * *c
-    };
-    for m in 1..1000 {
-        let m = m as f64;
-        let m2 = 2.0 * m;
-        h *= step(m * (b - m) * x / ((qam + m2) * (a + m2)), &mut c, &mut d);
-        let del = step(
-            -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2)),
-            &mut c,
-            &mut d,
-        );
-        h *= del;
-        if (del - 1.0).abs() < 1e-15 {
-            break;
-        }
-    }
-    h
 }
 
 #[cfg(test)]
@@ -441,15 +203,5 @@ mod tests {
         // Rounding is no spread.
         let (a, b) = (3.0 + 4e-16, 3.0 - 4e-16);
         assert_eq!(anova_p(&[&[a, a, a], &[b, b]]), 1.0);
-    }
-
-    #[test]
-    fn batches_split_integrals_at_batch_ends() {
-        let mut b = BatchMeans::new(4, 8.0, 1);
-        b.advance(3.0, &[1.0]);
-        b.advance(8.0, &[2.0]);
-        assert_eq!(b.sums(0), &[2.0, 3.0, 4.0, 4.0]);
-        let e = estimate(&b.batches(0));
-        assert!((e.mean - 1.625).abs() < 1e-12);
     }
 }
