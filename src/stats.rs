@@ -237,17 +237,30 @@ fn ln_gamma(x: f64) -> f64 {
     0.5 * ln(2.0 * std::f64::consts::PI) + (x + 0.5) * ln(t) - t + ln(a)
 }
 
-/// The regularised upper incomplete gamma function Q(a, x).
+/// The regularised upper incomplete gamma function Q(a, x) = P(G ≥ x) for G ~ Gamma(a, 1).
 pub fn gamma_q(a: f64, x: f64) -> f64 {
+    gamma_pq(a, x).1
+}
+
+/// The regularised lower incomplete gamma function P(a, x) = P(G ≤ x) for G ~ Gamma(a, 1).
+pub fn gamma_p(a: f64, x: f64) -> f64 {
+    gamma_pq(a, x).0
+}
+
+/// `(P(a, x), Q(a, x))`, the one on the side of the series computed directly (so a small
+/// tail keeps its relative precision) and the other as its complement.
+fn gamma_pq(a: f64, x: f64) -> (f64, f64) {
     if x <= 0.0 {
-        return 1.0;
+        return (0.0, 1.0);
     }
     let gln = ln_gamma(a);
+    // The series and the fraction take O(√a) terms near the mode.
+    const MAX_TERMS: usize = 100_000;
     if x < a + 1.0 {
         // Series for P.
         let (mut ap, mut sum) = (a, 1.0 / a);
         let mut del = sum;
-        for _ in 0..1000 {
+        for _ in 0..MAX_TERMS {
             ap += 1.0;
             del *= x / ap;
             sum += del;
@@ -255,7 +268,8 @@ pub fn gamma_q(a: f64, x: f64) -> f64 {
                 break;
             }
         }
-        1.0 - sum * (-x + a * ln(x) - gln).exp()
+        let p = sum * (-x + a * ln(x) - gln).exp();
+        (p, 1.0 - p)
     } else {
         // Continued fraction for Q (Lentz).
         let tiny = 1e-300;
@@ -263,7 +277,7 @@ pub fn gamma_q(a: f64, x: f64) -> f64 {
         let mut c = 1.0 / tiny;
         let mut d = 1.0 / b;
         let mut h = d;
-        for i in 1..1000 {
+        for i in 1..MAX_TERMS {
             let an = -(i as f64) * (i as f64 - a);
             b += 2.0;
             d = an * d + b;
@@ -281,8 +295,60 @@ pub fn gamma_q(a: f64, x: f64) -> f64 {
                 break;
             }
         }
-        (-x + a * ln(x) - gln).exp() * h
+        let q = (-x + a * ln(x) - gln).exp() * h;
+        (1.0 - q, q)
     }
+}
+
+/// P(K > k) for Kolmogorov's limiting distribution `K = sup |B(t)|` of the Brownian bridge:
+/// `2 Σ (−1)^(j−1) exp(−2j²k²)` for large `k`, `1 − √(2π)/k Σ exp(−(2j−1)²π²/(8k²))` for
+/// small `k` (each series converges fast on its side of 1.18).
+pub fn kolmogorov_q(k: f64) -> f64 {
+    if k.is_nan() {
+        return f64::NAN;
+    }
+    if k <= 0.0 {
+        return 1.0;
+    }
+    let mut sum = 0.0;
+    if k < 1.18 {
+        let w = std::f64::consts::PI * std::f64::consts::PI / (8.0 * k * k);
+        for j in 1..=20 {
+            let m = (2 * j - 1) as f64;
+            sum += (-m * m * w).exp();
+        }
+        (1.0 - (2.0 * std::f64::consts::PI).sqrt() / k * sum).clamp(0.0, 1.0)
+    } else {
+        for j in 1..=100 {
+            let j = j as f64;
+            let term = (-2.0 * j * j * k * k).exp();
+            sum += if j as u64 % 2 == 1 { term } else { -term };
+            if term < 1e-18 {
+                break;
+            }
+        }
+        (2.0 * sum).clamp(0.0, 1.0)
+    }
+}
+
+/// P(X ≤ k) for X ~ Binomial(n, p): `I_(1−p)(n − k, k + 1)`.
+pub fn binomial_cdf(k: u64, n: u64, p: f64) -> f64 {
+    if k >= n {
+        return 1.0;
+    }
+    beta_i((n - k) as f64, (k + 1) as f64, 1.0 - p)
+}
+
+/// The central `level` interval `[lo, hi]` of Binomial(n, p): the fewest `lo` and `hi` with
+/// `P(X < lo) ≤ (1 − level)/2` and `P(X > hi) ≤ (1 − level)/2` — where the count of `n`
+/// independent tests at level `p` falls with probability at least `level`.
+pub fn binomial_interval(n: u64, p: f64, level: f64) -> (u64, u64) {
+    let tail = (1.0 - level) / 2.0;
+    let lo = (0..=n).find(|&k| binomial_cdf(k, n, p) > tail).unwrap_or(n);
+    let hi = (lo..=n)
+        .find(|&k| binomial_cdf(k, n, p) >= 1.0 - tail)
+        .unwrap_or(n);
+    (lo, hi)
 }
 
 /// The regularised incomplete beta function I_x(a, b).
@@ -363,5 +429,63 @@ mod tests {
         assert_eq!(b.sums(0), &[2.0, 3.0, 4.0, 4.0]);
         let e = estimate(&b.batches(0));
         assert!((e.mean - 1.625).abs() < 1e-12);
+    }
+
+    #[test]
+    fn gamma_tails_are_complements_and_exact_for_integer_shapes() {
+        for &(a, x) in &[
+            (1.0, 0.3),
+            (3.0, 1.0),
+            (3.0, 7.5),
+            (40.0, 38.0),
+            (5000.0, 5100.0),
+        ] {
+            assert!(
+                (gamma_p(a, x) + gamma_q(a, x) - 1.0).abs() < 1e-12,
+                "{a} {x}"
+            );
+        }
+        // Gamma(3, 1): P(G ≤ x) = 1 − e^(−x)(1 + x + x²/2).
+        for x in [0.2f64, 1.0, 2.5, 9.0] {
+            let exact = 1.0 - (-x).exp() * (1.0 + x + x * x / 2.0);
+            assert!((gamma_p(3.0, x) - exact).abs() < 1e-12, "{x}");
+        }
+        // The small lower tail keeps its relative precision.
+        let x = 1e-3f64;
+        let exact = x * x * x / 6.0 * (1.0 - 3.0 * x / 4.0);
+        assert!((gamma_p(3.0, x) / exact - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn kolmogorov_tail_at_its_tabulated_quantiles() {
+        // Upper 5% and 1% points of Kolmogorov's distribution (Smirnov 1948's table).
+        assert!((kolmogorov_q(1.358_098_6) - 0.05).abs() < 1e-7);
+        assert!((kolmogorov_q(1.627_623_6) - 0.01).abs() < 1e-7);
+        // The two series agree where they meet.
+        let (below, above) = (kolmogorov_q(1.18 - 1e-12), kolmogorov_q(1.18));
+        assert!((below - above).abs() < 1e-10, "{below} {above}");
+        assert_eq!(kolmogorov_q(0.0), 1.0);
+        assert!(kolmogorov_q(0.2) > 1.0 - 1e-12);
+    }
+
+    #[test]
+    fn binomial_cdf_and_interval() {
+        // Against the sum of the probabilities.
+        let (n, p) = (30u64, 0.05f64);
+        let mut choose = 1.0f64;
+        let mut sum = 0.0;
+        for k in 0..=n {
+            if k > 0 {
+                choose *= (n - k + 1) as f64 / k as f64;
+            }
+            sum += choose * p.powi(k as i32) * (1.0 - p).powi((n - k) as i32);
+            assert!((binomial_cdf(k, n, p) - sum).abs() < 1e-12, "{k}");
+        }
+        let (lo, hi) = binomial_interval(1000, 0.05, 0.999);
+        assert!(binomial_cdf(lo - 1, 1000, 0.05) <= 0.0005);
+        assert!(binomial_cdf(lo, 1000, 0.05) > 0.0005);
+        assert!(binomial_cdf(hi, 1000, 0.05) >= 0.9995);
+        assert!(binomial_cdf(hi - 1, 1000, 0.05) < 0.9995);
+        assert_eq!(binomial_interval(10, 0.0, 0.999), (0, 0));
     }
 }

@@ -1,6 +1,9 @@
 //! The tests of conformance: Student t against batch means, Poisson score intervals for rates,
 //! the Lilliefors-corrected Kolmogorov–Smirnov test of exponentiality, Pearson's chi-square
-//! for choices, one-way analysis of variance.
+//! for choices, one-way analysis of variance, and the tests of agents' stays against an
+//! exponential holding time of known rate ([`stays_mean_test`], [`stays_ks_test`]), which
+//! take the end of the run into account: a stay that entered `c` before the end was seen
+//! only because it lasted less than `c`.
 //!
 //! The estimates they read and the distribution functions they are built from live at the
 //! bottom layer, [`crate::stats`] (re-exported here, where they used to be); intervals are the
@@ -13,7 +16,7 @@ pub use crate::stats::{
 };
 
 use crate::sample::ln;
-use crate::stats::beta_i;
+use crate::stats::{beta_i, gamma_p, kolmogorov_q};
 
 /// Two-sided p-value of `predicted` against batch means `est` with `df` degrees of freedom
 /// (the t statistic `(mean − predicted) / (half_width / t₀.₉₇₅)`); a zero-width interval gives
@@ -51,6 +54,81 @@ pub fn rate_test(n: u64, e: f64, lambda: f64) -> f64 {
     }
     let z = (n as f64 - mu) / mu.sqrt();
     erfc(z.abs() / std::f64::consts::SQRT_2)
+}
+
+/// Mean and variance of an exponential of rate `rate` conditioned on being at most `c`
+/// (`c` = ∞: `1/rate` and `1/rate²`): `1/λ − c·q/(1 − q)` and `1/λ² − c²·q/(1 − q)²` with
+/// `q = e^(−λc)`, by their series for small `λc` (where the closed forms cancel).
+pub fn truncated_exponential(rate: f64, c: f64) -> (f64, f64) {
+    let a = rate * c;
+    if a.is_infinite() {
+        return (1.0 / rate, 1.0 / (rate * rate));
+    }
+    if a < 0.05 {
+        // 1/a − 1/(eᵃ − 1) = 1/2 − a/12 + a³/720 − …; its derivative gives the variance.
+        let a2 = a * a;
+        let mean = c * (0.5 - a / 12.0 + a * a2 / 720.0 - a2 * a2 * a / 30_240.0);
+        let var = c * c * (1.0 / 12.0 - a2 / 240.0 + a2 * a2 / 6_048.0);
+        return (mean, var);
+    }
+    let q = (-a).exp();
+    let one_minus_q = -(-a).exp_m1();
+    let r = q / one_minus_q;
+    (
+        1.0 / rate - c * r,
+        1.0 / (rate * rate) - c * c * r / one_minus_q,
+    )
+}
+
+/// Two-sided p-value of "these stays are exponential with rate `rate`" from their sum.
+/// Each stay is `(duration, horizon)`: it entered `horizon` before the end of the run, so it
+/// was seen ended only because `duration ≤ horizon`, and under the model its duration is the
+/// exponential truncated at its horizon ([`truncated_exponential`]). The sum is referred to
+/// the gamma distribution with the sum's exact mean and variance — exactly the
+/// `Gamma(n, 1/rate)` of `n` exponential stays when no horizon cuts (each `≫ 1/rate`).
+/// Stays with horizon 0 say nothing and are left out; `None` when none is left.
+pub fn stays_mean_test(stays: &[(f64, f64)], rate: f64) -> Option<f64> {
+    let (mut sum, mut mean, mut var) = (0.0, 0.0, 0.0);
+    for &(x, c) in stays.iter().filter(|s| s.1 > 0.0) {
+        let (m, v) = truncated_exponential(rate, c);
+        sum += x;
+        mean += m;
+        var += v;
+    }
+    if mean <= 0.0 || var <= 0.0 {
+        return None;
+    }
+    let (shape, scale) = (mean * mean / var, var / mean);
+    let lower = gamma_p(shape, sum / scale);
+    Some((2.0 * lower.min(1.0 - lower)).min(1.0))
+}
+
+/// Kolmogorov–Smirnov test of "these stays are exponential with rate `rate`" (the rate the
+/// model gives, not one estimated from them): each stay `(duration, horizon)` becomes
+/// `u = F(duration) / F(horizon)`, uniform on [0, 1] under the model whatever its horizon
+/// (see [`stays_mean_test`]), and the `u`s are tested against the uniform. Returns Stephens'
+/// modified statistic `D·(√n + 0.12 + 0.11/√n)` and its p-value from Kolmogorov's
+/// distribution; `None` for fewer than 2 stays.
+pub fn stays_ks_test(stays: &[(f64, f64)], rate: f64) -> Option<(f64, f64)> {
+    let cdf = |x: f64| -(-rate * x).exp_m1();
+    let mut us: Vec<f64> = stays
+        .iter()
+        .filter(|s| s.1 > 0.0)
+        .map(|&(x, c)| (cdf(x) / cdf(c)).min(1.0))
+        .collect();
+    let n = us.len();
+    if n < 2 {
+        return None;
+    }
+    us.sort_by(f64::total_cmp);
+    let nf = n as f64;
+    let d = us
+        .iter()
+        .enumerate()
+        .map(|(i, &u)| ((i + 1) as f64 / nf - u).max(u - i as f64 / nf))
+        .fold(0.0f64, f64::max);
+    let k = d * (nf.sqrt() + 0.12 + 0.11 / nf.sqrt());
+    Some((k, kolmogorov_q(k)))
 }
 
 /// Upper-tail points of the modified statistic `(D − 0.2/n)(√n + 0.26 + 0.5/√n)` of the
@@ -203,5 +281,111 @@ mod tests {
         // Rounding is no spread.
         let (a, b) = (3.0 + 4e-16, 3.0 - 4e-16);
         assert_eq!(anova_p(&[&[a, a, a], &[b, b]]), 1.0);
+    }
+
+    /// ∫₀ᶜ f(x)·λe^(−λx) dx by Simpson's rule on 20 000 intervals.
+    fn integral(rate: f64, c: f64, f: impl Fn(f64) -> f64) -> f64 {
+        let n = 20_000;
+        let h = c / n as f64;
+        let g = |x: f64| f(x) * rate * (-rate * x).exp();
+        let inner: f64 = (1..n)
+            .map(|i| if i % 2 == 1 { 4.0 } else { 2.0 } * g(i as f64 * h))
+            .sum();
+        (g(0.0) + inner + g(c)) * h / 3.0
+    }
+
+    #[test]
+    fn truncated_exponential_moments_match_their_integrals() {
+        for &(rate, c) in &[
+            (1.0, 0.01),
+            (2.0, 0.024),
+            (2.0, 0.026),
+            (0.5, 0.3),
+            (1.0, 1.0),
+            (3.0, 2.0),
+            (1.0, 40.0),
+        ] {
+            let mass = integral(rate, c, |_| 1.0);
+            let mean = integral(rate, c, |x| x) / mass;
+            let var = integral(rate, c, |x| (x - mean).powi(2)) / mass;
+            let (m, v) = truncated_exponential(rate, c);
+            assert!((m - mean).abs() < 1e-9 * mean, "{rate} {c}: {m} vs {mean}");
+            assert!((v - var).abs() < 1e-9 * var, "{rate} {c}: {v} vs {var}");
+        }
+        // The series and the closed form meet at λc = 0.05.
+        let (a, b) = (
+            truncated_exponential(1.0, 0.05 - 1e-13),
+            truncated_exponential(1.0, 0.05),
+        );
+        assert!(
+            (a.0 - b.0).abs() < 1e-13 && (a.1 - b.1).abs() < 1e-13,
+            "{a:?} {b:?}"
+        );
+        assert_eq!(truncated_exponential(2.0, f64::INFINITY), (0.5, 0.25));
+    }
+
+    #[test]
+    fn stays_far_from_the_end_get_the_exact_gamma_test() {
+        // One stay: p = 2·min(F, 1 − F) of the exponential.
+        for x in [0.05f64, 0.7, 3.0] {
+            let f = 1.0 - (-2.0 * x).exp();
+            let p = stays_mean_test(&[(x, 1e6)], 2.0).unwrap();
+            assert!((p - 2.0 * f.min(1.0 - f)).abs() < 1e-12, "{x}: {p}");
+        }
+        // Three stays of rate 1: the sum is Gamma(3, 1).
+        let stays = [(0.4, 1e6), (1.1, 1e6), (2.0, 1e6)];
+        let s = 3.5f64;
+        let lower = 1.0 - (-s).exp() * (1.0 + s + s * s / 2.0);
+        let p = stays_mean_test(&stays, 1.0).unwrap();
+        assert!((p - 2.0 * lower.min(1.0 - lower)).abs() < 1e-12, "{p}");
+        // Horizon 0 says nothing.
+        assert_eq!(stays_mean_test(&[(0.0, 0.0)], 1.0), None);
+    }
+
+    /// Runs of `entries` stays of rate 1 entering uniformly over `[0, end]`, seen only when
+    /// they end by `end`: how often each test flags at 5% over `reps` runs, and the naive
+    /// gamma test that ignores the end.
+    fn cut_runs(reps: u64, entries: usize, end: f64) -> (u64, u64, u64) {
+        use rand::SeedableRng;
+        let mut rng = crate::sample::Rng::seed_from_u64(24);
+        let (mut mean_flags, mut ks_flags, mut naive_flags) = (0, 0, 0);
+        for _ in 0..reps {
+            let mut stays = Vec::new();
+            for _ in 0..entries {
+                let entered = crate::sample::uniform(&mut rng) * end;
+                let x = crate::sample::exponential(&mut rng, 1.0);
+                if entered + x <= end {
+                    stays.push((x, end - entered));
+                }
+            }
+            mean_flags += (stays_mean_test(&stays, 1.0).unwrap() < 0.05) as u64;
+            ks_flags += (stays_ks_test(&stays, 1.0).unwrap().1 < 0.05) as u64;
+            let far: Vec<(f64, f64)> = stays.iter().map(|s| (s.0, f64::INFINITY)).collect();
+            naive_flags += (stays_mean_test(&far, 1.0).unwrap() < 0.05) as u64;
+        }
+        (mean_flags, ks_flags, naive_flags)
+    }
+
+    #[test]
+    fn stays_cut_by_the_end_of_the_run_keep_the_level() {
+        // Runs of 5 mean stays: a stay that entered late was seen only if it was short (about
+        // a fifth of the entries are still in the place at the end).
+        let reps = 2000;
+        let (mean_flags, ks_flags, naive_flags) = cut_runs(reps, 200, 5.0);
+        let (lo, hi) = crate::stats::binomial_interval(reps, 0.05, 0.999);
+        eprintln!(
+            "of {reps} runs, flagged: mean {mean_flags}, ks {ks_flags}, naive {naive_flags} \
+             (99.9% interval [{lo}, {hi}])"
+        );
+        assert!(
+            (lo..=hi).contains(&mean_flags),
+            "{mean_flags} not in [{lo}, {hi}]"
+        );
+        assert!(
+            (lo..=hi).contains(&ks_flags),
+            "{ks_flags} not in [{lo}, {hi}]"
+        );
+        // Ignoring the end, the seen stays look short.
+        assert!(naive_flags > 3 * hi, "{naive_flags} vs {hi}");
     }
 }
