@@ -392,8 +392,9 @@ impl Engine {
     }
 
     /// Fires `t` at model time `now`, moving agents by the identity rules: consumed agents
-    /// continue in arc order into the produced action-place tokens, surplus ones end, extra
-    /// tokens are new agents.
+    /// continue — those bound to robots first, then in input-arc order — into the produced
+    /// tokens of agent places (output-arc order), surplus ones end (a join), extra tokens are
+    /// new agents (a fork).
     ///
     /// A firing that would overflow a place's count changes nothing and is refused.
     pub(crate) fn fire(
@@ -429,6 +430,11 @@ impl Engine {
             }
         }
         if self.has_robots {
+            // Robots continue first: a join never ends a robot's agent while a plain
+            // token's agent goes on.
+            let agents = &self.agents;
+            out.consumed
+                .sort_by_key(|id| agents.get(id).is_none_or(|r| r.robot.is_none()));
             for id in &out.consumed {
                 if let Some(r) = self.agents.get(id).and_then(|r| r.robot.clone()) {
                     out.robots.push(r);

@@ -8,6 +8,7 @@ mod bad_limits;
 mod check;
 mod conform;
 mod endless_runs;
+mod faithful_execution;
 mod journal_survives_signals;
 mod program_actions;
 mod readme;

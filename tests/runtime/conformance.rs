@@ -182,7 +182,7 @@ async fn stays_that_depend_on_the_way_in_get_one_erlang_chain_per_entry() {
             } else {
                 (0.5, "Td")
             };
-            tokio::time::sleep(Duration::from_secs_f64(d)).await;
+            ctx.clock.sleep(d).await;
             ctx.fire(t)
         }
     });
@@ -265,7 +265,7 @@ async fn monitored_run(until: f64, after: f64) -> (Vec<Event>, Vec<Event>) {
     let journal = dir.path().join("run.jsonl");
     let slow = action_fn(move |ctx| async move {
         let d = if ctx.time < 750.0 { 0.5 } else { after };
-        tokio::time::sleep(Duration::from_secs_f64(d)).await;
+        ctx.clock.sleep(d).await;
         ctx.fire("T3")
     });
     let mut h = Runtime::builder(net.clone())

@@ -10,6 +10,7 @@ mod agent_identity;
 mod agents_match_tokens;
 mod builtin_actions;
 mod conformance;
+mod differential;
 mod failures;
 mod golden_trace;
 mod matches_analysis;

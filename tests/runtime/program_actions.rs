@@ -464,9 +464,10 @@ async fn the_python_helper_runs_decorated_functions_and_records_their_prints() {
         .map(|(a, _, l)| format!("{a}: {l}"))
         .collect();
     lines.sort();
-    // t1 forks: agent 0 goes on, agent 1 is new; both slept concurrently.
+    // `left`'s token is agent 1 (a place without an action keeps its agent); t1 forks:
+    // agent 0 goes on, agent 2 is new; both slept concurrently.
     assert_eq!(
         lines,
-        ["0: inspecting look for agent 0", "0: slept 0", "1: slept 1"]
+        ["0: inspecting look for agent 0", "0: slept 0", "2: slept 2"]
     );
 }
