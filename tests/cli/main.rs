@@ -12,6 +12,7 @@ mod journal_survives_signals;
 mod program_actions;
 mod readme;
 mod replay_robots;
+mod robots_must_match_agents;
 mod run;
 mod run_on_robots;
 mod simulate;
