@@ -15,6 +15,7 @@ mod replay_robots;
 mod robots_must_match_agents;
 mod run;
 mod run_on_robots;
+mod signals_end_the_run_and_its_viewer;
 mod simulate;
 mod synthesize;
 mod thesis_standalone;
