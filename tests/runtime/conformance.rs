@@ -3,8 +3,6 @@
 //! `drift` events — in the journal and on the bus, right after the firing that showed them —
 //! when an action slows down half-way, and none when it does not.
 
-use std::time::Duration;
-
 use gspn::conform::{
     Monitor, Monitored, Options, RowKind, Trace, Verdict, compare, fit, observe, steady_predictions,
 };

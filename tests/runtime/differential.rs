@@ -27,7 +27,7 @@ use gspn::runtime::{
 };
 use gspn::sim::Simulator;
 use proptest::prelude::*;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 
 /// A random transition: immediate (weight, priority) or exponential (rate, servers kind),
 /// input arcs (place, weight), output arcs, an optional inhibitor.
