@@ -18,8 +18,8 @@
 //! - **Agents**: once a run has an action place, every token outside resource places is an
 //!   agent with a stable id; it keeps its identity through places without an action (they
 //!   are transparent: their agents are ready at once). Through a firing, consumed agents
-//!   continue into the produced tokens — robot-bound ones first, then in input-arc order;
-//!   leftovers end (join), extra tokens are new agents (fork).
+//!   continue into the produced tokens in input-arc order; leftovers end (join), extra tokens
+//!   are new agents (fork).
 //! - **Readiness**: a transition is ready when it is enabled and each input place's agents
 //!   that it needs have ended their actions with `Fire(it)` or `Decide`. The supervisor picks
 //!   among ready transitions with the one firing core ([`crate::firing`]): the highest

@@ -336,6 +336,7 @@ impl Engine {
     /// The next transition the supervisor fires at once: a ready immediate one (the firing
     /// core's choice: highest priority, policy else weights), else a reported exponential
     /// one in arrival order.
+    #[inline]
     pub(crate) fn next_ready(&mut self) -> Option<TransitionId> {
         if self.firable.is_vanishing() {
             let t = self
@@ -381,6 +382,7 @@ impl Engine {
     }
 
     /// Samples the race: the delay to the next net-timed firing and the transition.
+    #[inline]
     pub(crate) fn sample_race(&mut self) -> Option<(f64, TransitionId)> {
         let dt = self.firable.sample_delay(&mut self.rng)?;
         Some((dt, self.firable.pick_race(&mut self.rng)?))
@@ -392,11 +394,12 @@ impl Engine {
     }
 
     /// Fires `t` at model time `now`, moving agents by the identity rules: consumed agents
-    /// continue — those bound to robots first, then in input-arc order — into the produced
-    /// tokens of agent places (output-arc order), surplus ones end (a join), extra tokens are
-    /// new agents (a fork).
+    /// continue in input-arc order into the produced tokens of agent places (output-arc
+    /// order), surplus ones end (a join), extra tokens are new agents (a fork). (With robots
+    /// the net conserves its tokens outside resources, so a robot never ends in a join.)
     ///
     /// A firing that would overflow a place's count changes nothing and is refused.
+    #[inline]
     pub(crate) fn fire(
         &mut self,
         t: TransitionId,
@@ -430,11 +433,6 @@ impl Engine {
             }
         }
         if self.has_robots {
-            // Robots continue first: a join never ends a robot's agent while a plain
-            // token's agent goes on.
-            let agents = &self.agents;
-            out.consumed
-                .sort_by_key(|id| agents.get(id).is_none_or(|r| r.robot.is_none()));
             for id in &out.consumed {
                 if let Some(r) = self.agents.get(id).and_then(|r| r.robot.clone()) {
                     out.robots.push(r);

@@ -464,7 +464,14 @@ impl Supervisor {
             self.drive();
             return;
         }
-        while self.stopping.is_none() {
+        self.fire_ready();
+    }
+
+    /// Fires what is ready now; in virtual time only while no action runs (then
+    /// [`Supervisor::drive`] decides what may go on).
+    #[inline]
+    fn fire_ready(&mut self) {
+        while self.stopping.is_none() && !(self.clock.is_discrete() && self.eng.running() > 0) {
             match self.eng.next_ready() {
                 Some(t) => {
                     if let Some(m) = self.eng.take_first_miss() {
@@ -592,7 +599,7 @@ impl Supervisor {
             }
             self.clock.set(at);
             self.fire_one(t);
-            self.settle();
+            self.fire_ready();
         }
         true
     }
@@ -629,6 +636,24 @@ impl Supervisor {
             }
             if !self.vt.busy() && self.vt.has_mail() {
                 self.deliver();
+                continue;
+            }
+            if self.eng.running() == 0 {
+                // No action runs (so none sleeps, nothing waits for delivery): the token
+                // game's own loop, in batches — the same draws as the loop below.
+                self.fire_ready();
+                if self.stopping.is_some() || self.stop_at_rest.is_some() {
+                    continue;
+                }
+                if self.eng.running() == 0 {
+                    if !self.fire_burst() {
+                        return;
+                    }
+                    if self.eng.running() == 0 && self.stopping.is_none() {
+                        self.kick();
+                        return;
+                    }
+                }
                 continue;
             }
             if self.vt.deciding() {
