@@ -548,3 +548,50 @@ fn durations_stated_by_actions_are_the_only_time_they_take() {
     assert_eq!(summary.firings, 2);
     assert_eq!(summary.time, 3.75);
 }
+
+#[test]
+fn place_timeouts_are_model_seconds_in_virtual_time() {
+    // `a`: a Rust action that burns 300 ms of wall-clock time under a 0.2-model-second
+    // timeout — it takes no model time, so it does not time out. `c`: `wait 3` under a
+    // 2-second timeout fails at model time 2 exactly, however loaded the machine is.
+    let mut b = NetBuilder::new("timeouts");
+    let a = b.place("a", 1);
+    let c = b.place("c", 0);
+    let d = b.place("d", 0);
+    let t1 = b.immediate("t1", 1.0, 1);
+    let t2 = b.immediate("t2", 1.0, 1);
+    b.input(a, t1, 1);
+    b.output(t1, c, 1);
+    b.input(c, t2, 1);
+    b.output(t2, d, 1);
+    let net = b.build().unwrap();
+    let role = |name: &str, timeout: f64| Role::Action {
+        name: name.to_string(),
+        timeout: Some(timeout),
+        on_failure: FailurePolicy::Stop,
+        robot: None,
+    };
+    let rt = two_threads();
+    let summary = rt.block_on(async {
+        let h = Runtime::builder(net)
+            .seed(2)
+            .action(
+                "busy",
+                action_fn(|_| async {
+                    std::thread::sleep(Duration::from_millis(300));
+                    Outcome::Decide
+                }),
+            )
+            .role(a, role("busy", 0.2))
+            .role(c, role("wait 3", 2.0))
+            .spawn()
+            .unwrap();
+        h.wait().await
+    });
+    assert_eq!(summary.firings, 1);
+    assert_eq!(summary.time, 2.0);
+    assert_eq!(
+        summary.errors,
+        ["agent 0 in `c` failed: timed out after 2 model seconds"]
+    );
+}
