@@ -315,10 +315,11 @@ pub(crate) fn run_action(
             },
             Limit::Abort { abort, seconds } => {
                 tokio::select! {
-                    r = caught => r,
+                    biased;
                     Ok(()) = abort => Ok(Outcome::Failed(format!(
                         "timed out after {seconds} model seconds"
                     ))),
+                    r = caught => r,
                 }
             }
         };

@@ -588,7 +588,7 @@ fn place_timeouts_are_model_seconds_in_virtual_time() {
             .unwrap();
         h.wait().await
     });
-    assert_eq!(summary.firings, 1);
+    assert_eq!(summary.firings, 1, "{summary:?}");
     assert_eq!(summary.time, 2.0);
     assert_eq!(
         summary.errors,

@@ -530,10 +530,7 @@ async fn programs_state_the_model_time_their_actions_take() {
             _ => None,
         })
         .collect();
-    assert_eq!(
-        fired,
-        [("t1".to_string(), 2.25), ("t2".to_string(), 3.75)]
-    );
+    assert_eq!(fired, [("t1".to_string(), 2.25), ("t2".to_string(), 3.75)]);
 
     // A duration that is no number of seconds fails the action, naming it.
     let h = Runtime::builder(net)

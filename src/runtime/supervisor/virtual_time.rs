@@ -36,6 +36,9 @@ struct Activity {
     asleep: Option<u64>,
     /// Its timeout's instant (a key of `deadlines`) and how to stop it.
     deadline: Option<(u64, oneshot::Sender<()>)>,
+    /// The waker of a sleep cut short by the timeout, held until the action reports, so
+    /// the sleep never ends before the abort is seen.
+    held: Option<oneshot::Sender<()>>,
 }
 
 /// What the discrete clock knows besides the engine; see the [module docs](self).
@@ -91,6 +94,7 @@ impl VirtualTime {
                 decides,
                 asleep: None,
                 deadline,
+                held: None,
             },
         ) {
             // A restart replaces a run that already reported (retry): nothing was busy.
@@ -199,10 +203,11 @@ impl VirtualTime {
             if let Some((dk, abort)) = a.deadline.take() {
                 let decides = a.decides;
                 a.asleep = None;
-                self.deadlines.remove(&(dk, agent));
-                self.sleepers.remove(&(asleep, agent));
-                self.wake(decides);
+                // The sleep does not end: only the abort does.
+                a.held = self.sleepers.remove(&(asleep, agent));
                 let _ = abort.send(());
+                self.deadlines.remove(&(dk, agent));
+                self.wake(decides);
                 stopped += 1;
             }
         }
