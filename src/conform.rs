@@ -51,7 +51,8 @@ use crate::analysis::state_space::Options as SpaceOptions;
 use crate::net::{Net, PlaceId, Timing, TransitionId};
 use crate::policy::Policy;
 use crate::runtime::event::{Event, EventKind};
-use crate::sim::{Estimate, SimError, Simulator};
+use crate::sim::{SimError, Simulator};
+use crate::stats::Estimate;
 
 /// The significance level of every verdict.
 pub const ALPHA: f64 = 0.05;
@@ -125,7 +126,7 @@ impl Trace {
             initial,
             steps,
             end,
-            holdings: holding::holdings(net, events),
+            holdings: holding::holdings(events),
         }
     }
 
@@ -277,6 +278,8 @@ pub struct Observations {
     pub decisions: Vec<Decision>,
     /// The agents' stays that ended within the observed span.
     pub holdings: Vec<Holding>,
+    /// The most tokens each place held in the run.
+    pub most_tokens: Vec<u32>,
 }
 
 /// Reads a trace of `net` (run under `policy`, if any) into observations.
@@ -456,6 +459,15 @@ pub fn observe(
             .filter(|h| h.entered + h.duration <= trace.end)
             .cloned()
             .collect(),
+        most_tokens: trace
+            .steps
+            .iter()
+            .fold(trace.initial.clone(), |mut most, s| {
+                for (k, &x) in most.iter_mut().zip(&s.marking) {
+                    *k = (*k).max(x);
+                }
+                most
+            }),
     })
 }
 
@@ -469,6 +481,9 @@ pub struct Predictions {
     pub mean_tokens: Option<Vec<f64>>,
     /// Steady-state throughput per transition.
     pub throughput: Option<Vec<f64>>,
+    /// The most tokens each place holds in a reachable tangible marking (under the policy):
+    /// whether every token of a place has a server, for the `holding` rows.
+    pub bounds: Option<Vec<u32>>,
 }
 
 impl Predictions {
@@ -479,6 +494,7 @@ impl Predictions {
             source: why.into(),
             mean_tokens: None,
             throughput: None,
+            bounds: None,
         }
     }
 }
@@ -515,5 +531,19 @@ pub fn steady_predictions(
         },
         mean_tokens: Some(analysis.measures.mean_tokens),
         throughput: Some(analysis.measures.throughput),
+        bounds: Some(tangible_bounds(net, &analysis.space)),
     })
+}
+
+/// The most tokens each place holds in a tangible marking of `space`.
+fn tangible_bounds(net: &Net, space: &crate::analysis::state_space::StateSpace) -> Vec<u32> {
+    let mut bounds = vec![0u32; net.place_count()];
+    let mut m = vec![0u32; net.place_count()];
+    for s in 0..space.tangible_count() {
+        space.marking_into(s, &mut m);
+        for (b, &k) in bounds.iter_mut().zip(&m) {
+            *b = (*b).max(k);
+        }
+    }
+    bounds
 }

@@ -12,6 +12,9 @@
 //! - [`net`]: the model — places, transitions, arcs, markings, enabling and firing. Pure.
 //! - [`sample`]: chance at the bottom layer — the seeded generator, the portable exponential
 //!   sampler, weighted picks and the sum tree; every random draw goes through it.
+//! - [`stats`]: statistics at the bottom layer — estimates with 95% intervals, batch means,
+//!   Student t quantiles and the distribution functions; `sim`, `runtime` and `conform` all
+//!   read them from here.
 //! - [`firing`]: the firing rules, once — enabling, the immediate choice, the exponential
 //!   race with server semantics, the statistics; the explorer, the token game and the
 //!   runtime drive it with their own choosers.
@@ -59,6 +62,7 @@ pub mod ros2;
 pub mod runtime;
 pub mod sample;
 pub mod sim;
+pub mod stats;
 #[cfg(feature = "web")]
 pub mod web;
 pub mod world;

@@ -52,7 +52,8 @@
 mod monte_carlo;
 
 pub use crate::firing::Statistics;
-pub use monte_carlo::{Estimate, Estimates, Horizon, MonteCarlo, monte_carlo, t_quantile_975};
+pub use crate::stats::{Estimate, t_quantile_975};
+pub use monte_carlo::{Estimates, Horizon, MonteCarlo, monte_carlo};
 
 use std::sync::Arc;
 

@@ -4,7 +4,7 @@ use serde::Serialize;
 
 use super::*;
 use crate::net::{Net, Timing, TransitionId};
-use crate::sim::Estimate;
+use crate::stats::Estimate;
 
 /// What a row compares.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -25,7 +25,7 @@ pub enum RowKind {
     /// The mean time agents stayed in an action place before one output transition took
     /// them out.
     Holding,
-    /// Whether the agents' stays in an action place are exponential.
+    /// Whether the agents' stays in an action place follow the predicted exponential.
     HoldingShape,
 }
 
@@ -50,7 +50,8 @@ pub struct Row {
     pub kind: RowKind,
     /// The place, transition, `place -> transition` or decision class.
     pub item: String,
-    /// The observation (for `shape`: the modified KS statistic; for `decision`: Pearson's X²).
+    /// The observation (for `shape` and `holding_shape`: the modified KS statistic; for
+    /// `decision`: Pearson's X²).
     pub observed: f64,
     /// Its 95% interval, when it has one.
     pub interval: Option<[f64; 2]>,
@@ -62,7 +63,8 @@ pub struct Row {
     pub p_value: Option<f64>,
     /// The verdict at [`ALPHA`].
     pub verdict: Verdict,
-    /// Counts beside expectations (decision rows).
+    /// Counts beside expectations (decision rows); why the model predicts nothing (holding
+    /// rows with `no_prediction`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub detail: Option<String>,
 }
@@ -274,7 +276,7 @@ pub fn compare(net: &Net, obs: &Observations, pred: &Predictions, opts: &Options
             detail: Some(detail.join(", ")),
         });
     }
-    holding_rows(net, obs, opts, &mut rows);
+    holding_rows(net, obs, pred, opts, &mut rows);
     Report {
         net: net.name().to_string(),
         predictions: pred.source.clone(),
@@ -286,46 +288,73 @@ pub fn compare(net: &Net, obs: &Observations, pred: &Predictions, opts: &Options
 }
 
 /// The `holding` rows (per place and exit transition) and the `holding_shape` row (per
-/// place) of the agents' stays (see [`super::holding`]): tested against the model only for a
-/// race place and the stays during which the agent was alone there; otherwise shown over
-/// every stay with `no prediction`.
-fn holding_rows(net: &Net, obs: &Observations, opts: &Options, rows: &mut Vec<Row>) {
+/// place) of the agents' stays (see [`super::holding`]): every stay that ended within the
+/// run, tested where the model predicts it ([`holding::stay_model`], with the most tokens
+/// each place holds in a tangible marking: `pred.bounds`, else the P-invariants' bounds, and
+/// never fewer than the run held); elsewhere shown with `no prediction` and why.
+fn holding_rows(
+    net: &Net,
+    obs: &Observations,
+    pred: &Predictions,
+    opts: &Options,
+    rows: &mut Vec<Row>,
+) {
+    let bounds: Vec<Option<u32>> = match &pred.bounds {
+        Some(b) => b.iter().map(|&k| Some(k)).collect(),
+        None => crate::analysis::invariants::structural_bounds(net)
+            .into_iter()
+            .map(|b| b.and_then(|k| u32::try_from(k).ok()))
+            .collect(),
+    };
     for (p, outs) in holding::by_place(net, &obs.holdings) {
-        let lambda = holding::race_rate(net, p);
-        let pick = |hs: &[&Holding]| -> Vec<f64> {
+        let seen = obs.most_tokens.get(p.index()).copied().unwrap_or(0);
+        let bound = bounds[p.index()].map(|b| b.max(seen));
+        let model = holding::stay_model(net, p, bound);
+        let (rate, why) = match &model {
+            holding::StayModel::Exponential { rate } => (Some(*rate), None),
+            holding::StayModel::Unpredicted(u) => (None, Some(u.describe(net))),
+        };
+        // (duration, horizon): a stay that entered `horizon` before the end was seen ended
+        // only because it was shorter.
+        let stays = |hs: &[&Holding]| -> Vec<(f64, f64)> {
             hs.iter()
-                .filter(|h| lambda.is_none() || h.alone)
-                .map(|h| h.duration)
+                .map(|h| (h.duration, obs.end - h.entered))
                 .collect()
         };
         let mut all = Vec::new();
         for (t, hs) in &outs {
-            let xs = pick(hs);
+            let xs = stays(hs);
             all.extend_from_slice(&xs);
             let n = xs.len() as u64;
-            let sum: f64 = xs.iter().sum();
-            let p_value = lambda
-                .filter(|_| n >= opts.min_firings && sum > 0.0)
-                .map(|l| stats::rate_test(n, sum, l));
-            let e = (n >= 2).then(|| stats::estimate(&xs));
+            let durations: Vec<f64> = xs.iter().map(|s| s.0).collect();
+            let mean = durations.iter().sum::<f64>() / n.max(1) as f64;
+            let p_value = rate
+                .filter(|_| n >= opts.min_firings)
+                .and_then(|r| stats::stays_mean_test(&xs, r));
+            let e = (n >= 2).then(|| stats::estimate(&durations));
             rows.push(Row {
                 kind: RowKind::Holding,
                 item: format!("{} -> {}", net.place(p).name, net.transition(*t).name),
-                observed: if n > 0 { sum / n as f64 } else { 0.0 },
+                observed: mean,
                 interval: e.map(|e| [e.lo().max(0.0), e.hi()]),
-                predicted: lambda.map(|l| 1.0 / l),
+                predicted: rate.map(|r| 1.0 / r),
                 n,
                 p_value,
-                verdict: match (lambda, p_value) {
+                verdict: match (rate, p_value) {
                     (None, _) => Verdict::NoPrediction,
                     (Some(_), None) => Verdict::TooLittleData,
                     (Some(_), Some(p)) => verdict(p),
                 },
-                detail: None,
+                detail: why.clone(),
             });
         }
+        // Against the predicted exponential where there is one; otherwise, for information,
+        // the Kolmogorov–Smirnov statistic against an exponential of the stays' own mean.
         let ks = (all.len() >= opts.min_gaps)
-            .then(|| stats::ks_exponential(&all))
+            .then(|| match rate {
+                Some(r) => stats::stays_ks_test(&all, r),
+                None => stats::ks_exponential(&all.iter().map(|s| s.0).collect::<Vec<_>>()),
+            })
             .flatten();
         rows.push(Row {
             kind: RowKind::HoldingShape,
@@ -334,13 +363,13 @@ fn holding_rows(net: &Net, obs: &Observations, opts: &Options, rows: &mut Vec<Ro
             interval: None,
             predicted: None,
             n: all.len() as u64,
-            p_value: ks.map(|k| k.1),
-            verdict: match (lambda, ks) {
+            p_value: ks.filter(|_| rate.is_some()).map(|k| k.1),
+            verdict: match (rate, ks) {
                 (None, _) => Verdict::NoPrediction,
                 (Some(_), None) => Verdict::TooLittleData,
                 (Some(_), Some(k)) => verdict(k.1),
             },
-            detail: None,
+            detail: why,
         });
     }
 }

@@ -1,104 +1,22 @@
-//! The statistics of conformance: batch means over one run, Poisson score intervals for rates,
+//! The tests of conformance: Student t against batch means, Poisson score intervals for rates,
 //! the Lilliefors-corrected Kolmogorov–Smirnov test of exponentiality, Pearson's chi-square
-//! for choices, and the distribution functions they need (normal, Student t, chi-square).
+//! for choices, one-way analysis of variance, and the tests of agents' stays against an
+//! exponential holding time of known rate ([`stays_mean_test`], [`stays_ks_test`]), which
+//! take the end of the run into account: a stay that entered `c` before the end was seen
+//! only because it lasted less than `c`.
 //!
-//! Intervals are the 95% ones `simulate --runs` prints ([`Estimate`], Student t quantiles from
-//! [`t_quantile_975`]); here the observations are the batches of one run instead of
+//! The estimates they read and the distribution functions they are built from live at the
+//! bottom layer, [`crate::stats`] (re-exported here, where they used to be); intervals are the
+//! 95% ones `simulate --runs` prints, here over the batches of one run instead of
 //! independent runs.
 
+pub use crate::stats::{
+    BatchMeans, Estimate, Z975, erfc, estimate, gamma_q, ratio_estimate, student_t_two_sided,
+    t_quantile_975,
+};
+
 use crate::sample::ln;
-use crate::sim::{Estimate, t_quantile_975};
-
-/// The standard normal 0.975 quantile.
-pub const Z975: f64 = 1.959_963_984_540_054;
-
-/// Batch means over one run: the time axis `[0, end]` cut into `n` batches of equal length;
-/// each statistic is a time integral ([`BatchMeans::advance`]) or a count
-/// ([`BatchMeans::count`]), divided by the batch length.
-#[derive(Clone, Debug)]
-pub struct BatchMeans {
-    len: f64,
-    /// `sums[k][b]`: statistic `k` in batch `b`.
-    sums: Vec<Vec<f64>>,
-    last: f64,
-}
-
-impl BatchMeans {
-    /// `stats` statistics over `n` (≥ 2) batches of `[0, end]` (end > 0).
-    pub fn new(n: usize, end: f64, stats: usize) -> Self {
-        BatchMeans {
-            len: end / n as f64,
-            sums: vec![vec![0.0; n.max(2)]; stats],
-            last: 0.0,
-        }
-    }
-
-    fn batch(&self, t: f64) -> usize {
-        let n = self.sums.first().map_or(1, Vec::len);
-        ((t / self.len) as usize).min(n - 1)
-    }
-
-    /// Adds `values[k]` (held constant since the last call) integrated up to time `t`.
-    pub fn advance(&mut self, t: f64, values: &[f64]) {
-        let n = self.sums.first().map_or(1, Vec::len);
-        let mut from = self.last;
-        while from < t {
-            let b = self.batch(from);
-            let end = if b == n - 1 {
-                t
-            } else {
-                t.min((b + 1) as f64 * self.len)
-            };
-            for (k, v) in values.iter().enumerate() {
-                self.sums[k][b] += v * (end - from);
-            }
-            from = end;
-        }
-        self.last = self.last.max(t);
-    }
-
-    /// Adds `x` to count statistic `k` at time `t`.
-    pub fn count(&mut self, t: f64, k: usize, x: f64) {
-        let b = self.batch(t);
-        self.sums[k][b] += x;
-    }
-
-    /// Statistic `k` per batch, per unit of time.
-    pub fn batches(&self, k: usize) -> Vec<f64> {
-        self.sums[k].iter().map(|s| s / self.len).collect()
-    }
-
-    /// Statistic `k` per batch, as summed.
-    pub fn sums(&self, k: usize) -> &[f64] {
-        &self.sums[k]
-    }
-}
-
-/// Mean of the batches and the half-width of its 95% interval (Student t, `n − 1` degrees
-/// of freedom), as [`crate::sim::MonteCarlo`] gives over runs.
-pub fn estimate(xs: &[f64]) -> Estimate {
-    let n = xs.len() as f64;
-    let mean = xs.iter().sum::<f64>() / n;
-    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    Estimate {
-        mean,
-        half_width: t_quantile_975(xs.len() as u64 - 1) * (var.max(0.0) / n).sqrt(),
-    }
-}
-
-/// The ratio `Σ num / Σ den` of two batched counts with its 95% interval (ratio batch means:
-/// the residuals `num_b − r·den_b` give the variance).
-pub fn ratio_estimate(num: &[f64], den: &[f64]) -> Estimate {
-    let (sn, sd): (f64, f64) = (num.iter().sum(), den.iter().sum());
-    let r = sn / sd;
-    let b = num.len() as f64;
-    let res: Vec<f64> = num.iter().zip(den).map(|(n, d)| n - r * d).collect();
-    let var = res.iter().map(|x| x * x).sum::<f64>() / (b - 1.0);
-    Estimate {
-        mean: r,
-        half_width: t_quantile_975(num.len() as u64 - 1) * (var / b).sqrt() / (sd / b),
-    }
-}
+use crate::stats::{beta_i, gamma_p, kolmogorov_q};
 
 /// Two-sided p-value of `predicted` against batch means `est` with `df` degrees of freedom
 /// (the t statistic `(mean − predicted) / (half_width / t₀.₉₇₅)`); a zero-width interval gives
@@ -136,6 +54,81 @@ pub fn rate_test(n: u64, e: f64, lambda: f64) -> f64 {
     }
     let z = (n as f64 - mu) / mu.sqrt();
     erfc(z.abs() / std::f64::consts::SQRT_2)
+}
+
+/// Mean and variance of an exponential of rate `rate` conditioned on being at most `c`
+/// (`c` = ∞: `1/rate` and `1/rate²`): `1/λ − c·q/(1 − q)` and `1/λ² − c²·q/(1 − q)²` with
+/// `q = e^(−λc)`, by their series for small `λc` (where the closed forms cancel).
+pub fn truncated_exponential(rate: f64, c: f64) -> (f64, f64) {
+    let a = rate * c;
+    if a.is_infinite() {
+        return (1.0 / rate, 1.0 / (rate * rate));
+    }
+    if a < 0.05 {
+        // 1/a − 1/(eᵃ − 1) = 1/2 − a/12 + a³/720 − …; its derivative gives the variance.
+        let a2 = a * a;
+        let mean = c * (0.5 - a / 12.0 + a * a2 / 720.0 - a2 * a2 * a / 30_240.0);
+        let var = c * c * (1.0 / 12.0 - a2 / 240.0 + a2 * a2 / 6_048.0);
+        return (mean, var);
+    }
+    let q = (-a).exp();
+    let one_minus_q = -(-a).exp_m1();
+    let r = q / one_minus_q;
+    (
+        1.0 / rate - c * r,
+        1.0 / (rate * rate) - c * c * r / one_minus_q,
+    )
+}
+
+/// Two-sided p-value of "these stays are exponential with rate `rate`" from their sum.
+/// Each stay is `(duration, horizon)`: it entered `horizon` before the end of the run, so it
+/// was seen ended only because `duration ≤ horizon`, and under the model its duration is the
+/// exponential truncated at its horizon ([`truncated_exponential`]). The sum is referred to
+/// the gamma distribution with the sum's exact mean and variance — exactly the
+/// `Gamma(n, 1/rate)` of `n` exponential stays when no horizon cuts (each `≫ 1/rate`).
+/// Stays with horizon 0 say nothing and are left out; `None` when none is left.
+pub fn stays_mean_test(stays: &[(f64, f64)], rate: f64) -> Option<f64> {
+    let (mut sum, mut mean, mut var) = (0.0, 0.0, 0.0);
+    for &(x, c) in stays.iter().filter(|s| s.1 > 0.0) {
+        let (m, v) = truncated_exponential(rate, c);
+        sum += x;
+        mean += m;
+        var += v;
+    }
+    if mean <= 0.0 || var <= 0.0 {
+        return None;
+    }
+    let (shape, scale) = (mean * mean / var, var / mean);
+    let lower = gamma_p(shape, sum / scale);
+    Some((2.0 * lower.min(1.0 - lower)).min(1.0))
+}
+
+/// Kolmogorov–Smirnov test of "these stays are exponential with rate `rate`" (the rate the
+/// model gives, not one estimated from them): each stay `(duration, horizon)` becomes
+/// `u = F(duration) / F(horizon)`, uniform on [0, 1] under the model whatever its horizon
+/// (see [`stays_mean_test`]), and the `u`s are tested against the uniform. Returns Stephens'
+/// modified statistic `D·(√n + 0.12 + 0.11/√n)` and its p-value from Kolmogorov's
+/// distribution; `None` for fewer than 2 stays.
+pub fn stays_ks_test(stays: &[(f64, f64)], rate: f64) -> Option<(f64, f64)> {
+    let cdf = |x: f64| -(-rate * x).exp_m1();
+    let mut us: Vec<f64> = stays
+        .iter()
+        .filter(|s| s.1 > 0.0)
+        .map(|&(x, c)| (cdf(x) / cdf(c)).min(1.0))
+        .collect();
+    let n = us.len();
+    if n < 2 {
+        return None;
+    }
+    us.sort_by(f64::total_cmp);
+    let nf = n as f64;
+    let d = us
+        .iter()
+        .enumerate()
+        .map(|(i, &u)| ((i + 1) as f64 / nf - u).max(u - i as f64 / nf))
+        .fold(0.0f64, f64::max);
+    let k = d * (nf.sqrt() + 0.12 + 0.11 / nf.sqrt());
+    Some((k, kolmogorov_q(k)))
 }
 
 /// Upper-tail points of the modified statistic `(D − 0.2/n)(√n + 0.26 + 0.5/√n)` of the
@@ -216,25 +209,6 @@ pub fn chi_square(counts: &[u64], probs: &[f64]) -> f64 {
     gamma_q((cells - 1) as f64 / 2.0, x2 / 2.0)
 }
 
-/// The complementary error function (Numerical Recipes' Chebyshev fit, relative error
-/// < 1.2e-7).
-pub fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87
-                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
-    if x >= 0.0 { r } else { 2.0 - r }
-}
-
 /// One-way analysis of variance: the p-value of "the groups have one mean" (Fisher's F with
 /// `G − 1` and `N − G` degrees of freedom). Groups of no value are left out; fewer than two
 /// groups, or no degree of freedom within them, give 1. Without spread within the groups the
@@ -266,140 +240,6 @@ pub fn anova_p(groups: &[&[f64]]) -> f64 {
     }
     let f = (between / d1) / (within / d2);
     beta_i(d2 / 2.0, d1 / 2.0, d2 / (d2 + d1 * f))
-}
-
-/// P(|T| ≥ t) for Student's t with `df` degrees of freedom.
-pub fn student_t_two_sided(t: f64, df: f64) -> f64 {
-    beta_i(df / 2.0, 0.5, df / (df + t * t))
-}
-
-fn ln_gamma(x: f64) -> f64 {
-    // Lanczos (g = 7, n = 9).
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    if x < 0.5 {
-        return ln(std::f64::consts::PI / (std::f64::consts::PI * x).sin()) - ln_gamma(1.0 - x);
-    }
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + 7.5;
-    for (i, &c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * ln(2.0 * std::f64::consts::PI) + (x + 0.5) * ln(t) - t + ln(a)
-}
-
-/// The regularised upper incomplete gamma function Q(a, x).
-pub fn gamma_q(a: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 1.0;
-    }
-    let gln = ln_gamma(a);
-    if x < a + 1.0 {
-        // Series for P.
-        let (mut ap, mut sum) = (a, 1.0 / a);
-        let mut del = sum;
-        for _ in 0..1000 {
-            ap += 1.0;
-            del *= x / ap;
-            sum += del;
-            if del.abs() < sum.abs() * 1e-15 {
-                break;
-            }
-        }
-        1.0 - sum * (-x + a * ln(x) - gln).exp()
-    } else {
-        // Continued fraction for Q (Lentz).
-        let tiny = 1e-300;
-        let mut b = x + 1.0 - a;
-        let mut c = 1.0 / tiny;
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..1000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            if d.abs() < tiny {
-                d = tiny;
-            }
-            c = b + an / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            d = 1.0 / d;
-            let del = d * c;
-            h *= del;
-            if (del - 1.0).abs() < 1e-15 {
-                break;
-            }
-        }
-        (-x + a * ln(x) - gln).exp() * h
-    }
-}
-
-/// The regularised incomplete beta function I_x(a, b).
-fn beta_i(a: f64, b: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 0.0;
-    }
-    if x >= 1.0 {
-        return 1.0;
-    }
-    let front = (ln_gamma(a + b) - ln_gamma(a) - ln_gamma(b) + a * ln(x) + b * ln(1.0 - x)).exp();
-    if x < (a + 1.0) / (a + b + 2.0) {
-        front * beta_cf(a, b, x) / a
-    } else {
-        1.0 - front * beta_cf(b, a, 1.0 - x) / b
-    }
-}
-
-fn beta_cf(a: f64, b: f64, x: f64) -> f64 {
-    let tiny = 1e-300;
-    let (qab, qap, qam) = (a + b, a + 1.0, a - 1.0);
-    let mut c = 1.0;
-    let mut d = 1.0 - qab * x / qap;
-    if d.abs() < tiny {
-        d = tiny;
-    }
-    d = 1.0 / d;
-    let mut h = d;
-    // One step of the modified Lentz recurrence with coefficient `aa`.
-    let step = |aa: f64, c: &mut f64, d: &mut f64| -> f64 {
-        *d = 1.0 + aa * *d;
-        if d.abs() < tiny {
-            *d = tiny;
-        }
-        *c = 1.0 + aa / *c;
-        if c.abs() < tiny {
-            *c = tiny;
-        }
-        *d = 1.0 / *d;
-        *d * *c
-    };
-    for m in 1..1000 {
-        let m = m as f64;
-        let m2 = 2.0 * m;
-        h *= step(m * (b - m) * x / ((qam + m2) * (a + m2)), &mut c, &mut d);
-        let del = step(
-            -(a + m) * (qab + m) * x / ((a + m2) * (qap + m2)),
-            &mut c,
-            &mut d,
-        );
-        h *= del;
-        if (del - 1.0).abs() < 1e-15 {
-            break;
-        }
-    }
-    h
 }
 
 #[cfg(test)]
@@ -443,13 +283,109 @@ mod tests {
         assert_eq!(anova_p(&[&[a, a, a], &[b, b]]), 1.0);
     }
 
+    /// ∫₀ᶜ f(x)·λe^(−λx) dx by Simpson's rule on 20 000 intervals.
+    fn integral(rate: f64, c: f64, f: impl Fn(f64) -> f64) -> f64 {
+        let n = 20_000;
+        let h = c / n as f64;
+        let g = |x: f64| f(x) * rate * (-rate * x).exp();
+        let inner: f64 = (1..n)
+            .map(|i| if i % 2 == 1 { 4.0 } else { 2.0 } * g(i as f64 * h))
+            .sum();
+        (g(0.0) + inner + g(c)) * h / 3.0
+    }
+
     #[test]
-    fn batches_split_integrals_at_batch_ends() {
-        let mut b = BatchMeans::new(4, 8.0, 1);
-        b.advance(3.0, &[1.0]);
-        b.advance(8.0, &[2.0]);
-        assert_eq!(b.sums(0), &[2.0, 3.0, 4.0, 4.0]);
-        let e = estimate(&b.batches(0));
-        assert!((e.mean - 1.625).abs() < 1e-12);
+    fn truncated_exponential_moments_match_their_integrals() {
+        for &(rate, c) in &[
+            (1.0, 0.01),
+            (2.0, 0.024),
+            (2.0, 0.026),
+            (0.5, 0.3),
+            (1.0, 1.0),
+            (3.0, 2.0),
+            (1.0, 40.0),
+        ] {
+            let mass = integral(rate, c, |_| 1.0);
+            let mean = integral(rate, c, |x| x) / mass;
+            let var = integral(rate, c, |x| (x - mean).powi(2)) / mass;
+            let (m, v) = truncated_exponential(rate, c);
+            assert!((m - mean).abs() < 1e-9 * mean, "{rate} {c}: {m} vs {mean}");
+            assert!((v - var).abs() < 1e-9 * var, "{rate} {c}: {v} vs {var}");
+        }
+        // The series and the closed form meet at λc = 0.05.
+        let (a, b) = (
+            truncated_exponential(1.0, 0.05 - 1e-13),
+            truncated_exponential(1.0, 0.05),
+        );
+        assert!(
+            (a.0 - b.0).abs() < 1e-13 && (a.1 - b.1).abs() < 1e-13,
+            "{a:?} {b:?}"
+        );
+        assert_eq!(truncated_exponential(2.0, f64::INFINITY), (0.5, 0.25));
+    }
+
+    #[test]
+    fn stays_far_from_the_end_get_the_exact_gamma_test() {
+        // One stay: p = 2·min(F, 1 − F) of the exponential.
+        for x in [0.05f64, 0.7, 3.0] {
+            let f = 1.0 - (-2.0 * x).exp();
+            let p = stays_mean_test(&[(x, 1e6)], 2.0).unwrap();
+            assert!((p - 2.0 * f.min(1.0 - f)).abs() < 1e-12, "{x}: {p}");
+        }
+        // Three stays of rate 1: the sum is Gamma(3, 1).
+        let stays = [(0.4, 1e6), (1.1, 1e6), (2.0, 1e6)];
+        let s = 3.5f64;
+        let lower = 1.0 - (-s).exp() * (1.0 + s + s * s / 2.0);
+        let p = stays_mean_test(&stays, 1.0).unwrap();
+        assert!((p - 2.0 * lower.min(1.0 - lower)).abs() < 1e-12, "{p}");
+        // Horizon 0 says nothing.
+        assert_eq!(stays_mean_test(&[(0.0, 0.0)], 1.0), None);
+    }
+
+    /// Runs of `entries` stays of rate 1 entering uniformly over `[0, end]`, seen only when
+    /// they end by `end`: how often each test flags at 5% over `reps` runs, and the naive
+    /// gamma test that ignores the end.
+    fn cut_runs(reps: u64, entries: usize, end: f64) -> (u64, u64, u64) {
+        use rand::SeedableRng;
+        let mut rng = crate::sample::Rng::seed_from_u64(24);
+        let (mut mean_flags, mut ks_flags, mut naive_flags) = (0, 0, 0);
+        for _ in 0..reps {
+            let mut stays = Vec::new();
+            for _ in 0..entries {
+                let entered = crate::sample::uniform(&mut rng) * end;
+                let x = crate::sample::exponential(&mut rng, 1.0);
+                if entered + x <= end {
+                    stays.push((x, end - entered));
+                }
+            }
+            mean_flags += (stays_mean_test(&stays, 1.0).unwrap() < 0.05) as u64;
+            ks_flags += (stays_ks_test(&stays, 1.0).unwrap().1 < 0.05) as u64;
+            let far: Vec<(f64, f64)> = stays.iter().map(|s| (s.0, f64::INFINITY)).collect();
+            naive_flags += (stays_mean_test(&far, 1.0).unwrap() < 0.05) as u64;
+        }
+        (mean_flags, ks_flags, naive_flags)
+    }
+
+    #[test]
+    fn stays_cut_by_the_end_of_the_run_keep_the_level() {
+        // Runs of 5 mean stays: a stay that entered late was seen only if it was short (about
+        // a fifth of the entries are still in the place at the end).
+        let reps = 2000;
+        let (mean_flags, ks_flags, naive_flags) = cut_runs(reps, 200, 5.0);
+        let (lo, hi) = crate::stats::binomial_interval(reps, 0.05, 0.999);
+        eprintln!(
+            "of {reps} runs, flagged: mean {mean_flags}, ks {ks_flags}, naive {naive_flags} \
+             (99.9% interval [{lo}, {hi}])"
+        );
+        assert!(
+            (lo..=hi).contains(&mean_flags),
+            "{mean_flags} not in [{lo}, {hi}]"
+        );
+        assert!(
+            (lo..=hi).contains(&ks_flags),
+            "{ks_flags} not in [{lo}, {hi}]"
+        );
+        // Ignoring the end, the seen stays look short.
+        assert!(naive_flags > 3 * hi, "{naive_flags} vs {hi}");
     }
 }

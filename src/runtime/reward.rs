@@ -142,8 +142,7 @@ impl Meter {
                     .iter()
                     .map(|x| x / m.length)
                     .collect();
-                let half_width =
-                    (complete >= 2).then(|| crate::conform::stats::estimate(&rates).half_width);
+                let half_width = (complete >= 2).then(|| crate::stats::estimate(&rates).half_width);
                 let total = m.total[k];
                 let earned = Earned {
                     total,

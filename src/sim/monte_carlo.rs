@@ -15,6 +15,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use super::{SimError, Simulator};
 use crate::net::Net;
 use crate::policy::Policy;
+use crate::stats::{Estimate, t_quantile_975};
 
 /// How long each run lasts.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,32 +28,6 @@ pub enum Horizon {
 
 /// Runs per block: the unit of work of a thread, merged in order.
 const BLOCK: u64 = 8;
-
-/// One estimated quantity: the mean over runs and the half-width of its 95% interval.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Estimate {
-    /// Mean over runs.
-    pub mean: f64,
-    /// Half-width of the 95% confidence interval; NaN with fewer than 2 runs.
-    pub half_width: f64,
-}
-
-impl Estimate {
-    /// Lower end of the 95% interval.
-    pub fn lo(&self) -> f64 {
-        self.mean - self.half_width
-    }
-
-    /// Upper end of the 95% interval.
-    pub fn hi(&self) -> f64 {
-        self.mean + self.half_width
-    }
-
-    /// True when `x` lies in the 95% interval.
-    pub fn contains(&self, x: f64) -> bool {
-        self.lo() <= x && x <= self.hi()
-    }
-}
 
 /// What a Monte-Carlo experiment estimated.
 #[derive(Clone, Debug, PartialEq)]
@@ -328,71 +303,9 @@ impl Acc {
     }
 }
 
-/// The 0.975 quantile of Student's t with `df` degrees of freedom (≥ 1): exact to 9
-/// decimals from a table up to 30, then the Cornish–Fisher expansion (error < 1e-7).
-pub fn t_quantile_975(df: u64) -> f64 {
-    const TABLE: [f64; 30] = [
-        12.706204736,
-        4.302652730,
-        3.182446305,
-        2.776445105,
-        2.570581836,
-        2.446911851,
-        2.364624252,
-        2.306004135,
-        2.262157163,
-        2.228138852,
-        2.200985160,
-        2.178812830,
-        2.160368656,
-        2.144786688,
-        2.131449546,
-        2.119905299,
-        2.109815578,
-        2.100922040,
-        2.093024054,
-        2.085963447,
-        2.079613845,
-        2.073873068,
-        2.068657610,
-        2.063898562,
-        2.059538553,
-        2.055529439,
-        2.051830516,
-        2.048407142,
-        2.045229642,
-        2.042272456,
-    ];
-    if df == 0 {
-        return f64::NAN;
-    }
-    if df <= 30 {
-        return TABLE[df as usize - 1];
-    }
-    let z: f64 = 1.959_963_984_540_054;
-    let v = df as f64;
-    let (z2, z3) = (z * z, z * z * z);
-    let (z5, z7, z9) = (z3 * z2, z3 * z2 * z2, z3 * z3 * z3);
-    z + (z3 + z) / (4.0 * v)
-        + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * v * v)
-        + (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / (384.0 * v * v * v)
-        + (79.0 * z9 + 776.0 * z7 + 1482.0 * z5 - 1920.0 * z3 - 945.0 * z)
-            / (92160.0 * v * v * v * v)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn t_quantiles() {
-        assert_eq!(t_quantile_975(1), 12.706204736);
-        assert!((t_quantile_975(31) - 2.039513446).abs() < 1e-7);
-        assert!((t_quantile_975(199) - 1.971956544).abs() < 1e-8);
-        let z = 1.959_963_984_540_054;
-        assert!(t_quantile_975(1_000_000) > z && t_quantile_975(1_000_000) - z < 2.5e-6);
-        assert!(t_quantile_975(0).is_nan());
-    }
 
     #[test]
     fn merged_blocks_equal_one_pass() {

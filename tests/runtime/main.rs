@@ -10,6 +10,7 @@ mod agent_identity;
 mod agents_match_tokens;
 mod builtin_actions;
 mod conformance;
+mod conformance_without_false_alarms;
 mod differential;
 mod failures;
 mod golden_trace;

@@ -1,6 +1,8 @@
-//! `plan-runner conform JOURNAL (--plan PLAN | --net NET) [--json] [--fit OUT]`: a recorded
-//! run beside its model's predictions, row by row with a verdict (see `gspn::conform` and
-//! docs/conformance.md); `--fit` writes the net with the rates and weights the run shows.
+//! `plan-runner conform JOURNAL (--plan PLAN | --net NET) [--json] [--fit OUT]
+//! [--fail-on-drift]`: a recorded run beside its model's predictions, row by row with a
+//! verdict (see `gspn::conform` and docs/conformance.md); `--fit` writes the net with the
+//! rates and weights the run shows. Exit status: 2 for bad input; with `--fail-on-drift`, 1
+//! when a row diverges; 0 otherwise.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -49,6 +51,10 @@ pub(crate) struct Args {
     /// Most reachable markings for the steady-state prediction.
     #[arg(long, value_name = "N", default_value_t = 1_000_000)]
     max_states: usize,
+    /// Exit with status 1 when any row diverges (0 when none does): a gate for CI or a
+    /// deployment. The report is printed either way.
+    #[arg(long)]
+    fail_on_drift: bool,
     #[command(flatten)]
     net_args: NetArgs,
 }
@@ -142,8 +148,17 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let policy = (!policy.is_empty()).then_some(policy);
     let obs = observe(&net, policy.as_ref(), &trace, &opts)
         .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
-    let pred = steady_predictions(&net, policy.as_ref(), args.max_states)
-        .unwrap_or_else(|e| Predictions::none(&format!("none: {e}")));
+    // A run that did not start from the net's initial marking (`run --robots N` scales it)
+    // is predicted from the marking it started from.
+    let started = (trace.initial != net.initial_marking().as_slice())
+        .then(|| net.with_initial_marking(&trace.initial).ok())
+        .flatten();
+    let pred = steady_predictions(
+        started.as_ref().unwrap_or(&net),
+        policy.as_ref(),
+        args.max_states,
+    )
+    .unwrap_or_else(|e| Predictions::none(&format!("none: {e}")));
     let report = compare(&net, &obs, &pred, &opts);
     let fitted = match (&args.fit, format) {
         (Some(out), Some(format)) => {
@@ -164,6 +179,11 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         if let Some((out, params)) = &fitted {
             print_fitted(out, params);
         }
+    }
+    let diverging = report.diverging().count();
+    if args.fail_on_drift && diverging > 0 {
+        eprintln!("conform: {diverging} row(s) diverge at the 5% level (--fail-on-drift): exit 1");
+        return Ok(ExitCode::from(1));
     }
     Ok(ExitCode::SUCCESS)
 }
