@@ -122,6 +122,37 @@ fn the_cleaning_robots_keep_their_priorities_with_wait_everywhere() {
     assert_eq!(last["event"], "stopped");
     assert_eq!(last["reason"], "time_limit");
     assert_eq!(last["time"], 5000.0);
+
+    // `conform` on that run: no holding-time row diverges. The travel and cleaning places
+    // hold several robots with single servers, so their stays depend on the queue: "no
+    // prediction" there, not a false alarm; the charger's place is predicted and agrees.
+    let net_file = repo("plans/cleaning/plan.toml");
+    let out = run_ok(&[
+        "conform",
+        j.to_str().unwrap(),
+        "--net",
+        net_file.to_str().unwrap(),
+        "--json",
+    ]);
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let holding: Vec<&Value> = report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["kind"] == "holding")
+        .collect();
+    assert!(holding.len() >= 8, "{} holding rows", holding.len());
+    let flagged: Vec<String> = holding
+        .iter()
+        .filter(|r| r["verdict"] == "diverges")
+        .map(|r| r["item"].to_string())
+        .collect();
+    assert!(flagged.is_empty(), "holding rows flagged: {flagged:?}");
+    let charging = holding
+        .iter()
+        .find(|r| r["item"] == "Charging -> EndCharge")
+        .expect("a holding row for the charger");
+    assert_eq!(charging["verdict"], "consistent");
 }
 
 #[test]

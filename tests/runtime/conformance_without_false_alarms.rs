@@ -31,7 +31,6 @@
 //! rows flag (stays with a coefficient of variation near 0.5, not 1), while a race that
 //! consumes a uniformly chosen agent among those being served brings it back to 6 of 135.
 
-
 use rand::{RngExt, SeedableRng};
 
 use gspn::conform::holding::{StayModel, stay_model};
