@@ -74,6 +74,41 @@ fn marking_json(ctx: &ActionContext) -> String {
     serde_json::to_string(&MarkingMap(ctx)).unwrap_or_default()
 }
 
+/// A stated duration: a JSON number or numeric string of model seconds, finite, ≥ 0 and at
+/// most [`MAX_SECONDS`](crate::limits::MAX_SECONDS).
+fn stated_seconds(v: &serde_json::Value) -> Option<f64> {
+    let s = match v {
+        serde_json::Value::Number(n) => n.as_f64()?,
+        serde_json::Value::String(s) => s.trim().parse().ok()?,
+        _ => return None,
+    };
+    crate::limits::valid_wait(s).then_some(s)
+}
+
+/// A command's last stdout line: `NAME`, `NAME after S` or `after S` (NAME a transition or
+/// `decide`; S model seconds the outcome takes effect after). The name, and the seconds or
+/// why they are not seconds.
+fn split_after(line: &str) -> (&str, Result<f64, String>) {
+    let line = line.trim();
+    let (name, secs) = if let Some(s) = line.strip_prefix("after ") {
+        ("", s)
+    } else if let Some((n, s)) = line.rsplit_once(" after ") {
+        (n.trim(), s)
+    } else {
+        return (line, Ok(0.0));
+    };
+    let secs = secs.trim();
+    match secs.parse::<f64>() {
+        Ok(v) if crate::limits::valid_wait(v) => (name, Ok(v)),
+        _ => (
+            name,
+            Err(format!(
+                "`after {secs}`: not a number of model seconds (finite, ≥ 0, ≤ 315576000)"
+            )),
+        ),
+    }
+}
+
 /// What a program's answer (a last stdout line, a worker's `fire`) means for the run.
 fn outcome_of_name(ctx: &ActionContext, who: &str, name: &str) -> crate::runtime::Outcome {
     use crate::runtime::Outcome;

@@ -13,15 +13,16 @@
 //!
 //! The rules:
 //!
-//! - **Enabling** ([`enabled`]): every input arc satisfied, every inhibitor below its
-//!   threshold, no capacity exceeded (the same rules as [`Net::is_enabled`]).
+//! - **Enabling** ([`Net::is_enabled`], the rule's one home): every input arc satisfied,
+//!   every inhibitor below its threshold, no capacity exceeded.
 //! - **Vanishing** markings (an immediate transition enabled): time does not pass; only the
 //!   enabled immediate transitions of the highest priority may fire. The [`Policy`], when one
 //!   of its rules applies, gives the distribution; otherwise the choice is ∝ weight, and
 //!   uniform when every candidate has weight 0 (a decision the net leaves to a policy it was
 //!   not given).
 //! - **Tangible** markings: the enabled exponential transitions race; `t` fires at
-//!   `rate(t) × min(servers, degree(t))` ([`rate`]); the delay is exponential with the total
+//!   `rate(t) × min(servers, degree(t))` ([`Net::exp_rate`]; the runtime caps the degree by
+//!   its ready agents); the delay is exponential with the total
 //!   rate and the winner is drawn ∝ its rate.
 //! - **Dead** markings: nothing is enabled.
 
@@ -33,69 +34,6 @@ pub(crate) use statistics::Tally;
 use crate::net::{Net, Servers, Timing, TransitionId};
 use crate::policy::Policy;
 use crate::sample::{self, Rng, SumTree};
-
-/// True when `t` may fire in `m`: inputs satisfied, inhibitors below threshold, no capacity
-/// exceeded. `has_capacity` is false when no place of the net has a capacity (skips a loop).
-#[inline]
-pub(crate) fn enabled(net: &Net, m: &[u32], t: TransitionId, has_capacity: bool) -> bool {
-    net.inputs(t).iter().all(|&(p, w)| m[p.index()] >= w)
-        && side_conditions(net, m, t, has_capacity)
-}
-
-/// Inhibitors below threshold and no capacity exceeded (the input arcs checked apart).
-#[inline]
-fn side_conditions(net: &Net, m: &[u32], t: TransitionId, has_capacity: bool) -> bool {
-    for &(p, w) in net.inhibitors(t) {
-        if m[p.index()] >= w {
-            return false;
-        }
-    }
-    if has_capacity {
-        for &(p, d) in net.delta(t) {
-            if d > 0 && m[p.index()] as i64 + d > net.capacity_of(p) as i64 {
-                return false;
-            }
-        }
-    }
-    true
-}
-
-/// The firing rate of exponential `t` (per-server `rate`, `servers`) in `m`:
-/// `rate × min(servers, degree)`, 0 when `t` is not enabled. `cap` bounds the degree from
-/// outside (the runtime: how many agents handed the choice back to the net; `u32::MAX`
-/// for the net's own race).
-#[inline]
-pub(crate) fn rate(
-    net: &Net,
-    m: &[u32],
-    t: TransitionId,
-    (rate, servers): (f64, Servers),
-    has_capacity: bool,
-    cap: u32,
-) -> f64 {
-    let inputs = net.inputs(t);
-    let active = if servers == Servers::Single && cap > 0 {
-        // Enabled is all a single server needs: no divisions.
-        if !inputs.iter().all(|&(p, w)| m[p.index()] >= w) {
-            return 0.0;
-        }
-        1
-    } else {
-        let mut degree = if inputs.is_empty() { 1 } else { u32::MAX };
-        for &(p, w) in inputs {
-            let k = m[p.index()];
-            if k < w {
-                return 0.0;
-            }
-            degree = degree.min(if w == 1 { k } else { k / w });
-        }
-        servers.active(degree.min(cap))
-    };
-    if active == 0 || !side_conditions(net, m, t, has_capacity) {
-        return 0.0;
-    }
-    rate * active as f64
-}
 
 /// The transitions of a net sorted for the rules: immediate ones by decreasing priority (then
 /// id), and the exponential ones.
@@ -204,7 +142,6 @@ pub(crate) struct Firable {
     /// Per transition: a candidate (kept for immediate ones only).
     imm_on: Vec<bool>,
     imm_on_count: u32,
-    has_capacity: bool,
     candidates: Vec<TransitionId>,
     dist: Vec<(TransitionId, f64)>,
     /// The last [`Firable::choose_immediate`] decided outside the policy's table.
@@ -259,7 +196,6 @@ impl Firable {
             levels,
             imm_on: vec![false; net.transition_count()],
             imm_on_count: 0,
-            has_capacity: net.places().iter().any(|p| p.capacity.is_some()),
             candidates: Vec::new(),
             dist: Vec::new(),
             outside_policy: false,
@@ -280,11 +216,11 @@ impl Firable {
         match self.slots[t.index()] {
             Slot::Exp(i) => {
                 let (_, r, servers) = self.exp_params[i as usize];
-                let r = rate(net, m, t, (r, servers), self.has_capacity, u32::MAX);
+                let r = net.race_rate(m, t, (r, servers), u32::MAX);
                 self.set_slot_rate(i as usize, r);
             }
             Slot::Imm { .. } => {
-                let on = enabled(net, m, t, self.has_capacity);
+                let on = net.is_enabled(m, t);
                 self.set_immediate(net, t, on);
             }
         }
@@ -296,7 +232,7 @@ impl Firable {
     pub(crate) fn refresh_capped(&mut self, net: &Net, m: &[u32], t: TransitionId, cap: u32) {
         if let Slot::Exp(i) = self.slots[t.index()] {
             let (_, r, servers) = self.exp_params[i as usize];
-            let r = rate(net, m, t, (r, servers), self.has_capacity, cap);
+            let r = net.race_rate(m, t, (r, servers), cap);
             self.set_slot_rate(i as usize, r);
         }
     }

@@ -225,15 +225,17 @@ impl Net {
     }
 
     /// True when `t` may fire in `m`: inputs satisfied, inhibitors below threshold, and no
-    /// capacity exceeded by the result.
+    /// capacity exceeded by the result. The one home of the enabling rule: the firing core,
+    /// the explorer, the token game and the runtime all ask here.
     #[inline]
     pub fn is_enabled(&self, m: &[u32], t: TransitionId) -> bool {
+        self.pre[t.index()].iter().all(|&(p, w)| m[p.index()] >= w) && self.side_conditions(m, t)
+    }
+
+    /// Inhibitors below threshold and no capacity exceeded (the input arcs checked apart).
+    #[inline]
+    fn side_conditions(&self, m: &[u32], t: TransitionId) -> bool {
         let i = t.index();
-        for &(p, w) in &self.pre[i] {
-            if m[p.index()] < w {
-                return false;
-            }
-        }
         for &(p, w) in &self.inhib[i] {
             if m[p.index()] >= w {
                 return false;
@@ -265,11 +267,46 @@ impl Net {
     pub fn exp_rate(&self, m: &[u32], t: TransitionId) -> f64 {
         match self.transitions[t.index()].timing {
             Timing::Exponential { rate, servers } => {
-                let d = self.enabled_degree(m, t);
-                rate * servers.active(d) as f64
+                self.race_rate(m, t, (rate, servers), u32::MAX)
             }
             Timing::Immediate { .. } => 0.0,
         }
+    }
+
+    /// The rate rule, once: exponential `t` with per-server `rate` and `servers` fires in `m`
+    /// at `rate × min(servers, degree, cap)`, 0 when it is not enabled. `cap` bounds the
+    /// degree from outside (the runtime: how many agents handed the choice back to the net;
+    /// `u32::MAX` for the net's own race). The caller passes the timing it has at hand.
+    #[inline]
+    pub(crate) fn race_rate(
+        &self,
+        m: &[u32],
+        t: TransitionId,
+        (rate, servers): (f64, Servers),
+        cap: u32,
+    ) -> f64 {
+        let inputs = &self.pre[t.index()];
+        let active = if servers == Servers::Single && cap > 0 {
+            // Enabled is all a single server needs: no divisions.
+            if !inputs.iter().all(|&(p, w)| m[p.index()] >= w) {
+                return 0.0;
+            }
+            1
+        } else {
+            let mut degree = if inputs.is_empty() { 1 } else { u32::MAX };
+            for &(p, w) in inputs {
+                let k = m[p.index()];
+                if k < w {
+                    return 0.0;
+                }
+                degree = degree.min(if w == 1 { k } else { k / w });
+            }
+            servers.active(degree.min(cap))
+        };
+        if active == 0 || !self.side_conditions(m, t) {
+            return 0.0;
+        }
+        rate * active as f64
     }
 
     /// The first place that firing `t` in `m` would push past [`MAX_TOKENS`], if any: every

@@ -13,9 +13,27 @@
 //! - [`Backend`]: what a run drives besides its actors (robot world, ROS 2, viewer), kept in
 //!   [`Backends`].
 //!
-//! Places without a registered action are *net-timed*: the supervisor samples their
-//! exponential transitions with the net's rates and server semantics, so a plan with no user
-//! code is the GSPN's own token game.
+//! The execution semantics (`docs/execution.md` has them in full):
+//!
+//! - **Agents**: once a run has an action place, every token outside resource places is an
+//!   agent with a stable id; it keeps its identity through places without an action (they
+//!   are transparent: their agents are ready at once). Through a firing, consumed agents
+//!   continue into the produced tokens in input-arc order; leftovers end (join), extra tokens
+//!   are new agents (fork).
+//! - **Readiness**: a transition is ready when it is enabled and each input place's agents
+//!   that it needs have ended their actions with `Fire(it)` or `Decide`. The supervisor picks
+//!   among ready transitions with the one firing core ([`crate::firing`]): the highest
+//!   priority first, then the policy or the weights; a lower-priority immediate transition
+//!   never fires while a higher-priority one is enabled and ready.
+//! - **Time**: with `time_scale = 0` the model clock moves only by the net's delays and the
+//!   durations actions state ([`ModelClock::sleep`], `wait S`, a program's `after S`); the
+//!   supervisor chooses only when no action that could decide at this instant is still
+//!   computing, and applies what arrived in agent order — the same seed gives the same run
+//!   with any actions. With `time_scale > 0` actions take the (scaled) time they take.
+//! - Places whose agents hand the choice back to the net (`Decide`, a `wait`, no action) are
+//!   *net-timed*: the supervisor samples their exponential transitions with the net's rates
+//!   and server semantics, so a plan whose actions take no model time is the GSPN's own token
+//!   game, firing for firing.
 //!
 //! ```
 //! use gspn::net::{NetBuilder, Servers};
@@ -79,6 +97,7 @@ pub use backend::{
 };
 pub use builder::RuntimeBuilder;
 pub use builtin::{BUILTIN_WORDS, Builtin};
+pub use clock::ModelClock;
 pub use event::{Drift, Event, EventKind, Events, Monitored, Received, Watcher};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};
 pub use id::AgentId;
@@ -196,12 +215,12 @@ pub enum RuntimeError {
     },
     /// The plan names a different number of robots than there are initial agents.
     #[error(
-        "{robots} robot(s) named but the net starts with {agents} agent(s) in action places: name one robot per initial agent"
+        "{robots} robot(s) named but the net starts with {agents} agent(s) (initial tokens outside resource places): name one robot per initial agent"
     )]
     RobotCount {
         /// Robots named.
         robots: usize,
-        /// Initial tokens in action places (places with a registered action).
+        /// Initial tokens outside resource places.
         agents: u64,
     },
     /// A place's action is a built-in (`wait`, `log`, `fire`) written wrongly.

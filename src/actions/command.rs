@@ -4,8 +4,10 @@
 //! program also gets `GSPN_AGENT`, `GSPN_PLACE`, `GSPN_ROBOT`, `GSPN_SEED`, `GSPN_TIME`,
 //! `GSPN_MARKING` (JSON) and `GSPN_OUTPUTS` (the place's output transitions, space-separated).
 //! Exit 0 and a last stdout line naming a transition fires it; an empty last line or
-//! `decide` lets the net decide; a non-zero exit fails the action with the code and the tail
-//! of stderr. Every stdout and stderr line becomes an
+//! `decide` lets the net decide; `T after S`, `decide after S` or `after S` states a
+//! duration: the outcome takes effect S model seconds later (in virtual time, the only way a
+//! program's action takes model time — the time the program itself takes never counts); a
+//! non-zero exit fails the action with the code and the tail of stderr. Every stdout and stderr line becomes an
 //! [`ActionOutput`](crate::runtime::EventKind::ActionOutput) event.
 
 use std::collections::VecDeque;
@@ -18,7 +20,9 @@ use tokio::io::{AsyncBufReadExt, AsyncRead, BufReader};
 use tokio::process::Command;
 
 use super::group::ProcessGroup;
-use super::{DEFAULT_KILL_GRACE, MAX_OUTPUT_LINES, OutputNames, marking_json, outcome_of_name};
+use super::{
+    DEFAULT_KILL_GRACE, MAX_OUTPUT_LINES, OutputNames, marking_json, outcome_of_name, split_after,
+};
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome, OutputStream};
 
 /// Lines of stderr quoted in a failure.
@@ -35,8 +39,10 @@ pub struct CommandSpec {
     pub cwd: Option<PathBuf>,
     /// Extra environment variables.
     pub env: Vec<(String, String)>,
-    /// Fails the action (and stops the program) after this long, in model seconds scaled like
-    /// the run's clock (default: none; the place's `timeout` applies too).
+    /// Fails the action (and stops the program) after the program ran this long, in tokio
+    /// time: wall-clock seconds (scaled like the run's clock in real time) — a guard against
+    /// a hung program, also in virtual time, where the program's own time is not model time
+    /// (default: none; the place's `timeout`, in model seconds, applies too).
     pub timeout: Option<Duration>,
     /// Between SIGTERM and SIGKILL when the program must stop.
     pub kill_grace: Duration,
@@ -150,7 +156,22 @@ async fn run(spec: &CommandSpec, outputs: &[String], ctx: ActionContext) -> Outc
             group.finish();
             match status {
                 Ok(s) if s.success() => {
-                    outcome_of_name(&ctx, &format!("`{program}`"), last.back().map_or("", |l| l.as_str()))
+                    let (name, after) = split_after(last.back().map_or("", |l| l.as_str()));
+                    let after = match after {
+                        Ok(a) => a,
+                        Err(why) => return Outcome::Failed(format!("`{program}`: {why}")),
+                    };
+                    let outcome = outcome_of_name(&ctx, &format!("`{program}`"), name);
+                    if after > 0.0 && !matches!(outcome, Outcome::Failed(_)) {
+                        // The program stated a duration: the outcome takes effect that much
+                        // model time later.
+                        tokio::select! {
+                            biased;
+                            () = ctx.cancel.cancelled() => return Outcome::Cancelled,
+                            () = ctx.clock.sleep(after) => {}
+                        }
+                    }
+                    outcome
                 }
                 Ok(s) => Outcome::Failed(failure(program, s, &tail)),
                 Err(e) => Outcome::Failed(format!("`{program}`: {e}")),

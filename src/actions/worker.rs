@@ -7,7 +7,9 @@
 //! - cancel, on stdin: `{"cancel": id}` (the run is stopping or the action timed out);
 //! - replies, on stdout: `{"id", "fire": "t3"}` | `{"id", "decide": true}` |
 //!   `{"id", "error": "…"}`, and any number of `{"id", "output": "a line"}` before them
-//!   (recorded as the agent's output).
+//!   (recorded as the agent's output); `"after": S` on a `fire` or `decide` reply states a
+//!   duration: the outcome takes effect S model seconds later (in virtual time, the only way
+//!   a worker's action takes model time).
 //!
 //! A worker that exits fails its in-flight actions with the reason and is started again on
 //! the next request, after a backoff that doubles from 100 ms up to 5 s while it keeps
@@ -99,7 +101,7 @@ enum Msg {
         id: u64,
         line: String,
         ctx: ActionContext,
-        reply: oneshot::Sender<Outcome>,
+        reply: oneshot::Sender<Answer>,
     },
     Cancel(u64),
 }
@@ -129,6 +131,9 @@ struct Reply {
     error: Option<String>,
     #[serde(default)]
     output: Option<String>,
+    /// Model seconds the outcome takes effect after.
+    #[serde(default)]
+    after: Option<serde_json::Value>,
 }
 
 impl Worker {
@@ -198,6 +203,7 @@ impl Action for WorkerAction {
         let name = Arc::clone(&w.name);
         Box::pin(async move {
             let cancel = ctx.cancel.clone();
+            let clock = ctx.clock.clone();
             let (reply, rx) = oneshot::channel();
             if tx
                 .send(Msg::Request {
@@ -215,11 +221,21 @@ impl Action for WorkerAction {
                 id,
                 done: false,
             };
-            let out = tokio::select! {
-                r = rx => r.unwrap_or_else(|_| Outcome::Failed(format!("worker `{name}` is gone"))),
-                () = cancel.cancelled() => Outcome::Cancelled,
+            let (out, after) = tokio::select! {
+                r = rx => r.unwrap_or_else(|_| (Outcome::Failed(format!("worker `{name}` is gone")), 0.0)),
+                () = cancel.cancelled() => (Outcome::Cancelled, 0.0),
             };
             guard.done = !matches!(out, Outcome::Cancelled);
+            drop(guard);
+            if after > 0.0 {
+                // The reply stated a duration: the outcome takes effect that much model
+                // time later.
+                tokio::select! {
+                    biased;
+                    () = cancel.cancelled() => return Outcome::Cancelled,
+                    () = clock.sleep(after) => {}
+                }
+            }
             out
         })
     }
@@ -227,8 +243,12 @@ impl Action for WorkerAction {
 
 struct Pending {
     ctx: ActionContext,
-    reply: oneshot::Sender<Outcome>,
+    reply: oneshot::Sender<Answer>,
 }
+
+/// A reply: the outcome, and the model seconds it takes effect after (`"after"`, 0 when
+/// none).
+type Answer = (Outcome, f64);
 
 /// The worker's task: starts the program when requests come, routes replies, restarts it
 /// after a crash, stops it when every handle is gone.
@@ -289,7 +309,7 @@ async fn supervise(spec: WorkerSpec, mut rx: mpsc::UnboundedReceiver<Msg>) {
         reason.push_str("; it is restarted");
         tracing::warn!("{reason}");
         for (_, p) in pending.drain() {
-            let _ = p.reply.send(Outcome::Failed(reason.clone()));
+            let _ = p.reply.send((Outcome::Failed(reason.clone()), 0.0));
         }
         if started.elapsed() >= HEALTHY {
             backoff = BACKOFF_START;
@@ -302,7 +322,7 @@ async fn supervise(spec: WorkerSpec, mut rx: mpsc::UnboundedReceiver<Msg>) {
 
 fn fail(msg: Msg, reason: &str) {
     if let Msg::Request { reply, .. } = msg {
-        let _ = reply.send(Outcome::Failed(reason.to_string()));
+        let _ = reply.send((Outcome::Failed(reason.to_string()), 0.0));
     }
 }
 
@@ -326,14 +346,26 @@ fn route(name: &str, line: &str, pending: &mut FxHashMap<u64, Pending>) {
         return; // cancelled meanwhile
     };
     let who = format!("worker `{name}`");
-    let outcome = if let Some(e) = reply.error {
-        Outcome::Failed(format!("{who}: {e}"))
-    } else if let Some(t) = reply.fire {
-        outcome_of_name(&p.ctx, &who, &t)
-    } else {
-        Outcome::Decide
+    let after = match reply.after.as_ref().map(super::stated_seconds) {
+        None => Ok(0.0),
+        Some(Some(s)) => Ok(s),
+        Some(None) => Err(format!(
+            "{who}: `after` = {} is not a number of model seconds (finite, ≥ 0, ≤ 315576000)",
+            reply
+                .after
+                .as_ref()
+                .map_or(String::new(), ToString::to_string)
+        )),
     };
-    let _ = p.reply.send(outcome);
+    let answer = match (reply.error, after) {
+        (Some(e), _) => (Outcome::Failed(format!("{who}: {e}")), 0.0),
+        (None, Err(why)) => (Outcome::Failed(why), 0.0),
+        (None, Ok(after)) => match reply.fire {
+            Some(t) => (outcome_of_name(&p.ctx, &who, &t), after),
+            None => (Outcome::Decide, after),
+        },
+    };
+    let _ = p.reply.send(answer);
 }
 
 /// One incarnation of the worker program.

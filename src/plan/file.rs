@@ -50,8 +50,10 @@ pub struct PlanFile {
     /// When the run ends.
     pub stop: Option<StopFile>,
     /// Robot names bound to the initial agents, in agent order: places in net order, then
-    /// tokens. Each agent keeps its robot as it moves through the net; a net that can create
-    /// or destroy robot tokens (outside resource places) is refused when the run starts.
+    /// tokens. Every initial token outside resource places is an agent, so a non-empty list
+    /// names exactly that many robots (another length is refused at this key). Each agent
+    /// keeps its robot as it moves through the net; a net that can create or destroy robot
+    /// tokens (outside resource places) is refused when the run starts.
     #[serde(default)]
     #[schemars(with = "Vec<String>")]
     pub robots: Vec<Spanned<String>>,

@@ -157,6 +157,12 @@ impl PlanFile {
             }
             robots.push(name.clone());
         }
+        if !robots.is_empty() {
+            check_robot_count(&net, &roles, robots.len()).map_err(|kind| {
+                let span = key_span(text, "robots").unwrap_or_else(|| self.robots[0].span());
+                at(span, kind)
+            })?;
+        }
 
         let map = match &self.map {
             Some(m) => Some(m.get_ref().resolve(&net, m.span(), &at)?),
@@ -211,6 +217,57 @@ impl PlanFile {
             text: None,
         })
     }
+}
+
+/// Refuses a `robots` list whose length is not the number of initial agents: every initial
+/// token outside resource places is an agent (agents keep their identity through places
+/// without actions), so the names must number the initial tokens of all the other places.
+fn check_robot_count(
+    net: &Net,
+    roles: &[Option<Role>],
+    robots: usize,
+) -> Result<(), LoadErrorKind> {
+    let holding: Vec<(&str, u32)> = net
+        .place_ids()
+        .filter(|p| !matches!(roles[p.index()], Some(Role::Resource)))
+        .map(|p| (net.place(p).name.as_str(), net.place(p).initial))
+        .filter(|&(_, k)| k > 0)
+        .collect();
+    let agents: u64 = holding.iter().map(|&(_, k)| u64::from(k)).sum();
+    if agents == robots as u64 {
+        return Ok(());
+    }
+    /// Places listed by name in the message; the rest are counted.
+    const SHOWN: usize = 8;
+    let mut places = holding
+        .iter()
+        .take(SHOWN)
+        .map(|(name, k)| format!("{name} {k}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    if holding.len() > SHOWN {
+        places.push_str(&format!(" and {} more place(s)", holding.len() - SHOWN));
+    }
+    let tokens = if holding.is_empty() {
+        "no initial tokens outside resource places".to_string()
+    } else {
+        format!("initial tokens outside resource places: {places}")
+    };
+    Err(LoadErrorKind::Invalid(format!(
+        "`robots` names {robots} robot(s) but the net starts with {agents} agent(s) ({tokens}); \
+         name one robot per initial agent, or make the places that count things `role = \"resource\"`"
+    )))
+}
+
+/// The span of the top-level key `key` in the TOML `text` (its name, not its value), when
+/// the text parses and has it.
+fn key_span(text: &str, key: &str) -> Option<Range<usize>> {
+    let table = toml::de::DeTable::parse(text).ok()?;
+    table
+        .get_ref()
+        .iter()
+        .find(|(k, _)| k.get_ref().as_ref() == key)
+        .map(|(k, _)| k.span())
 }
 
 /// Bytes between the start of a TOML string value and its content (its opening quotes).

@@ -15,6 +15,7 @@ use std::time::Duration;
 use serde::{Deserialize, Serialize};
 use tokio::sync::{mpsc, watch};
 
+use super::clock::ModelClock;
 use super::id::AgentId;
 use crate::net::{Marking, Net, PlaceId, TransitionId};
 
@@ -108,6 +109,9 @@ pub struct ActionContext {
     pub seed: u64,
     /// Model time (seconds) when the action started.
     pub time: f64,
+    /// The run's model time: [`ModelClock::sleep`] waits model seconds — in virtual time
+    /// (`time_scale = 0`) the only way an action takes model time.
+    pub clock: ModelClock,
     /// Where the action's output lines go ([`EventKind::ActionOutput`](super::EventKind::ActionOutput)
     /// events in the journal and the viewer's log).
     pub output: OutputSink,
@@ -274,26 +278,50 @@ pub(crate) struct ActionDone {
     pub(crate) outcome: Outcome,
 }
 
+/// How long an action may run: a place's `timeout`.
+#[derive(Debug)]
+pub(crate) enum Limit {
+    /// No limit.
+    None,
+    /// This much tokio time (real time, or tokio's paused clock).
+    After(Duration),
+    /// Virtual time: the supervisor sends on `abort` when the run's clock passes the
+    /// deadline, `seconds` model seconds after the start.
+    Abort {
+        abort: tokio::sync::oneshot::Receiver<()>,
+        seconds: f64,
+    },
+}
+
 /// One run of `action` for one agent, as a future that never panics: a panic (when the
-/// future is made or polled) becomes `Failed("panicked…")`, and running past `timeout` becomes
-/// `Failed("timed out…")`. Place actors spawn it as a task; agent actors
+/// future is made or polled) becomes `Failed("panicked…")`, and running past its [`Limit`]
+/// becomes `Failed("timed out…")`. Place actors spawn it as a task; agent actors
 /// ([`AgentMode::Actor`](super::AgentMode::Actor)) await it in their own task.
 pub(crate) fn run_action(
     action: &Arc<dyn Action>,
     ctx: ActionContext,
-    timeout: Option<Duration>,
+    limit: Limit,
 ) -> impl std::future::Future<Output = Outcome> + Send + 'static {
     // A panic before the future exists is the agent's failure too, not the place's.
     let fut = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| action.run(ctx)))
         .unwrap_or_else(|_| Box::pin(async { Outcome::Failed("panicked".into()) }));
     async move {
         let caught = CatchUnwind(fut);
-        let outcome = match timeout {
-            Some(d) => match tokio::time::timeout(d, caught).await {
+        let outcome = match limit {
+            Limit::None => caught.await,
+            Limit::After(d) => match tokio::time::timeout(d, caught).await {
                 Ok(r) => r,
                 Err(_) => Ok(Outcome::Failed(format!("timed out after {d:?}"))),
             },
-            None => caught.await,
+            Limit::Abort { abort, seconds } => {
+                tokio::select! {
+                    biased;
+                    Ok(()) = abort => Ok(Outcome::Failed(format!(
+                        "timed out after {seconds} model seconds"
+                    ))),
+                    r = caught => r,
+                }
+            }
         };
         outcome.unwrap_or_else(|p| Outcome::Failed(format!("panicked: {p}")))
     }

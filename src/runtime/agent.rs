@@ -8,14 +8,13 @@
 //! actor (see `docs/benchmarks.md` for what each mode costs).
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use kameo::Actor;
 use kameo::message::{Context, Message};
 use serde::{Deserialize, Serialize};
 use tokio::sync::mpsc::UnboundedSender;
 
-use super::action::{Action, ActionContext, ActionDone, run_action};
+use super::action::{Action, ActionContext, ActionDone, Limit, run_action};
 use super::id::AgentId;
 use crate::net::PlaceId;
 
@@ -77,8 +76,8 @@ pub(crate) struct Run {
     pub(crate) ctx: ActionContext,
     pub(crate) ticket: u64,
     pub(crate) action: Arc<dyn Action>,
-    /// Already scaled to tokio time.
-    pub(crate) timeout: Option<Duration>,
+    /// The place's timeout for this run.
+    pub(crate) limit: Limit,
 }
 
 impl Message<Run> for Agent {
@@ -87,7 +86,7 @@ impl Message<Run> for Agent {
     async fn handle(&mut self, msg: Run, _: &mut Context<Self, Self::Reply>) {
         self.place = msg.ctx.place;
         self.state = AgentState::Occupied;
-        let outcome = run_action(&msg.action, msg.ctx, msg.timeout).await;
+        let outcome = run_action(&msg.action, msg.ctx, msg.limit).await;
         self.state = AgentState::Done;
         let _ = self.reports.send(ActionDone {
             agent: self.id,

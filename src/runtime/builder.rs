@@ -12,6 +12,7 @@ use tokio::sync::{broadcast, watch};
 use super::action::Action;
 use super::agent::AgentMode;
 use super::builtin::Builtin;
+use super::clock::Mode;
 use super::engine::Engine;
 use super::event::{Events, Watcher};
 use super::handle::{Progress, RuntimeHandle};
@@ -42,6 +43,7 @@ pub struct RuntimeBuilder {
     subscribe: bool,
     robots: Vec<Arc<str>>,
     watcher: Option<Box<dyn Watcher>>,
+    follow_tokio: bool,
 }
 
 impl std::fmt::Debug for RuntimeBuilder {
@@ -76,6 +78,7 @@ impl RuntimeBuilder {
             subscribe: true,
             robots: Vec::new(),
             watcher: None,
+            follow_tokio: false,
         }
     }
 
@@ -148,8 +151,8 @@ impl RuntimeBuilder {
         self
     }
 
-    /// Binds the initial agents to robots, in agent order (action places in net order, then
-    /// their tokens): agent 0 gets the first name, and so on. An agent keeps its robot as it
+    /// Binds the initial agents to robots, in agent order (places that are not resources, in
+    /// net order, then their tokens): agent 0 gets the first name, and so on. An agent keeps its robot as it
     /// moves through the net ([`ActionContext::robot`](super::ActionContext::robot), the
     /// `robots` of [`Fired`](super::EventKind::Fired)). [`RuntimeBuilder::spawn`] refuses a
     /// count that differs from the initial agents, and a net that can create or destroy robot
@@ -174,8 +177,21 @@ impl RuntimeBuilder {
     }
 
     /// 0 = virtual time, as fast as possible (the default); 1 = real time; 0.5 = twice as fast.
+    ///
+    /// In virtual time the model clock moves only by the net's delays and by the model
+    /// seconds actions sleep ([`ModelClock::sleep`](super::ModelClock::sleep)); the time a
+    /// program takes never enters it, so the same seed gives the same run. See
+    /// `docs/execution.md`.
     pub fn time_scale(mut self, scale: f64) -> Self {
         self.time_scale = scale;
+        self
+    }
+
+    /// With `time_scale = 0`, model time is tokio's (paused) clock instead of the
+    /// supervisor's own: for a simulated world that steps physics on tokio time (the world's
+    /// [`Fleet`](crate::world) sets it). Actions then take the tokio time they take.
+    pub fn follow_tokio_clock(mut self, yes: bool) -> Self {
+        self.follow_tokio = yes;
         self
     }
 
@@ -279,7 +295,7 @@ impl RuntimeBuilder {
         {
             conservation::check_robot_tokens(&net, &self.roles)?;
         }
-        let mut warnings = Vec::new();
+        let warnings = Vec::new();
         let mut setups = Vec::new();
         for p in net.place_ids() {
             if let Some(Role::Action {
@@ -289,17 +305,14 @@ impl RuntimeBuilder {
                 robot,
             }) = &self.roles[p.index()]
             {
+                let mut instant = None;
                 let action = match self.actions.get(name) {
                     Some(a) => Some(Arc::clone(a)),
                     // Not registered: a built-in (`wait`, `log`, `fire`), when it is one.
                     None => match Builtin::parse(name, &net, p) {
                         Some(Ok(b)) => {
-                            let scale = if self.time_scale > 0.0 {
-                                self.time_scale
-                            } else {
-                                1.0
-                            };
-                            Some(Arc::new(b.action(scale)) as Arc<dyn Action>)
+                            instant = b.instant();
+                            Some(Arc::new(b.action()) as Arc<dyn Action>)
                         }
                         Some(Err(reason)) => {
                             return Err(RuntimeError::BadBuiltin {
@@ -317,6 +330,9 @@ impl RuntimeBuilder {
                         timeout: *timeout,
                         on_failure: *on_failure,
                         robot: robot.as_deref().map(Arc::from),
+                        instant,
+                        passive: false,
+                        decides: false,
                     }),
                     None => {
                         let mut known: Vec<String> = self.actions.keys().cloned().collect();
@@ -330,6 +346,33 @@ impl RuntimeBuilder {
                 }
             }
         }
+        // Identity: once a run has agents, every place that is not a resource keeps them — a
+        // place without an action is a transparent one (its agents are ready at once).
+        if !setups.is_empty() || !self.robots.is_empty() {
+            let wait = Arc::new(Builtin::Wait(None).action()) as Arc<dyn Action>;
+            for p in net.place_ids() {
+                if self.roles[p.index()].is_none() {
+                    setups.push(PlaceSetup {
+                        place: p,
+                        action: Arc::clone(&wait),
+                        timeout: None,
+                        on_failure: FailurePolicy::Stop,
+                        robot: None,
+                        instant: Some((super::Outcome::Decide, None)),
+                        passive: true,
+                        decides: false,
+                    });
+                }
+            }
+            // Agents are made in place order (the robots' order).
+            setups.sort_by_key(|s| s.place);
+        }
+        for s in &mut setups {
+            s.decides = net
+                .consumers(s.place)
+                .iter()
+                .any(|&t| net.transition(t).is_immediate());
+        }
         if !self.robots.is_empty() {
             let agents: u64 = setups
                 .iter()
@@ -340,24 +383,6 @@ impl RuntimeBuilder {
                     robots: self.robots.len(),
                     agents,
                 });
-            }
-            // One pass over the arcs and the setups, not a search per place.
-            let mut keeps_agents = vec![false; net.place_count()];
-            for s in &setups {
-                keeps_agents[s.place.index()] = true;
-            }
-            let mut used = vec![false; net.place_count()];
-            for a in net.arcs() {
-                used[a.place.index()] = true;
-            }
-            for p in net.place_ids() {
-                let resource = matches!(self.roles[p.index()], Some(Role::Resource));
-                if used[p.index()] && !keeps_agents[p.index()] && !resource {
-                    warnings.push(format!(
-                        "place `{}` has no registered action: a robot entering it leaves its agent, and the robot's identity is lost",
-                        net.place(p).name
-                    ));
-                }
             }
         }
         let seed = self.seed.unwrap_or_else(|| {
@@ -406,7 +431,7 @@ impl RuntimeBuilder {
         let sup = Supervisor::start(SupervisorArgs {
             eng,
             setups,
-            time_scale: self.time_scale,
+            mode: Mode::of(self.time_scale, self.follow_tokio),
             stop: self.stop,
             bus,
             journal,

@@ -6,11 +6,15 @@
 //! - `log MSG`: records MSG as the agent's output, then the net decides;
 //! - `fire T` / `fire T after S`: fires T (an output of the place), after S model seconds.
 //!
+//! The ones that take no model time (`wait`, `log MSG`, `fire T`) are [`Builtin::instant`]:
+//! the supervisor applies them itself when the agent enters the place, with no task, so a
+//! place with one is as transparent as a place without an action. The others sleep on the
+//! run's [`ModelClock`](super::ModelClock).
+//!
 //! A backend with its own meaning for a name (the robot world's `wait` moves no robot but
 //! holds one) registers it first; these fill in what is left.
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use super::action::{Action, ActionContext, ActionFuture, Outcome, OutputStream};
 use crate::net::{Net, PlaceId, TransitionId};
@@ -85,11 +89,21 @@ impl Builtin {
         })
     }
 
-    /// The action, with `scale` tokio seconds per model second.
-    pub(crate) fn action(self, scale: f64) -> BuiltinAction {
-        BuiltinAction {
-            builtin: self,
-            scale,
+    /// The action.
+    pub(crate) fn action(self) -> BuiltinAction {
+        BuiltinAction { builtin: self }
+    }
+
+    /// The outcome of a built-in that takes no model time (`wait`, `log MSG`, `fire T`), and
+    /// the line it writes; `None` for one that waits.
+    pub fn instant(&self) -> Option<(Outcome, Option<Arc<str>>)> {
+        match self {
+            Builtin::Wait(s) if s.is_none_or(|s| s <= 0.0) => Some((Outcome::Decide, None)),
+            Builtin::Log(msg) => Some((Outcome::Decide, Some(Arc::clone(msg)))),
+            Builtin::Fire { transition, after } if after.is_none_or(|s| s <= 0.0) => {
+                Some((Outcome::Fire(*transition), None))
+            }
+            Builtin::Wait(_) | Builtin::Fire { .. } => None,
         }
     }
 }
@@ -98,7 +112,6 @@ impl Builtin {
 #[derive(Debug)]
 pub(crate) struct BuiltinAction {
     builtin: Builtin,
-    scale: f64,
 }
 
 impl Action for BuiltinAction {
@@ -114,11 +127,11 @@ impl Action for BuiltinAction {
         let Some(s) = delay.filter(|&s| s > 0.0) else {
             return Box::pin(std::future::ready(outcome));
         };
-        let d = Duration::from_secs_f64(s * self.scale);
         Box::pin(async move {
             tokio::select! {
-                () = tokio::time::sleep(d) => outcome,
+                biased;
                 () = ctx.cancel.cancelled() => Outcome::Cancelled,
+                () = ctx.clock.sleep(s) => outcome,
             }
         })
     }

@@ -336,6 +336,7 @@ impl Engine {
     /// The next transition the supervisor fires at once: a ready immediate one (the firing
     /// core's choice: highest priority, policy else weights), else a reported exponential
     /// one in arrival order.
+    #[inline]
     pub(crate) fn next_ready(&mut self) -> Option<TransitionId> {
         if self.firable.is_vanishing() {
             let t = self
@@ -381,6 +382,7 @@ impl Engine {
     }
 
     /// Samples the race: the delay to the next net-timed firing and the transition.
+    #[inline]
     pub(crate) fn sample_race(&mut self) -> Option<(f64, TransitionId)> {
         let dt = self.firable.sample_delay(&mut self.rng)?;
         Some((dt, self.firable.pick_race(&mut self.rng)?))
@@ -392,10 +394,12 @@ impl Engine {
     }
 
     /// Fires `t` at model time `now`, moving agents by the identity rules: consumed agents
-    /// continue in arc order into the produced action-place tokens, surplus ones end, extra
-    /// tokens are new agents.
+    /// continue in input-arc order into the produced tokens of agent places (output-arc
+    /// order), surplus ones end (a join), extra tokens are new agents (a fork). (With robots
+    /// the net conserves its tokens outside resources, so a robot never ends in a join.)
     ///
     /// A firing that would overflow a place's count changes nothing and is refused.
+    #[inline]
     pub(crate) fn fire(
         &mut self,
         t: TransitionId,

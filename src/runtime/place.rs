@@ -6,29 +6,24 @@
 //! [`Outcome::Failed`] for that agent only.
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use kameo::Actor;
 use kameo::message::{Context, Message};
 
-use super::action::{Action, ActionContext, ActionDone, run_action};
+use super::action::{Action, ActionContext, ActionDone, Limit, run_action};
 use tokio::sync::mpsc::UnboundedSender;
 
 /// The actor of one action place.
 #[derive(Actor)]
 pub(crate) struct Place {
     pub(crate) action: Arc<dyn Action>,
-    /// Per-run timeout, already scaled to tokio time.
-    pub(crate) timeout: Option<Duration>,
     /// Where the tasks report outcomes (drained by the supervisor in batches).
     pub(crate) reports: UnboundedSender<ActionDone>,
 }
 
 impl std::fmt::Debug for Place {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Place")
-            .field("timeout", &self.timeout)
-            .finish()
+        f.debug_struct("Place").finish_non_exhaustive()
     }
 }
 
@@ -38,6 +33,8 @@ pub(crate) struct Start {
     pub(crate) ctx: ActionContext,
     /// The supervisor's tag for this start (stale reports are ignored).
     pub(crate) ticket: u64,
+    /// The place's timeout for this run.
+    pub(crate) limit: Limit,
 }
 
 impl Message<Start> for Place {
@@ -45,7 +42,7 @@ impl Message<Start> for Place {
 
     async fn handle(&mut self, msg: Start, _: &mut Context<Self, Self::Reply>) {
         let agent = msg.ctx.agent;
-        let fut = run_action(&self.action, msg.ctx, self.timeout);
+        let fut = run_action(&self.action, msg.ctx, msg.limit);
         let sup = self.reports.clone();
         tokio::spawn(async move {
             let outcome = fut.await;

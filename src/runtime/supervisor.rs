@@ -3,10 +3,21 @@
 //! actions run in tasks hosted by the place actors and report back with an [`ActionDone`].
 //!
 //! The supervisor keeps only the decisions of when to fire and when to stop. Time is its
-//! [`Clock`]'s: with `time_scale = 0` (virtual time) and no action running, the supervisor
-//! plays the net-timed race directly, in batches, jumping the model clock — as fast as possible
-//! and exactly reproducible from the seed; while actions run it waits on the clock's tokio
-//! timer (paused clock in tests) like in scaled real time. Events go to its [`EventSink`].
+//! [`Clock`]'s ([`Mode`]):
+//!
+//! - **virtual** (`time_scale = 0`): a discrete-event loop ([`Supervisor::drive`]). The
+//!   supervisor chooses only when no action is busy — every running action has reported or
+//!   sleeps on the model clock — so everything that becomes ready at one model instant is
+//!   there when it chooses (the priority rule holds among all of it), and what arrived is
+//!   applied in agent order. Then it fires what is ready, or moves the clock to the next due
+//!   instant: the net-timed race, a sleeper's wake-up, a timeout. Exactly reproducible from
+//!   the seed, whatever the actions' programs take in wall-clock time.
+//! - **tokio** and **real**: with no action running in tokio mode the supervisor plays the
+//!   net-timed race in batches; otherwise it waits on the clock's tokio timer and fires what
+//!   is ready as reports arrive.
+//!
+//! Built-in actions that take no model time and places without an action are applied inline
+//! ([`PlaceSetup::instant`]): no task, no waiting. Events go to its [`EventSink`].
 
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
@@ -21,8 +32,9 @@ use tokio::sync::{broadcast, mpsc, watch};
 
 use super::StopReason;
 use super::action::{ActionContext, ActionDone, CancelSource, CancelToken, OutputLine, OutputSink};
+use super::action::{Limit, Outcome};
 use super::agent::{Agent, AgentMode, AgentState, Run, Update};
-use super::clock::Clock;
+use super::clock::{Clock, Mode, ModelClock, SleepRequest};
 use super::engine::{Engine, Firing, Ready};
 use super::event::{Event, EventKind, Watcher};
 use super::handle::{Progress, Summary};
@@ -36,9 +48,11 @@ use crate::net::{PlaceId, TransitionId};
 
 mod actor;
 mod messages;
+mod virtual_time;
 
 use messages::{Continue, StopDeadline, Timer};
 pub(crate) use messages::{GetAgents, GetMarking, StopRequest};
+use virtual_time::VirtualTime;
 
 /// Initial agents from which actor spawning is split over two threads.
 const PARALLEL_SPAWN: usize = 20_000;
@@ -53,6 +67,14 @@ pub(crate) struct PlaceSetup {
     pub(crate) timeout: Option<f64>,
     pub(crate) on_failure: FailurePolicy,
     pub(crate) robot: Option<Arc<str>>,
+    /// A built-in that takes no model time (or no action at all): its outcome and the line
+    /// it writes, applied by the supervisor when the agent enters.
+    pub(crate) instant: Option<(Outcome, Option<Arc<str>>)>,
+    /// A place without an action (agents keep their identity there): no action events.
+    pub(crate) passive: bool,
+    /// The place has an immediate output transition (an action there may decide something
+    /// at the instant it ends).
+    pub(crate) decides: bool,
 }
 
 /// The supervisor actor.
@@ -60,10 +82,17 @@ pub struct Supervisor {
     eng: Engine,
     buf: Firing,
     setups: Vec<PlaceSetup>,
-    places: Vec<ActorRef<Place>>,
+    /// Per setup, its place actor (none for inline setups).
+    places: Vec<Option<ActorRef<Place>>>,
     clock: Clock,
+    vt: VirtualTime,
+    sleeps_tx: mpsc::UnboundedSender<SleepRequest>,
+    sleeps_rx: Option<mpsc::UnboundedReceiver<SleepRequest>>,
     stop: StopConditions,
     stopping: Option<StopReason>,
+    /// Virtual time: a firing limit or stop condition reached while actions were still
+    /// computing at this instant; the run stops once they have ended or sleep.
+    stop_at_rest: Option<StopReason>,
     finished: bool,
     continue_pending: bool,
     sink: EventSink,
@@ -101,7 +130,7 @@ impl std::fmt::Debug for Supervisor {
 pub(crate) struct SupervisorArgs {
     pub(crate) eng: Engine,
     pub(crate) setups: Vec<PlaceSetup>,
-    pub(crate) time_scale: f64,
+    pub(crate) mode: Mode,
     pub(crate) stop: StopConditions,
     pub(crate) bus: broadcast::Sender<Event>,
     pub(crate) journal: Option<Journal>,
@@ -123,14 +152,19 @@ impl Supervisor {
         let (cancel, cancel_token) = CancelSource::new();
         let (reports_tx, reports_rx) = mpsc::unbounded_channel();
         let (output_tx, output_rx) = mpsc::unbounded_channel();
+        let (sleeps_tx, sleeps_rx) = mpsc::unbounded_channel();
         let sup = Supervisor {
             eng: args.eng,
             buf: Firing::default(),
             setups: args.setups,
             places: Vec::new(),
-            clock: Clock::new(args.time_scale),
+            clock: Clock::new(args.mode),
+            vt: VirtualTime::default(),
+            sleeps_tx,
+            sleeps_rx: Some(sleeps_rx),
             stop: args.stop,
             stopping: None,
+            stop_at_rest: None,
             finished: false,
             continue_pending: false,
             sink: EventSink::new(args.bus, args.journal),
@@ -235,7 +269,7 @@ impl Supervisor {
     }
 
     /// Starts (or restarts) the action of an agent in its place; Inactive when the place has
-    /// no output transition.
+    /// no output transition. An instant one ends here and now.
     fn start_action(&mut self, id: AgentId, attempt: u32) {
         let Some(place) = self.eng.agent(id).map(|r| r.place) else {
             return;
@@ -246,7 +280,39 @@ impl Supervisor {
         }
         let a = self.ap(place);
         let ticket = self.eng.start(id, attempt);
+        let passive = self.setups[a].passive;
+        if let Some((outcome, line)) = self.setups[a].instant.clone() {
+            if !passive {
+                self.set_state(id, AgentState::Occupied);
+                if self.observed() {
+                    self.emit(EventKind::ActionStarted {
+                        agent: id,
+                        place,
+                        attempt,
+                    });
+                    if let Some(line) = line {
+                        self.action_output(OutputLine {
+                            agent: id,
+                            place,
+                            stream: super::action::OutputStream::Stdout,
+                            line: line.to_string(),
+                        });
+                    }
+                }
+            }
+            self.action_done(ActionDone {
+                agent: id,
+                ticket,
+                outcome,
+            });
+            return;
+        }
         let robot = self.eng.agent(id).and_then(|r| r.robot.clone());
+        let clock = match self.clock.mode() {
+            Mode::Virtual => ModelClock::virtual_for(self.sleeps_tx.clone(), id, ticket),
+            Mode::Tokio => ModelClock::tokio(1.0),
+            Mode::Real(scale) => ModelClock::tokio(scale),
+        };
         let ctx = ActionContext {
             agent: id,
             robot: robot.or_else(|| self.setups[a].robot.clone()),
@@ -257,22 +323,43 @@ impl Supervisor {
             net: Arc::clone(self.eng.net()),
             seed: self.seed,
             time: self.now(),
+            clock,
             output: OutputSink::new(self.output_tx.clone()),
         };
+        let timeout = self.setups[a].timeout;
+        let limit = match timeout {
+            None => Limit::None,
+            Some(seconds) if self.clock.is_discrete() => {
+                let (abort_tx, abort) = tokio::sync::oneshot::channel();
+                self.vt.started(
+                    id,
+                    ticket,
+                    self.setups[a].decides,
+                    Some((self.now() + seconds, abort_tx)),
+                );
+                Limit::Abort { abort, seconds }
+            }
+            Some(seconds) => Limit::After(self.clock.to_tokio(seconds)),
+        };
+        if self.clock.is_discrete() && timeout.is_none() {
+            self.vt.started(id, ticket, self.setups[a].decides, None);
+        }
         match self.agent_actors.get(&id) {
             Some(agent) => {
-                let setup = &self.setups[a];
+                let action = Arc::clone(&self.setups[a].action);
                 let _ = agent
                     .tell(Run {
                         ctx,
                         ticket,
-                        action: Arc::clone(&setup.action),
-                        timeout: setup.timeout.map(|t| self.clock.to_tokio(t)),
+                        action,
+                        limit,
                     })
                     .try_send();
             }
             None => {
-                let _ = self.places[a].tell(Start { ctx, ticket }).try_send();
+                if let Some(p) = &self.places[a] {
+                    let _ = p.tell(Start { ctx, ticket, limit }).try_send();
+                }
             }
         }
         self.set_state(id, AgentState::Occupied);
@@ -289,7 +376,7 @@ impl Supervisor {
     /// so a journal shows an action's output before its end).
     fn drain_output(&mut self, rx: &mut mpsc::UnboundedReceiver<OutputLine>) {
         while let Ok(o) = rx.try_recv() {
-            self.action_output(o);
+            self.line(o);
         }
     }
 
@@ -370,9 +457,21 @@ impl Supervisor {
         }
     }
 
-    /// Fires everything that is ready now (immediate transitions, reported events).
+    /// Fires everything that is ready now (immediate transitions, reported events); in
+    /// virtual time, [`Supervisor::drive`].
     fn settle(&mut self) {
-        while self.stopping.is_none() {
+        if self.clock.is_discrete() {
+            self.drive();
+            return;
+        }
+        self.fire_ready();
+    }
+
+    /// Fires what is ready now; in virtual time only while no action runs (then
+    /// [`Supervisor::drive`] decides what may go on).
+    #[inline]
+    fn fire_ready(&mut self) {
+        while self.stopping.is_none() && !(self.clock.is_discrete() && self.eng.running() > 0) {
             match self.eng.next_ready() {
                 Some(t) => {
                     if let Some(m) = self.eng.take_first_miss() {
@@ -410,7 +509,7 @@ impl Supervisor {
     /// After every change: nothing more can happen (stop), the fast path (virtual time, no
     /// action running), or a timer for the next net-timed firing or the time limit.
     fn schedule(&mut self) {
-        if self.stopping.is_some() {
+        if self.stopping.is_some() || self.clock.is_discrete() {
             return;
         }
         if self.clock.is_virtual() && self.eng.running() == 0 {
@@ -500,18 +599,160 @@ impl Supervisor {
             }
             self.clock.set(at);
             self.fire_one(t);
-            self.settle();
+            self.fire_ready();
         }
         true
+    }
+
+    /// The virtual-time loop: when no action is busy, delivers what arrived (in agent
+    /// order); while no *deciding* action is busy (see [`VirtualTime`]), fires what is
+    /// ready; when nothing is ready and no action is busy, moves the clock to the next due
+    /// instant — the race's next firing, a sleeper's wake-up or a timeout — and wakes what is
+    /// due there.
+    /// Returns when an action is busy (its report or sleep calls this again), when nothing can
+    /// happen any more, or after [`BATCH`] firings (a `Continue` message goes on, so the
+    /// mailbox gets a turn).
+    ///
+    /// With no action that takes model time, its draws are the token game's: one uniform for
+    /// an immediate choice, then for a race the delay and the winner.
+    fn drive(&mut self) {
+        if !self.clock.is_discrete() {
+            return;
+        }
+        let mut fired = 0;
+        loop {
+            if self.stopping.is_some() {
+                return;
+            }
+            if let Some(reason) = &self.stop_at_rest {
+                if self.vt.busy() {
+                    return;
+                }
+                let reason = reason.clone();
+                self.deliver();
+                self.stop_at_rest = None;
+                self.begin_stop(reason);
+                return;
+            }
+            if !self.vt.busy() && self.vt.has_mail() {
+                self.deliver();
+                continue;
+            }
+            if self.eng.running() == 0 {
+                // No action runs (so none sleeps, nothing waits for delivery): the token
+                // game's own loop, in batches — the same draws as the loop below.
+                self.fire_ready();
+                if self.stopping.is_some() || self.stop_at_rest.is_some() {
+                    continue;
+                }
+                if self.eng.running() == 0 {
+                    if !self.fire_burst() {
+                        return;
+                    }
+                    if self.eng.running() == 0 && self.stopping.is_none() {
+                        self.kick();
+                        return;
+                    }
+                }
+                continue;
+            }
+            if self.vt.deciding() {
+                return; // its end at this instant could make a decision ready
+            }
+            if fired >= BATCH {
+                self.kick();
+                return;
+            }
+            if let Some(t) = self.eng.next_ready() {
+                if let Some(m) = self.eng.take_first_miss() {
+                    self.warn_outside_policy(&m, t);
+                }
+                self.fire_one(t);
+                fired += 1;
+                continue;
+            }
+            if self.vt.busy() {
+                return; // the clock waits for every action that computes
+            }
+            // Nothing fires at this instant: the clock moves to the next due one.
+            let due = self.vt.next_due();
+            let race = self.eng.sample_delay().map(|dt| self.now() + dt);
+            let at = match (race, due) {
+                (Some(r), Some(d)) => r.min(d),
+                (Some(r), None) => r,
+                (None, Some(d)) => d,
+                (None, None) => {
+                    if self.eng.running() == 0 {
+                        self.dead();
+                    }
+                    return;
+                }
+            };
+            if let Some(u) = self.stop.time_limit
+                && at > u
+            {
+                self.clock.set(u);
+                self.begin_stop(StopReason::TimeLimit);
+                return;
+            }
+            self.clock.set(at.max(self.now()));
+            // A wake-up at the race's instant goes first (a tie has probability 0).
+            if race.is_some_and(|r| due.is_none_or(|d| r < d)) {
+                if let Some(t) = self.eng.pick_race() {
+                    self.fire_one(t);
+                    fired += 1;
+                }
+                continue;
+            }
+            self.vt.wake_due(at);
+        }
+    }
+
+    /// Applies the output lines and reports that waited for the actions to stop being busy,
+    /// each in agent order (virtual time).
+    ///
+    /// Once the run is stopping, every action still running ends as cancelled, whatever it
+    /// answered: the run was over at that instant, and what a program says while it is being
+    /// stopped depends on how fast it was.
+    fn deliver(&mut self) {
+        let (lines, reports) = self.vt.take_mail();
+        let stopped = self.stopping.is_some();
+        for o in lines {
+            self.action_output(o);
+        }
+        for mut r in reports {
+            if stopped {
+                r.outcome = Outcome::Cancelled;
+            }
+            self.action_done(r);
+        }
     }
 
     fn begin_stop(&mut self, reason: StopReason) {
         if self.stopping.is_some() {
             return;
         }
+        // In virtual time a firing limit or a stop condition ends the run at the end of its
+        // instant: the actions computing now end first (or sleep), so what they said — and
+        // so the journal — does not depend on how fast they were.
+        if self.clock.is_discrete()
+            && matches!(reason, StopReason::MaxFirings | StopReason::Condition)
+            && self.vt.busy()
+        {
+            self.stop_at_rest.get_or_insert(reason);
+            return;
+        }
+        if !self.vt.busy() && self.vt.has_mail() {
+            // What ended before the stop is part of the run.
+            self.deliver();
+            if self.stopping.is_some() {
+                return;
+            }
+        }
         self.stopping = Some(reason);
         self.clock.cancel();
         self.cancel.cancel();
+        self.vt.release();
         if self.eng.running() == 0 {
             self.finish();
         } else {
@@ -548,7 +789,7 @@ impl Supervisor {
         for (_, a) in self.agent_actors.drain() {
             a.kill();
         }
-        for p in &self.places {
+        for p in self.places.iter().flatten() {
             p.kill();
         }
     }

@@ -220,7 +220,8 @@ impl Fleet {
         names.sort();
         names.dedup();
         let bound: Vec<Arc<str>> = starts.into_iter().map(|s| s.name).collect();
-        let mut builder = run.seed(seed).robots(bound);
+        // The world steps on tokio's clock: with time scale 0, model time is that clock.
+        let mut builder = run.seed(seed).robots(bound).follow_tokio_clock(true);
         for name in names {
             let action =
                 SimAction::parse(&map, &name, &world).map_err(|reason| FleetError::BadAction {

@@ -3,8 +3,6 @@
 //! `drift` events — in the journal and on the bus, right after the firing that showed them —
 //! when an action slows down half-way, and none when it does not.
 
-use std::time::Duration;
-
 use gspn::conform::{
     Monitor, Monitored, Options, RowKind, Trace, Verdict, compare, fit, observe, steady_predictions,
 };
@@ -182,7 +180,7 @@ async fn stays_that_depend_on_the_way_in_get_one_erlang_chain_per_entry() {
             } else {
                 (0.5, "Td")
             };
-            tokio::time::sleep(Duration::from_secs_f64(d)).await;
+            ctx.clock.sleep(d).await;
             ctx.fire(t)
         }
     });
@@ -265,7 +263,7 @@ async fn monitored_run(until: f64, after: f64) -> (Vec<Event>, Vec<Event>) {
     let journal = dir.path().join("run.jsonl");
     let slow = action_fn(move |ctx| async move {
         let d = if ctx.time < 750.0 { 0.5 } else { after };
-        tokio::time::sleep(Duration::from_secs_f64(d)).await;
+        ctx.clock.sleep(d).await;
         ctx.fire("T3")
     });
     let mut h = Runtime::builder(net.clone())

@@ -31,8 +31,6 @@
 //! rows flag (stays with a coefficient of variation near 0.5, not 1), while a race that
 //! consumes a uniformly chosen agent among those being served brings it back to 6 of 135.
 
-use std::time::Duration;
-
 use rand::{RngExt, SeedableRng};
 
 use gspn::conform::holding::{StayModel, stay_model};
@@ -161,8 +159,9 @@ fn own_clock() -> impl gspn::runtime::Action {
         let exit = pick_weighted(&mut rng, &rates).unwrap();
         async move {
             tokio::select! {
-                () = tokio::time::sleep(Duration::from_secs_f64(stay)) => Outcome::Fire(exit),
+                biased;
                 () = ctx.cancel.cancelled() => Outcome::Cancelled,
+                () = ctx.clock.sleep(stay) => Outcome::Fire(exit),
             }
         }
     })

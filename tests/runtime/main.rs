@@ -11,6 +11,7 @@ mod agents_match_tokens;
 mod builtin_actions;
 mod conformance;
 mod conformance_without_false_alarms;
+mod differential;
 mod failures;
 mod golden_trace;
 mod matches_analysis;

@@ -464,9 +464,86 @@ async fn the_python_helper_runs_decorated_functions_and_records_their_prints() {
         .map(|(a, _, l)| format!("{a}: {l}"))
         .collect();
     lines.sort();
-    // t1 forks: agent 0 goes on, agent 1 is new; both slept concurrently.
+    // `left`'s token is agent 1 (a place without an action keeps its agent); t1 forks:
+    // agent 0 goes on, agent 2 is new; both slept concurrently.
     assert_eq!(
         lines,
-        ["0: inspecting look for agent 0", "0: slept 0", "1: slept 1"]
+        ["0: inspecting look for agent 0", "0: slept 0", "2: slept 2"]
+    );
+}
+
+const DURATION_WORKER: &str = r#"
+import time
+from gspn_worker import action, run
+
+@action("slowly")
+def slowly(ctx):
+    time.sleep(0.05)          # wall-clock time: never model time
+    return "t2", 1.5          # fire t2, 1.5 model seconds from now
+
+run()
+"#;
+
+/// Durations stated by programs are the only model time they take (issue 24): a command's
+/// `t1 after 2.25` and a worker's `("t2", 1.5)` put the two firings at exactly 2.25 and 3.75,
+/// however long the processes ran; a bad duration fails the action, naming it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn programs_state_the_model_time_their_actions_take() {
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("slowly.py");
+    std::fs::write(&script, DURATION_WORKER).unwrap();
+    let mut b = NetBuilder::new("durations");
+    let a = b.place("a", 1);
+    let c = b.place("c", 0);
+    let end = b.place("end", 0);
+    let t1 = b.exponential("t1", 1.0, Servers::Single);
+    let t2 = b.exponential("t2", 1.0, Servers::Single);
+    b.input(a, t1, 1);
+    b.output(t1, c, 1);
+    b.input(c, t2, 1);
+    b.output(t2, end, 1);
+    let net = b.build().unwrap();
+    let mut spec = WorkerSpec::new(["python3", script.to_str().unwrap()]);
+    spec.env
+        .push(("PYTHONPATH".into(), python_dir().display().to_string()));
+    let worker = Worker::start(spec);
+    let mut h = Runtime::builder(net.clone())
+        .action(
+            "cmd",
+            CommandAction::new(sh("sleep 0.1; echo 't1 after 2.25'")),
+        )
+        .action("slowly", worker.action("slowly"))
+        .bind("a", "cmd")
+        .bind("c", "slowly")
+        .seed(1)
+        .spawn()
+        .unwrap();
+    let events = h.events().collect().await;
+    let s = h.wait().await;
+    assert_eq!(s.stopped, StopReason::Dead, "{:?}", s.errors);
+    let fired: Vec<(String, f64)> = events
+        .iter()
+        .filter_map(|e| match &e.kind {
+            EventKind::Fired { transition, .. } => {
+                Some((net.transition(*transition).name.clone(), e.time))
+            }
+            _ => None,
+        })
+        .collect();
+    assert_eq!(fired, [("t1".to_string(), 2.25), ("t2".to_string(), 3.75)]);
+
+    // A duration that is no number of seconds fails the action, naming it.
+    let h = Runtime::builder(net)
+        .action("cmd", CommandAction::new(sh("echo 't1 after soon'")))
+        .bind("a", "cmd")
+        .seed(1)
+        .spawn()
+        .unwrap();
+    let s = h.wait().await;
+    assert_eq!(s.stopped, StopReason::Failure);
+    assert!(
+        s.errors[0].contains("`after soon`: not a number of model seconds"),
+        "{:?}",
+        s.errors
     );
 }

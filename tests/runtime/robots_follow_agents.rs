@@ -158,21 +158,42 @@ fn a_plan_naming_a_robot_twice_is_refused_at_its_line_and_column() {
 }
 
 #[tokio::test(start_paused = true)]
-async fn a_robot_place_without_an_action_is_warned_about() {
-    // `c` has no action: a robot's agent would end there and its identity be lost.
-    let h = Runtime::builder(ring())
+async fn a_robot_keeps_its_agent_through_a_place_without_an_action() {
+    // `c` has no action: it is transparent, and a robot's agent passes through it (issue 24:
+    // it used to end there, and the robot's identity was lost).
+    let mut h = Runtime::builder(ring())
         .action("go", action_fn(|_| async { Outcome::Decide }))
         .bind("a", "go")
         .bind("b", "go")
         .robots(["r1", "r2", "r3"])
-        .max_firings(1)
+        .seed(3)
+        .max_firings(60)
         .spawn()
         .unwrap();
-    assert_eq!(
-        h.warnings(),
-        [
-            "place `c` has no registered action: a robot entering it leaves its agent, and the robot's identity is lost"
-        ]
+    assert!(h.warnings().is_empty(), "{:?}", h.warnings());
+    let mut events = h.events();
+    let mut through_c = 0;
+    while let Some(gspn::runtime::Received::Event(e)) = events.recv().await {
+        if let gspn::runtime::EventKind::Fired {
+            transition,
+            consumed,
+            produced,
+            robots,
+            ..
+        } = &e.kind
+        {
+            // Every firing moves one robot: one agent in, the same agent out.
+            assert_eq!(consumed, produced);
+            assert_eq!(robots.len(), 1);
+            // `ca` takes a robot out of `c`, the place without an action.
+            through_c += usize::from(transition.0 == 2);
+        }
+    }
+    let s = h.wait().await;
+    assert_eq!(s.firings, 60);
+    assert_eq!((s.agents_spawned, s.agents_ended), (3, 0));
+    assert!(
+        through_c >= 10,
+        "only {through_c} robots came back out of c"
     );
-    h.wait().await;
 }

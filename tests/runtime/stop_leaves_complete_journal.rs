@@ -38,6 +38,9 @@ async fn stop_cancels_actions_and_leaves_a_complete_journal(mode: AgentMode) {
         )
         .bind("patrol", "patrol")
         .seed(99)
+        // Real time (on the test's paused clock): the hour-long actions take tokio time while
+        // the net-timed tick fires.
+        .time_scale(1.0)
         .journal(&path)
         .spawn()
         .unwrap();

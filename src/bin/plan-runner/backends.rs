@@ -7,6 +7,8 @@
 use gspn::plan::Plan;
 use gspn::runtime::{Backends, RuntimeBuilder};
 
+use crate::common::StopSignals;
+
 #[cfg(feature = "sim")]
 use crate::common::BadInput;
 #[cfg(feature = "ros2")]
@@ -16,7 +18,8 @@ use anyhow::Context as _;
 #[derive(clap::Args, Debug)]
 pub(crate) struct BackendArgs {
     /// Watch the run in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080]
-    /// (feature `web`); after the run it stays up until Ctrl-C.
+    /// (feature `web`). A signal (Ctrl-C, SIGTERM) during the run ends the run and the viewer
+    /// together; after a run that ended on its own the viewer stays up until one.
     #[cfg(feature = "web")]
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
     web: Option<std::net::SocketAddr>,
@@ -90,6 +93,7 @@ pub(crate) fn tokio_runtime(plan: &Plan) -> std::io::Result<tokio::runtime::Runt
 pub(crate) async fn setup(
     mut plan: Plan,
     args: &BackendArgs,
+    signals: &StopSignals,
 ) -> anyhow::Result<(RuntimeBuilder, Backends)> {
     let mut backends = Backends::default();
     // Program actions (`action = { command | worker }`) first: the names they register are
@@ -118,6 +122,7 @@ pub(crate) async fn setup(
                 addr,
                 Some(feed),
                 args.monitor.clone(),
+                signals.clone(),
             ));
             return Ok((fleet.builder, backends));
         }
@@ -153,8 +158,9 @@ pub(crate) async fn setup(
             addr,
             None,
             args.monitor.clone(),
+            signals.clone(),
         ));
     }
-    let _ = args;
+    let _ = (args, signals);
     Ok((plan.runtime_builder(), backends))
 }

@@ -68,49 +68,120 @@ pub(crate) struct Interrupted {
     pub(crate) code: u8,
 }
 
-/// The signals that end a run the way Ctrl-C does: actions cancelled, journal flushed, a
-/// final `stopped` event. Each gives its own exit code, 128 + its number: SIGINT 130,
-/// SIGTERM 143, SIGHUP 129. Registered once, before the run starts, so a signal during
-/// start-up is not lost.
+/// A signal that ends a command: its name and exit code (128 + its number).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Caught {
+    /// The signal's name (`SIGTERM`).
+    pub(crate) signal: &'static str,
+    /// The exit code it gives, 128 + its number: SIGINT 130, SIGTERM 143, SIGHUP 129.
+    pub(crate) code: u8,
+}
+
+/// The signals that end a command the way Ctrl-C does — SIGINT, SIGTERM and SIGHUP — and
+/// the escalation: the **first** is handed to the command, which stops cleanly (a run's
+/// actions cancelled, its journal closed with a `stopped` line, its viewer stopped); a
+/// **second** ends the process at once with its own exit code, after killing every program
+/// an action started (nothing is flushed: the journal keeps what was written, as after a
+/// SIGKILL). So a shutdown that hangs (an action ignoring its cancellation, a slow
+/// backend) never needs a SIGKILL from outside.
+///
+/// A thread of its own listens, with its own small runtime: it works whatever the
+/// command's runtime is doing (a paused clock, a busy worker). Registered once, before the
+/// command starts its work, so a signal during start-up is not lost. Clones share the one
+/// listener.
+#[derive(Clone, Debug)]
 pub(crate) struct StopSignals {
+    first: tokio::sync::watch::Receiver<Option<Caught>>,
+}
+
+impl StopSignals {
+    /// Listens for the signals from now on (a thread of its own; call once per command).
+    pub(crate) fn new() -> anyhow::Result<StopSignals> {
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_io()
+            .build()?;
+        let (tx, first) = tokio::sync::watch::channel(None);
+        #[cfg(unix)]
+        let mut listen = {
+            use tokio::signal::unix::{SignalKind, signal};
+            let _guard = rt.enter();
+            Listen {
+                int: signal(SignalKind::interrupt())?,
+                term: signal(SignalKind::terminate())?,
+                hup: signal(SignalKind::hangup())?,
+            }
+        };
+        #[cfg(not(unix))]
+        let mut listen = Listen {};
+        std::thread::Builder::new()
+            .name("signals".into())
+            .spawn(move || {
+                rt.block_on(async {
+                    let caught = listen.next().await;
+                    let _ = tx.send(Some(caught));
+                    let again = listen.next().await;
+                    eprintln!(
+                        "{}: a second signal, ending at once (exit {})",
+                        again.signal, again.code
+                    );
+                    // No program an action started outlives plan-runner.
+                    #[cfg(unix)]
+                    gspn::actions::terminate_all();
+                    std::process::exit(i32::from(again.code));
+                });
+            })?;
+        Ok(StopSignals { first })
+    }
+
+    /// The first signal, once it has come (at once if it already has).
+    pub(crate) async fn recv(&mut self) -> Caught {
+        loop {
+            if let Some(caught) = *self.first.borrow_and_update() {
+                return caught;
+            }
+            if self.first.changed().await.is_err() {
+                // The listener is gone without a signal (it cannot be): wait forever, as a
+                // command without signals would.
+                return std::future::pending().await;
+            }
+        }
+    }
+
+    /// The first signal, if it has come.
+    #[cfg(feature = "web")]
+    pub(crate) fn caught(&self) -> Option<Caught> {
+        *self.first.borrow()
+    }
+}
+
+/// The listener's signal streams.
+struct Listen {
+    #[cfg(unix)]
+    int: tokio::signal::unix::Signal,
     #[cfg(unix)]
     term: tokio::signal::unix::Signal,
     #[cfg(unix)]
     hup: tokio::signal::unix::Signal,
-    #[cfg(unix)]
-    int: tokio::signal::unix::Signal,
 }
 
-impl StopSignals {
-    /// Listens for the signals (inside a tokio runtime).
-    pub(crate) fn new() -> anyhow::Result<StopSignals> {
+impl Listen {
+    async fn next(&mut self) -> Caught {
         #[cfg(unix)]
         {
-            use tokio::signal::unix::{SignalKind, signal};
-            Ok(StopSignals {
-                term: signal(SignalKind::terminate())?,
-                hup: signal(SignalKind::hangup())?,
-                int: signal(SignalKind::interrupt())?,
-            })
-        }
-        #[cfg(not(unix))]
-        Ok(StopSignals {})
-    }
-
-    /// The next signal: its name and exit code.
-    pub(crate) async fn recv(&mut self) -> (&'static str, u8) {
-        #[cfg(unix)]
-        {
-            tokio::select! {
+            let (signal, code) = tokio::select! {
                 _ = self.int.recv() => ("SIGINT", 130),
                 _ = self.term.recv() => ("SIGTERM", 143),
                 _ = self.hup.recv() => ("SIGHUP", 129),
-            }
+            };
+            Caught { signal, code }
         }
         #[cfg(not(unix))]
         {
             let _ = tokio::signal::ctrl_c().await;
-            ("Ctrl-C", 130)
+            Caught {
+                signal: "Ctrl-C",
+                code: 130,
+            }
         }
     }
 }

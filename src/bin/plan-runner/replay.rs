@@ -100,11 +100,12 @@ fn viewer(
     recording: Recording,
 ) -> anyhow::Result<ExitCode> {
     use gspn::web::{WebState, serve};
+    let mut signals = crate::common::StopSignals::new()?;
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
         .build()?;
-    rt.block_on(async {
+    let served = rt.block_on(async {
         let listener = tokio::net::TcpListener::bind(addr)
             .await
             .with_context(|| format!("cannot listen on {addr}"))?;
@@ -115,10 +116,8 @@ fn viewer(
             state.replay_firings(),
             listener.local_addr()?
         );
-        tokio::select! {
-            r = serve(listener, state) => r.context("viewer server")?,
-            _ = tokio::signal::ctrl_c() => return Ok(ExitCode::from(130)),
-        }
-        Ok(ExitCode::SUCCESS)
-    })
+        crate::serve::serve_until_signal(serve(listener, state), &mut signals).await
+    });
+    rt.shutdown_background();
+    served
 }

@@ -9,8 +9,9 @@
 //! one's `total`, `rate`, the 95% `half_width` of the rate from batch means and `batches`, and
 //! `warnings` when there are some: a decision outside the plan's `[[policy]]` table, taken by
 //! the net's weights, is a `warning` event and a line on stderr). Ctrl-C (SIGINT), SIGTERM and
-//! SIGHUP stop the run cleanly (actions
-//! cancelled, a final `stopped` event, journal flushed) with exit code 130, 143 and 129.
+//! SIGHUP stop the run cleanly (actions cancelled, a final `stopped` event, journal flushed,
+//! the viewer stopped) with exit code 130, 143 and 129; a second signal ends the process at
+//! once (see `common::StopSignals`).
 //!
 //! The backends (simulated robots for a plan with a `[map]`, ROS 2 for `ros2` places, the
 //! viewer with `--web`) come from `backends.rs`; each adds its section to the summary (the
@@ -113,20 +114,30 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             .map(|t| t.name.clone())
             .collect(),
     };
+    // Registered before the backends start: a signal while ROS 2 waits for its robots
+    // ends the wait at once with the signal's exit code.
+    let signals = StopSignals::new()?;
     let rt = backends::tokio_runtime(&plan).context("starting tokio")?;
-    let (summary, sections, code) = rt.block_on(async {
-        // Registered before the backends start: a signal while ROS 2 waits for its robots
-        // ends the wait at once with the signal's exit code.
-        let mut signals = StopSignals::new()?;
-        let setup = backends::setup(plan, &args.backends);
+    let ran = rt.block_on(async {
+        let mut waiting = signals.clone();
+        let setup = backends::setup(plan, &args.backends, &signals);
         let (run, mut backends) = tokio::select! {
             r = setup => r?,
-            (signal, code) = signals.recv() => {
-                return Err(Interrupted { what: "waiting for the robots", signal, code }.into());
+            caught = waiting.recv() => {
+                return Err(Interrupted {
+                    what: "waiting for the robots",
+                    signal: caught.signal,
+                    code: caught.code,
+                }
+                .into());
             }
         };
         execute(run, &args, &mut backends, signals).await
-    })?;
+    });
+    // Tasks still running (an action's program being stopped, a viewer's analysis on a
+    // blocking thread) must not hold the exit up: `main` kills what actions left behind.
+    rt.shutdown_background();
+    let (summary, sections, code) = ran?;
     if args.json {
         if sections.is_empty() {
             println!("{}", serde_json::to_string_pretty(&summary)?);
@@ -150,7 +161,9 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
 
 /// Runs `run` with its backends: journal, progress, stop signals, then every backend's
 /// section. The exit code is the summary's, or 128 + the signal's number when SIGINT,
-/// SIGTERM or SIGHUP stopped the run.
+/// SIGTERM or SIGHUP stopped the run. A signal during the run also ends the viewer (it
+/// stays up after a run that ended on its own, until a signal); a second signal ends the
+/// process at once ([`StopSignals`]).
 async fn execute(
     run: RuntimeBuilder,
     args: &Args,
@@ -205,8 +218,16 @@ async fn execute(
     let summary = loop {
         tokio::select! {
             s = &mut wait => break s,
-            (_, code) = signals.recv(), if interrupted.is_none() => {
-                interrupted = Some(code);
+            caught = signals.recv(), if interrupted.is_none() => {
+                interrupted = Some(caught.code);
+                let note = format!(
+                    "{}: stopping the run (a second signal ends plan-runner at once)",
+                    caught.signal
+                );
+                match &bar {
+                    Some(bar) => bar.println(note),
+                    None => eprintln!("{note}"),
+                }
                 handle.interrupt();
             }
             _ = ticker.tick() => {

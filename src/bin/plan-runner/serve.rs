@@ -16,7 +16,7 @@ use anyhow::Context as _;
 use gspn::runtime::{Backend, BackendError, BackendFuture, Section, Start, Started, Summary};
 use gspn::web::{LiveRun, WebState, serve};
 
-use crate::common::{BadInput, NetArgs};
+use crate::common::{BadInput, NetArgs, StopSignals};
 
 /// Arguments of `serve`.
 #[derive(clap::Args, Debug)]
@@ -103,22 +103,37 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         }
         None => state,
     };
+    let mut signals = StopSignals::new()?;
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
         .build()?;
-    rt.block_on(async {
+    let served = rt.block_on(async {
         let listener = tokio::net::TcpListener::bind(args.addr)
             .await
             .with_context(|| format!("cannot listen on {}", args.addr))?;
         let addr = listener.local_addr()?;
         println!("viewer for {} at http://{addr}/", args.file.display());
-        tokio::select! {
-            r = serve(listener, state) => r.context("viewer server")?,
-            _ = tokio::signal::ctrl_c() => return Ok(ExitCode::from(130)),
+        serve_until_signal(serve(listener, state), &mut signals).await
+    });
+    // An analysis still running on a blocking thread must not hold the exit up.
+    rt.shutdown_background();
+    served
+}
+
+/// Serves until a signal (SIGINT, SIGTERM, SIGHUP) ends the server: exit code 128 + the
+/// signal's number. For `serve` and `replay --web`.
+pub(crate) async fn serve_until_signal(
+    server: impl std::future::Future<Output = std::io::Result<()>>,
+    signals: &mut StopSignals,
+) -> anyhow::Result<ExitCode> {
+    tokio::select! {
+        r = server => {
+            r.context("viewer server")?;
+            Ok(ExitCode::SUCCESS)
         }
-        Ok(ExitCode::SUCCESS)
-    })
+        caught = signals.recv() => Ok(ExitCode::from(caught.code)),
+    }
 }
 
 /// Refuses to serve the viewer on a non-loopback `addr` unless `allow_remote` (exit code 2);
@@ -141,13 +156,15 @@ pub(crate) fn check_bind(addr: SocketAddr, allow_remote: bool) -> Result<(), Bad
 }
 
 /// The viewer of `plan-runner run --web` as a backend: serves the live run from its first
-/// event (and the simulated world's map when there is one); after the run it stays up until
-/// Ctrl-C, so the final state can be looked at.
+/// event (and the simulated world's map when there is one). After a run that ended on its
+/// own it stays up until a signal (Ctrl-C, SIGTERM, SIGHUP), so the final state can be
+/// looked at; a run a signal stopped takes the viewer with it.
 #[derive(Debug)]
 pub(crate) struct LiveViewer {
     addr: SocketAddr,
     world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
     monitor: MonitorSlot,
+    signals: StopSignals,
     served: Option<(SocketAddr, tokio::task::JoinHandle<std::io::Result<()>>)>,
 }
 
@@ -156,16 +173,19 @@ pub(crate) type MonitorSlot = Arc<std::sync::OnceLock<gspn::conform::SharedMonit
 
 impl LiveViewer {
     /// A viewer to serve at `addr`, with the world's view when the run has one and the
-    /// monitor's table when `monitor` is set by the time the run starts.
+    /// monitor's table when `monitor` is set by the time the run starts; it stays up after
+    /// the run until one of `signals` has come.
     pub(crate) fn new(
         addr: SocketAddr,
         world: Option<tokio::sync::watch::Receiver<serde_json::Value>>,
         monitor: MonitorSlot,
+        signals: StopSignals,
     ) -> Self {
         LiveViewer {
             addr,
             world,
             monitor,
+            signals,
             served: None,
         }
     }
@@ -206,15 +226,17 @@ impl Backend for LiveViewer {
         })
     }
 
-    /// Keeps the viewer up until Ctrl-C.
+    /// Keeps the viewer up until a signal, unless one already stopped the run.
     fn finish<'a>(&'a mut self, summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
         Box::pin(async move {
-            if let Some((addr, _)) = &self.served {
+            if let Some((addr, _)) = &self.served
+                && self.signals.caught().is_none()
+            {
                 eprintln!(
-                    "run over ({}); the viewer stays at http://{addr}/ until Ctrl-C",
+                    "run over ({}); the viewer stays at http://{addr}/ until Ctrl-C or SIGTERM",
                     summary.stopped
                 );
-                let _ = tokio::signal::ctrl_c().await;
+                self.signals.recv().await;
             }
             None
         })

@@ -11,15 +11,15 @@ impl Actor for Supervisor {
         sup.me = Some(me.clone());
         sup.clock.restart();
         for s in &sup.setups {
-            let timeout = s.timeout.map(|t| sup.clock.to_tokio(t));
-            let place = Place::spawn_with_mailbox(
-                Place {
-                    action: Arc::clone(&s.action),
-                    timeout,
-                    reports: sup.reports_tx.clone(),
-                },
-                mailbox::unbounded(),
-            );
+            let place = s.instant.is_none().then(|| {
+                Place::spawn_with_mailbox(
+                    Place {
+                        action: Arc::clone(&s.action),
+                        reports: sup.reports_tx.clone(),
+                    },
+                    mailbox::unbounded(),
+                )
+            });
             sup.places.push(place);
         }
         let mut initial = Vec::new();
@@ -71,9 +71,11 @@ impl Actor for Supervisor {
         Ok(())
     }
 
-    /// Waits for a message or for action reports. Reports come on their own channel (no
-    /// boxing, no actor message per report) and are drained in a batch: each is recorded in
-    /// arrival order, then what is ready fires once.
+    /// Waits for a message, action reports, output lines or (virtual time) sleep requests.
+    /// Reports come on their own channel (no boxing, no actor message per report) and are
+    /// drained in a batch. In real time each is recorded in arrival order, then what is ready
+    /// fires once; in virtual time they wait in [`VirtualTime`] until no action is busy and
+    /// are then applied in agent order ([`Supervisor::drive`]).
     async fn next(
         &mut self,
         _: WeakActorRef<Self>,
@@ -83,8 +85,11 @@ impl Actor for Supervisor {
             if self.finished {
                 return Ok(None);
             }
-            let (Some(mut rx), Some(mut out)) = (self.reports_rx.take(), self.output_rx.take())
-            else {
+            let (Some(mut rx), Some(mut out), Some(mut sleeps)) = (
+                self.reports_rx.take(),
+                self.output_rx.take(),
+                self.sleeps_rx.take(),
+            ) else {
                 return Ok(mailbox_rx.recv().await);
             };
             let got = tokio::select! {
@@ -92,13 +97,32 @@ impl Actor for Supervisor {
                 sig = mailbox_rx.recv() => {
                     self.reports_rx = Some(rx);
                     self.output_rx = Some(out);
+                    self.sleeps_rx = Some(sleeps);
                     return Ok(sig);
                 }
                 Some(o) = out.recv() => {
-                    self.action_output(o);
+                    self.line(o);
                     self.drain_output(&mut out);
                     self.reports_rx = Some(rx);
                     self.output_rx = Some(out);
+                    self.sleeps_rx = Some(sleeps);
+                    continue;
+                }
+                Some(req) = sleeps.recv() => {
+                    // A sleep asked for while the run stops ends at once (its waker dropped).
+                    let now = self.now();
+                    if self.stopping.is_none() {
+                        self.vt.sleep(now, req);
+                    }
+                    while let Ok(req) = sleeps.try_recv() {
+                        if self.stopping.is_none() {
+                            self.vt.sleep(now, req);
+                        }
+                    }
+                    self.reports_rx = Some(rx);
+                    self.output_rx = Some(out);
+                    self.sleeps_rx = Some(sleeps);
+                    self.drive();
                     continue;
                 }
                 r = rx.recv() => r,
@@ -106,12 +130,12 @@ impl Actor for Supervisor {
             let mut settle = false;
             if let Some(first) = got {
                 self.drain_output(&mut out);
-                settle |= self.action_done(first);
+                settle |= self.report(first);
                 for _ in 0..BATCH {
                     match rx.try_recv() {
                         Ok(d) => {
                             self.drain_output(&mut out);
-                            settle |= self.action_done(d)
+                            settle |= self.report(d)
                         }
                         Err(_) => break,
                     }
@@ -119,10 +143,36 @@ impl Actor for Supervisor {
             }
             self.reports_rx = Some(rx);
             self.output_rx = Some(out);
+            self.sleeps_rx = Some(sleeps);
             if settle {
                 self.settle();
                 self.schedule();
             }
+        }
+    }
+}
+
+impl Supervisor {
+    /// A report: kept for [`Supervisor::drive`] in virtual time (true: drive now), else
+    /// recorded at once (true: fire what is ready).
+    fn report(&mut self, done: ActionDone) -> bool {
+        if !self.clock.is_discrete() {
+            return self.action_done(done);
+        }
+        self.vt.report(done);
+        if self.stopping.is_some() && !self.vt.busy() {
+            // The last cancelled action ended: their ends, in agent order, then the end.
+            self.deliver();
+        }
+        self.stopping.is_none()
+    }
+
+    /// An output line: kept with the reports in virtual time, else recorded at once.
+    pub(super) fn line(&mut self, o: OutputLine) {
+        if self.clock.is_discrete() {
+            self.vt.output(o);
+        } else {
+            self.action_output(o);
         }
     }
 }

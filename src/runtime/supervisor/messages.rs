@@ -73,7 +73,12 @@ impl Supervisor {
         self.eng.action_ended();
         self.clock.advance();
         self.set_state(msg.agent, AgentState::Done);
-        if self.observed() {
+        // A place without an action has no action events.
+        let passive = self
+            .eng
+            .action_index(place)
+            .is_some_and(|a| self.setups[a].passive);
+        if self.observed() && !passive {
             self.emit(EventKind::ActionEnded {
                 agent: msg.agent,
                 place,
@@ -163,7 +168,9 @@ impl Message<Continue> for Supervisor {
     async fn handle(&mut self, _: Continue, ctx: &mut Context<Self, ()>) {
         self.continue_pending = false;
         if self.stopping.is_none() {
-            if self.clock.is_virtual() && self.eng.running() == 0 {
+            if self.clock.is_discrete() {
+                self.drive();
+            } else if self.clock.is_virtual() && self.eng.running() == 0 {
                 self.fast_path();
             } else {
                 self.schedule();
@@ -187,6 +194,9 @@ impl Message<StopDeadline> for Supervisor {
     type Reply = ();
 
     async fn handle(&mut self, _: StopDeadline, ctx: &mut Context<Self, ()>) {
+        if !self.finished {
+            self.deliver();
+        }
         if !self.finished {
             let m = format!(
                 "{} action(s) did not end within {:?} of the stop",
