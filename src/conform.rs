@@ -13,6 +13,8 @@
 //! | `shape` (exponential transition) | Kolmogorov–Smirnov statistic of the enabled-time gaps | exponential | Lilliefors (Stephens) |
 //! | `choice` (place → transition) | share of the place's tokens leaving by the transition, ratio batch means | from the steady-state throughputs | Student t over the batches |
 //! | `decision` (set of firable immediate transitions, policy rule) | how often each fired | the weights or the policy's rule | Pearson chi-square |
+//! | `holding` (place → exit transition) | mean stay of the agents that left by it | `1/Λ` where the model times each agent (see [`holding`]) | gamma, the end of the run taken into account |
+//! | `holding_shape` (place) | Kolmogorov–Smirnov statistic of every stay | exponential of rate `Λ` | Kolmogorov |
 //!
 //! **Enabled time** respects server semantics: while exponential `t` has enabling degree
 //! `d`, its exposure grows at `min(servers, d)` per unit of time, so under the model its

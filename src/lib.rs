@@ -24,6 +24,9 @@
 //! - [`io`]: net formats only — PIPE XML, PNML, GreatSPN PNPRO, DOT, PRISM.
 //! - [`sim`]: the token game — exact GSPN semantics on virtual time, seeded — and
 //!   Monte-Carlo estimates.
+//! - [`conform`]: a recorded run (a journal, or a token-game run) set beside its net's
+//!   predictions row by row with a verdict, the live drift monitor, and the net fitted back
+//!   from runs (`plan-runner conform`).
 //! - [`runtime`]: the actor runtime — supervisor, agents, places, actions, events, journal,
 //!   roles and stop conditions; `Runtime::builder(net)…spawn()` embeds a running plan in a
 //!   tokio service.

@@ -130,17 +130,23 @@ impl BatchMeans {
     pub fn advance(&mut self, t: f64, values: &[f64]) {
         let n = self.sums.first().map_or(1, Vec::len);
         let mut from = self.last;
+        // Batch by batch, counting the batch up rather than reading it off `from` again: at
+        // a batch's end `(b + 1)·len / len` may round below `b + 1`, and the batch would
+        // never be left.
+        let mut b = self.batch(from);
         while from < t {
-            let b = self.batch(from);
-            let end = if b == n - 1 {
+            let end = if b + 1 >= n {
                 t
             } else {
                 t.min((b + 1) as f64 * self.len)
             };
-            for (k, v) in values.iter().enumerate() {
-                self.sums[k][b] += v * (end - from);
+            if end > from {
+                for (k, v) in values.iter().enumerate() {
+                    self.sums[k][b] += v * (end - from);
+                }
+                from = end;
             }
-            from = end;
+            b += 1;
         }
         self.last = self.last.max(t);
     }
@@ -429,6 +435,28 @@ mod tests {
         assert_eq!(b.sums(0), &[2.0, 3.0, 4.0, 4.0]);
         let e = estimate(&b.batches(0));
         assert!((e.mean - 1.625).abs() < 1e-12);
+    }
+
+    /// Regression: a run that ended at 600.0000611410001 (real time leaking into virtual
+    /// time) hung `conform`: at 90.00000917115, the end of batch 2, `t / len` rounds to
+    /// 2.9999999999999996 and `advance` never left batch 2.
+    #[test]
+    fn a_batch_end_that_rounds_down_is_left() {
+        let end = 600.000_061_141_000_1;
+        let mut b = BatchMeans::new(20, end, 1);
+        let edge = 3.0 * (end / 20.0);
+        assert!(
+            ((edge / (end / 20.0)) as usize) < 3,
+            "the rounding this test is about"
+        );
+        b.advance(edge, &[1.0]);
+        b.advance(end, &[2.0]);
+        let sums = b.sums(0);
+        let len = end / 20.0;
+        for (i, s) in sums.iter().enumerate() {
+            let want = if i < 3 { len } else { 2.0 * len };
+            assert!((s - want).abs() < 1e-9, "batch {i}: {s} vs {want}");
+        }
     }
 
     #[test]

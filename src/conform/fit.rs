@@ -39,7 +39,8 @@ pub struct Fitted {
 ///
 /// **Phase-type holding times.** An action place whose agents' stays (see
 /// [`super::holding`]) the exponential does not fit — a race place (so the stays are the
-/// outputs' business alone) whose `holding_shape` test rejects at [`ALPHA`] — gets an
+/// outputs' business alone) whose stays a Kolmogorov–Smirnov test of exponentiality (mean
+/// estimated from them, Lilliefors) rejects at [`ALPHA`] — gets an
 /// Erlang holding time by the method of moments (mean `m`, variance `v`, `k = round(m²/v)`
 /// stages of rate `k/m`, at most [`Options::max_stages`]). When the stays depend on how the
 /// agent came in (a drive after `Go_Check`, a short re-measure after `AlarmOff`: the entry

@@ -1,7 +1,9 @@
 //! `plan-runner conform`: a net-timed run of cyc3 is consistent with its net and `--fit`
 //! learns its rates back; a run of the patrol on simulated robots diverges on the transitions
 //! out of the places that drive (`goto`), not exponential; bad arguments exit with 2;
-//! `simulate`/`analyze --from JOURNAL:SEQ` start from the journal's marking.
+//! `--fail-on-drift` exits 1 when a row diverges and 0 when none does (rows without a
+//! prediction do not count); `simulate`/`analyze --from JOURNAL:SEQ` start from the
+//! journal's marking.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -38,6 +40,12 @@ fn row<'a>(report: &'a Value, kind: &str, item: &str) -> &'a Value {
 /// A journal of `plan` run with `extra` arguments, in `dir`.
 fn journal(dir: &Path, plan: &str, extra: &[&str]) -> PathBuf {
     let j = dir.join("run.jsonl");
+    journal_to(&j, plan, extra);
+    j
+}
+
+/// Writes the journal of `plan` run with `extra` arguments to `j`.
+fn journal_to(j: &Path, plan: &str, extra: &[&str]) {
     let plan = repo(plan);
     let mut args = vec![
         "run",
@@ -53,7 +61,6 @@ fn journal(dir: &Path, plan: &str, extra: &[&str]) -> PathBuf {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    j
 }
 
 #[test]
@@ -198,6 +205,141 @@ fn bad_arguments_exit_with_2() {
         run(&["conform", j.to_str().unwrap()]).status.code(),
         Some(2)
     );
+}
+
+/// A plan of cyc3 (2 agents, single servers) whose P3 runs `action`, written in `dir`.
+fn cyc3_plan_with_p3(dir: &Path, action: &str) -> PathBuf {
+    let plan = dir.join("p3.toml");
+    let net = repo("plans/nets/cyc3_ss.PNPRO");
+    let text = format!(
+        "net = {net:?}\npage = \"cyc3\"\nseed = 3\ntime_scale = 0.0\n\n\
+         [places.P3]\naction = {action:?}\n"
+    );
+    std::fs::write(&plan, text).unwrap();
+    plan
+}
+
+#[test]
+fn fail_on_drift_exits_1_when_a_row_diverges_and_0_when_none_does() {
+    let dir = tempfile::tempdir().unwrap();
+    // P3's agents fire T3 (rate 2) at once: P3 is never seen holding a token, where the
+    // steady state says 4/7 on average.
+    let plan = cyc3_plan_with_p3(dir.path(), "fire T3");
+    let j = dir.path().join("fast.jsonl");
+    let out = run(&[
+        "run",
+        plan.to_str().unwrap(),
+        "--until",
+        "600",
+        "--journal",
+        j.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let conform = |extra: &[&str]| {
+        let mut args = vec![
+            "conform",
+            j.to_str().unwrap(),
+            "--plan",
+            plan.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    // Without the flag the report is all: exit 0.
+    let report = ok_json(&conform(&["--json"]));
+    let diverging = report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["verdict"] == "diverges")
+        .count();
+    // (Microseconds: the real time an action takes still leaks into virtual time, issue 24.)
+    let p3 = row(&report, "mean_tokens", "P3");
+    assert!(p3["observed"].as_f64().unwrap() < 1e-3, "{p3}");
+    assert!((p3["predicted"].as_f64().unwrap() - 4.0 / 7.0).abs() < 1e-12);
+    assert_eq!(p3["verdict"], "diverges");
+    assert!(p3["p_value"].as_f64().unwrap() < 1e-9, "{p3}");
+    // Two agents can share P3 and T3 has one server: how long one stays depends on the
+    // other, which the net does not say.
+    let holding = row(&report, "holding", "P3 -> T3");
+    assert_eq!(holding["verdict"], "no_prediction", "{holding}");
+    assert_eq!(
+        holding["detail"],
+        "T3 has a single server and the place up to 2 tokens: a stay depends on the queue"
+    );
+    // With it: exit 1, the same report on stdout, the count on stderr.
+    let out = conform(&["--json", "--fail-on-drift"]);
+    assert_eq!(out.status.code(), Some(1));
+    let again: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(again, report);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(&format!("{diverging} row(s) diverge")),
+        "{stderr}"
+    );
+    let out = conform(&["--fail-on-drift"]);
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("mean_tokens   P3") && l.ends_with("diverges")),
+        "{text}"
+    );
+    assert!(
+        text.contains("no prediction (T3 has a single server and the place up to 2 tokens"),
+        "{text}"
+    );
+
+    // A run with nothing to flag: 8 time units, too few firings for a rate (10) and no
+    // steady state within 1 marking: every row is `too little data` or `no prediction`,
+    // and neither fails the gate.
+    let short = dir.path().join("short.jsonl");
+    journal_to(&short, "plans/cyc3.toml", &["--until", "8"]);
+    let cyc3 = repo("plans/cyc3.toml");
+    let args = [
+        "conform",
+        short.to_str().unwrap(),
+        "--plan",
+        cyc3.to_str().unwrap(),
+        "--max-states",
+        "1",
+        "--fail-on-drift",
+    ];
+    let out = run(&args);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("# 0 of 0 tested rows diverge"), "{text}");
+    let mut json = args.to_vec();
+    json.push("--json");
+    let report = ok_json(&run(&json));
+    let verdicts: Vec<&str> = report["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["verdict"].as_str().unwrap())
+        .collect();
+    assert!(verdicts.contains(&"no_prediction") && verdicts.contains(&"too_little_data"));
+    assert!(
+        verdicts
+            .iter()
+            .all(|v| *v == "no_prediction" || *v == "too_little_data")
+    );
+
+    // Bad input still exits 2 with the flag.
+    let out = run(&[
+        "conform",
+        "no-such.jsonl",
+        "--plan",
+        cyc3.to_str().unwrap(),
+        "--fail-on-drift",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot read no-such.jsonl"));
 }
 
 #[test]
