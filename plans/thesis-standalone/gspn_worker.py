@@ -14,7 +14,9 @@
 docs/actions.md for the protocol. Standard library only.
 
 A function returns a transition name (fire it), None (let the policy or the net's rates
-decide) or raises (the action fails with the exception's message). Functions run one at a
+decide), either with a duration as a pair (`return "t1", 2.5`: the outcome takes effect 2.5
+model seconds later; in virtual time the time the function itself takes is not model time),
+or raises (the action fails with the exception's message). Functions run one at a
 time in the order requests come, unless declared `@action("name", concurrent=True)`: those
 run on a thread pool, so slow functions (a sleep, a robot call) overlap. Inside a function,
 print() goes to the run's journal as the agent's output; `ctx.cancelled` turns true when the
@@ -124,10 +126,17 @@ def _handle(req, entry):
             reply = {"id": rid, "error": "no action named %r in this worker" % req.get("action")}
         else:
             result = entry[0](Context(req))
+            after = None
+            if isinstance(result, tuple):
+                # (name or None, seconds): the outcome takes effect that many model seconds
+                # later -- in virtual time, the only way an action takes model time.
+                result, after = result
             if result is None:
                 reply = {"id": rid, "decide": True}
             else:
                 reply = {"id": rid, "fire": str(result)}
+            if after is not None:
+                reply["after"] = float(after)
     except Exception as e:  # the action fails; the worker lives on
         reply = {"id": rid, "error": "%s: %s" % (type(e).__name__, e)}
     finally:

@@ -152,11 +152,12 @@ impl RuntimeBuilder {
     }
 
     /// Binds the initial agents to robots, in agent order (places that are not resources, in
-    /// net order, then their tokens): agent 0 gets the first name, and so on. An agent keeps its robot as it
-    /// moves through the net ([`ActionContext::robot`](super::ActionContext::robot), the
-    /// `robots` of [`Fired`](super::EventKind::Fired)). [`RuntimeBuilder::spawn`] refuses a
-    /// count that differs from the initial agents, and a net that can create or destroy robot
-    /// tokens outside resource places.
+    /// net order, then their tokens): agent 0 gets the first name, and so on. An agent keeps
+    /// its robot as it moves through the net
+    /// ([`ActionContext::robot`](super::ActionContext::robot), the `robots` of
+    /// [`Fired`](super::EventKind::Fired)). [`RuntimeBuilder::spawn`] refuses a count that
+    /// differs from the initial agents, and a net that can create or destroy robot tokens
+    /// outside resource places.
     pub fn robots<S: AsRef<str>>(mut self, names: impl IntoIterator<Item = S>) -> Self {
         self.robots = names.into_iter().map(|s| Arc::from(s.as_ref())).collect();
         self
