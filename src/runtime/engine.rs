@@ -17,9 +17,12 @@ use super::id::AgentId;
 use super::reward::{Earned, Meter};
 use crate::analysis::decision::RewardSpec;
 use crate::firing::{Firable, Statistics, Tally};
-use crate::net::{Marking, Net, PlaceId, TokenOverflow, TransitionId};
+use crate::net::{Marking, Net, PlaceId, Timing, TokenOverflow, TransitionId};
 use crate::policy::Policy;
-use crate::sample::Rng;
+use crate::sample::{self, Rng};
+
+/// The random stream of [`Engine::pick`].
+const PICK_STREAM: u64 = 0x7069_636b; // "pick"
 
 /// What an agent's finished action made it ready for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,6 +80,9 @@ pub(crate) struct Engine {
     m: Marking,
     policy: Policy,
     rng: Rng,
+    /// Which in-service agent a net-timed race takes (its own stream: the race's draws stay
+    /// the token game's).
+    pick: Rng,
     /// Per place: index into `aps` when it is an action place.
     action_of: Vec<Option<u32>>,
     aps: Vec<ActionPlace>,
@@ -179,6 +185,11 @@ impl Engine {
         let mut e = Engine {
             m: net.initial_marking(),
             policy,
+            pick: {
+                let mut pick = rng.clone();
+                pick.set_stream(PICK_STREAM);
+                pick
+            },
             rng,
             action_of,
             aps,
@@ -420,10 +431,25 @@ impl Engine {
             if let Some(a) = self.action_of[p.index()] {
                 let ap = &mut self.aps[a as usize];
                 let local = ap.local(t);
+                // A net-timed race of a transition with several busy servers: each
+                // in-service agent (the first `active` to hand the choice back) is equally
+                // likely to be the one that finishes — every token has its own server.
+                let serving = match net.transition(t).timing {
+                    Timing::Exponential { servers, .. } if w == 1 => {
+                        servers.active(ap.decide_q.len() as u32) as usize
+                    }
+                    _ => 1,
+                };
                 for _ in 0..w {
-                    let id = local
-                        .and_then(|i| ap.fire_q[i].pop_front())
-                        .or_else(|| ap.decide_q.pop_front());
+                    let from_fire = local.and_then(|i| ap.fire_q[i].pop_front());
+                    let id = from_fire.or_else(|| {
+                        if serving > 1 && ap.decide_q.len() > 1 {
+                            let k = (sample::uniform(&mut self.pick) * serving as f64) as usize;
+                            ap.decide_q.remove(k.min(serving - 1))
+                        } else {
+                            ap.decide_q.pop_front()
+                        }
+                    });
                     if let Some(id) = id {
                         out.consumed.push(id);
                     }

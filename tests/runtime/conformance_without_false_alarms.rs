@@ -25,11 +25,10 @@
 //! every token has its own server — and two or more agents can meet run an action that
 //! draws the agent's own exponential clock and exit (`own_clock`, seeded per stay). The
 //! runtime's built-in `wait` is used everywhere else (a place that never holds two tokens, a
-//! queue, an immediate choice, the resource's stations): its net-timed race consumes the
-//! agent that has waited longest, which keeps the model's marking but not "each token its own
-//! server" once agents share a place — with `wait` there too, 103 of the 135 `holding_shape`
-//! rows flag (stays with a coefficient of variation near 0.5, not 1), while a race that
-//! consumes a uniformly chosen agent among those being served brings it back to 7 of 135.
+//! queue, an immediate choice, the resource's stations). The runtime's race takes a
+//! uniformly chosen agent among those being served (each token its own server); with `wait`
+//! in the shared places too, 10 of 135 `holding_shape` and 12 of 264 `holding` rows flag
+//! (103 of 135 `holding_shape` when the race took the longest-waiting agent).
 
 use rand::{RngExt, SeedableRng};
 
