@@ -512,10 +512,8 @@ fn self_timed_actions_match_the_exact_steady_state() {
     assert!(timed >= 8, "{timed} self-timed places in all replications");
 }
 
-#[test]
-fn durations_stated_by_actions_are_the_only_time_they_take() {
-    // One agent, `wait 2.5` then a Rust action that burns wall-clock time and sleeps 1.25
-    // model seconds: the run ends at exactly 3.75 after two firings.
+/// a --t1--> c --t2--> d, one token in `a`, immediate transitions: only actions take time.
+fn two_steps() -> Net {
     let mut b = NetBuilder::new("two steps");
     let a = b.place("a", 1);
     let c = b.place("c", 0);
@@ -526,7 +524,14 @@ fn durations_stated_by_actions_are_the_only_time_they_take() {
     b.output(t1, c, 1);
     b.input(c, t2, 1);
     b.output(t2, d, 1);
-    let net = b.build().unwrap();
+    b.build().unwrap()
+}
+
+#[test]
+fn durations_stated_by_actions_are_the_only_time_they_take() {
+    // One agent, `wait 2.5` then a Rust action that burns wall-clock time and sleeps 1.25
+    // model seconds: the run ends at exactly 3.75 after two firings.
+    let net = two_steps();
     let rt = two_threads();
     let summary = rt.block_on(async {
         let h = Runtime::builder(net)
@@ -554,17 +559,8 @@ fn place_timeouts_are_model_seconds_in_virtual_time() {
     // `a`: a Rust action that burns 300 ms of wall-clock time under a 0.2-model-second
     // timeout — it takes no model time, so it does not time out. `c`: `wait 3` under a
     // 2-second timeout fails at model time 2 exactly, however loaded the machine is.
-    let mut b = NetBuilder::new("timeouts");
-    let a = b.place("a", 1);
-    let c = b.place("c", 0);
-    let d = b.place("d", 0);
-    let t1 = b.immediate("t1", 1.0, 1);
-    let t2 = b.immediate("t2", 1.0, 1);
-    b.input(a, t1, 1);
-    b.output(t1, c, 1);
-    b.input(c, t2, 1);
-    b.output(t2, d, 1);
-    let net = b.build().unwrap();
+    let net = two_steps();
+    let (a, c) = (PlaceId(0), PlaceId(1));
     let role = |name: &str, timeout: f64| Role::Action {
         name: name.to_string(),
         timeout: Some(timeout),
