@@ -220,18 +220,17 @@ fn plans_thesis_standalone_is_what_the_importer_writes() {
         fresh,
         "plans/thesis-standalone/plan.toml is stale: run `plan-runner import-thesis plans/thesis-standalone/gspn_execution_input.json --out plans/thesis-standalone`"
     );
-    for f in ["thesis_functions.py"] {
-        assert_eq!(
-            std::fs::read_to_string(committed.join(f)).unwrap(),
-            std::fs::read_to_string(out.join(f)).unwrap(),
-            "{f}"
-        );
-        assert_eq!(
-            std::fs::read_to_string(repo("python").join(f)).unwrap(),
-            std::fs::read_to_string(out.join(f)).unwrap(),
-            "{f}"
-        );
-    }
+    let f = "thesis_functions.py";
+    assert_eq!(
+        std::fs::read_to_string(committed.join(f)).unwrap(),
+        std::fs::read_to_string(out.join(f)).unwrap(),
+        "{f}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(repo("python").join(f)).unwrap(),
+        std::fs::read_to_string(out.join(f)).unwrap(),
+        "{f}"
+    );
 }
 
 #[test]
