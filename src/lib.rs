@@ -37,6 +37,8 @@
 //! - [`ros2`]: the ROS 2 backend (feature `ros2`) — robots as ExecPlace action servers,
 //!   firings and the marking on topics, over DDS (`plan-runner robot`, `docs/ros2.md`);
 //!   `ros2::settings` (what a plan tells it) is compiled without the feature too.
+//! - [`zenoh`](mod@zenoh): the same robots and topics over Zenoh (feature `zenoh`), laid out as
+//!   rmw_zenoh lays them out, through routers (`plan-runner router`, `fleet`, `docs/zenoh.md`).
 //! - [`limits`]: the largest token count and duration a user may ask for.
 //! - `web` (feature `web`): the viewer — an axum server with embedded assets that draws a
 //!   net, plays its token game and shows its analysis (`plan-runner serve`).
@@ -69,6 +71,8 @@ pub mod stats;
 #[cfg(feature = "web")]
 pub mod web;
 pub mod world;
+#[cfg(feature = "zenoh")]
+pub mod zenoh;
 
 /// The everyday types, for `use gspn::prelude::*`.
 pub mod prelude {

@@ -13,7 +13,9 @@ use super::file::PlaceFile;
 use super::resolve::out_of_range;
 use crate::io::{LoadError, LoadErrorKind};
 use crate::net::Net;
-use crate::ros2::settings::{DEFAULT_SERVER, ROS2_ACTION, Ros2Settings, ServiceMapping};
+use crate::ros2::settings::{
+    DEFAULT_SERVER, ROS2_ACTION, Ros2Settings, ServiceMapping, Transport,
+};
 
 /// The `[ros2]` table: how the ROS 2 backend joins DDS and watches robots.
 #[derive(Debug, Deserialize, JsonSchema)]
@@ -43,6 +45,13 @@ pub struct Ros2File {
     /// `/rosout` (rcl_interfaces/msg/Log), as ROS 2 nodes do (default false;
     /// `--ros2-rosout` turns it on too).
     pub rosout: Option<bool>,
+    /// How the supervisor and its robots meet: `"dds"` (default) or `"zenoh"` (through a
+    /// Zenoh router, rmw_zenoh's layout; feature `zenoh`, `docs/zenoh.md`).
+    #[schemars(with = "Option<String>")]
+    pub transport: Option<Spanned<String>>,
+    /// The Zenoh router to connect to with `transport = "zenoh"` (default
+    /// `"tcp/127.0.0.1:7447"`; `--zenoh ENDPOINT` overrides it).
+    pub zenoh: Option<String>,
 }
 
 /// The `[ros2]` table and the `server` keys of the places.
@@ -92,6 +101,18 @@ pub(super) fn resolve_ros2(
             })?;
         }
         s.rosout = f.rosout;
+        if let Some(t) = &f.transport {
+            s.transport = Transport::parse(t.get_ref()).ok_or_else(|| {
+                at(
+                    t.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "ros2.transport: `{}` is not \"dds\" or \"zenoh\"",
+                        t.get_ref()
+                    )),
+                )
+            })?;
+        }
+        s.zenoh.clone_from(&f.zenoh);
         for (key, v, slot) in [
             ("heartbeat", &f.heartbeat, &mut s.heartbeat),
             ("lost_after", &f.lost_after, &mut s.lost_after),

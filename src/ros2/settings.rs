@@ -28,6 +28,10 @@ pub struct Ros2Settings {
     /// Whether the process's node forwards the ROS 2 layer's warnings and errors to
     /// `/rosout` (`None`: not said; the default is off; `--ros2-rosout` turns it on).
     pub rosout: Option<bool>,
+    /// DDS (default) or Zenoh.
+    pub transport: Transport,
+    /// The plan's Zenoh router endpoint (`[ros2] zenoh`).
+    pub zenoh: Option<String>,
     /// Places whose action is `ros2`, with their ExecPlace server name, in net order.
     pub servers: Vec<(PlaceId, String)>,
 }
@@ -51,6 +55,27 @@ impl ServiceMapping {
         match s {
             "enhanced" => Some(ServiceMapping::Enhanced),
             "cyclone" => Some(ServiceMapping::Cyclone),
+            _ => None,
+        }
+    }
+}
+
+/// How the supervisor and its robots meet (`[ros2] transport`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Transport {
+    /// DDS, the ROS 2 default (feature `ros2`).
+    #[default]
+    Dds,
+    /// Zenoh through a router, as rmw_zenoh does (feature `zenoh`).
+    Zenoh,
+}
+
+impl Transport {
+    /// The transport named `s` in a plan (`"dds"`, `"zenoh"`).
+    pub fn parse(s: &str) -> Option<Transport> {
+        match s {
+            "dds" => Some(Transport::Dds),
+            "zenoh" => Some(Transport::Zenoh),
             _ => None,
         }
     }

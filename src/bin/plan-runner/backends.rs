@@ -41,6 +41,10 @@ pub(crate) struct BackendArgs {
     #[cfg(feature = "ros2")]
     #[command(flatten)]
     ros2: crate::ros2::RunArgs,
+    /// `--zenoh ENDPOINT`: the same over Zenoh (feature `zenoh`).
+    #[cfg(feature = "zenoh")]
+    #[command(flatten)]
+    zenoh: crate::zenoh::RunArgs,
 }
 
 /// Refuses flags the plan cannot honour, before anything starts.
@@ -141,7 +145,7 @@ pub(crate) async fn setup(
         #[cfg(not(unix))]
         let interrupted = tokio::signal::ctrl_c();
         tokio::select! {
-            b = crate::ros2::connect(&plan, &args.ros2) => backends.push(b?),
+            b = connect_ros2(&plan, args) => backends.push(b?),
             _ = interrupted => {
                 return Err(crate::common::Interrupted {
                     what: "waiting for the robots",
@@ -163,4 +167,66 @@ pub(crate) async fn setup(
     }
     let _ = (args, signals);
     Ok((plan.runtime_builder(), backends))
+}
+
+/// The supervisor's ROS 2 side: over Zenoh when the flag or the plan says so (feature
+/// `zenoh`), else over DDS.
+#[cfg(feature = "ros2")]
+async fn connect_ros2(plan: &Plan, args: &BackendArgs) -> anyhow::Result<Ros2Side> {
+    #[cfg(feature = "zenoh")]
+    if let Some(e) = crate::zenoh::endpoint(plan, args.zenoh.zenoh()) {
+        return Ok(Ros2Side::Zenoh(
+            crate::zenoh::connect(plan, &e, &args.ros2).await?,
+        ));
+    }
+    Ok(Ros2Side::Dds(crate::ros2::connect(plan, &args.ros2).await?))
+}
+
+/// The ROS 2 backend of a run, on either transport.
+#[cfg(feature = "ros2")]
+#[derive(Debug)]
+enum Ros2Side {
+    Dds(crate::ros2::Ros2Run),
+    #[cfg(feature = "zenoh")]
+    Zenoh(crate::zenoh::ZenohRun),
+}
+
+#[cfg(feature = "ros2")]
+impl Ros2Side {
+    fn inner(&mut self) -> &mut dyn gspn::runtime::Backend {
+        match self {
+            Ros2Side::Dds(b) => b,
+            #[cfg(feature = "zenoh")]
+            Ros2Side::Zenoh(b) => b,
+        }
+    }
+}
+
+#[cfg(feature = "ros2")]
+impl gspn::runtime::Backend for Ros2Side {
+    fn name(&self) -> &'static str {
+        match self {
+            Ros2Side::Dds(b) => b.name(),
+            #[cfg(feature = "zenoh")]
+            Ros2Side::Zenoh(b) => b.name(),
+        }
+    }
+    fn attach(
+        &mut self,
+        run: RuntimeBuilder,
+    ) -> Result<RuntimeBuilder, gspn::runtime::BackendError> {
+        self.inner().attach(run)
+    }
+    fn observes_events(&self) -> bool {
+        true
+    }
+    fn started<'a>(&'a mut self, start: gspn::runtime::Start<'a>) -> gspn::runtime::Started<'a> {
+        self.inner().started(start)
+    }
+    fn finish<'a>(
+        &'a mut self,
+        summary: &'a gspn::runtime::Summary,
+    ) -> gspn::runtime::BackendFuture<'a, Option<gspn::runtime::Section>> {
+        self.inner().finish(summary)
+    }
 }

@@ -19,6 +19,8 @@ mod run;
 mod serve;
 mod simulate;
 mod synthesize;
+#[cfg(feature = "zenoh")]
+mod zenoh;
 
 use std::process::ExitCode;
 
@@ -59,6 +61,14 @@ enum Command {
     /// with net-timed local actions, a heartbeat, the firings (feature `ros2`).
     #[cfg(feature = "ros2")]
     Robot(ros2::RobotArgs),
+    /// Host many robots of a plan in one process over Zenoh (feature `zenoh`): each serves
+    /// its ExecPlace action and declares its own liveliness token, as `robot --zenoh` does.
+    #[cfg(feature = "zenoh")]
+    Fleet(zenoh::FleetArgs),
+    /// Run a Zenoh router (feature `zenoh`): supervisors and robots connect to it as
+    /// clients; routers join each other with --connect (sites across networks).
+    #[cfg(feature = "zenoh")]
+    Router(zenoh::RouterArgs),
 }
 
 fn main() -> ExitCode {
@@ -79,6 +89,10 @@ fn main() -> ExitCode {
         Command::Replay(a) => replay::main(a),
         #[cfg(feature = "ros2")]
         Command::Robot(a) => ros2::robot(a),
+        #[cfg(feature = "zenoh")]
+        Command::Fleet(a) => zenoh::fleet(a),
+        #[cfg(feature = "zenoh")]
+        Command::Router(a) => zenoh::router(a),
     };
     // No program an action started outlives plan-runner (a stop already ended them; this
     // catches the ones a runtime dropped mid-run).

@@ -64,11 +64,11 @@ pub(crate) struct RunArgs {
     /// Wait (up to the startup time) for this many subscribers of /gspn/firings before the
     /// first firing.
     #[arg(long, value_name = "N", default_value_t = 0)]
-    ros2_wait_subscribers: usize,
+    pub(crate) ros2_wait_subscribers: usize,
     /// At most this many seconds after the run for the subscribers to acknowledge the last
     /// firings, then as many for the end of the run (lost samples are repaired meanwhile).
     #[arg(long, value_name = "SECS", default_value_t = 0.5)]
-    ros2_linger: f64,
+    pub(crate) ros2_linger: f64,
     /// Accept time scale 0 (virtual time) with ros2 places: the robots still act in real
     /// time, so model times mean nothing.
     #[arg(long)]
@@ -109,7 +109,7 @@ pub(crate) fn wanted(plan: &Plan) -> bool {
 /// The robots the supervisor links to: the plan's `robots`, then the `robot` of each `ros2`
 /// place not among them (several places may name one robot: its server then gets their
 /// goals concurrently).
-fn robots(plan: &Plan) -> Vec<String> {
+pub(crate) fn robots(plan: &Plan) -> Vec<String> {
     let mut out = plan.robots.clone();
     for (p, _) in &plan.ros2.servers {
         if let Some(Some(Role::Action { robot: Some(r), .. })) = plan.roles.get(p.index())
@@ -241,6 +241,11 @@ pub(crate) struct RobotArgs {
     dds: DdsArgs,
     #[command(flatten)]
     net: NetArgs,
+    /// Serve over Zenoh through the router at ENDPOINT (`tcp/127.0.0.1:7447`) instead of
+    /// DDS [default: DDS, unless the plan says `[ros2] transport = "zenoh"`] (feature `zenoh`).
+    #[cfg(feature = "zenoh")]
+    #[arg(long, value_name = "ENDPOINT")]
+    zenoh: Option<String>,
 }
 
 /// `plan-runner robot`: serve until the supervisor's run is over (with `--stay`: until
@@ -268,6 +273,16 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         .unwrap_or(1.0);
     if !(scale.is_finite() && scale >= 0.0) {
         return Err(BadInput(format!("--time-scale {scale}: must be ≥ 0")).into());
+    }
+    #[cfg(feature = "zenoh")]
+    if let Some(endpoint) = crate::zenoh::endpoint(&plan, args.zenoh.as_deref()) {
+        let opts = gspn::zenoh::robot::FleetOptions {
+            ids: vec![args.id.clone()],
+            seed: args.seed.or(plan.seed).unwrap_or(0),
+            time_scale: scale,
+            stay: args.stay,
+        };
+        return crate::zenoh::serve_robots(&plan, &endpoint, opts);
     }
     let cfg = args.dds.config(&plan)?;
     let opts = RobotOptions {
@@ -302,7 +317,7 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
 }
 
 /// Completes on Ctrl-C or SIGTERM.
-async fn shutdown() {
+pub(crate) async fn shutdown() {
     #[cfg(unix)]
     {
         use tokio::signal::unix::{SignalKind, signal};

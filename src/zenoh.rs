@@ -1,0 +1,98 @@
+//! The Zenoh transport (feature `zenoh`): the same plans, robots and topics as the ROS 2
+//! backend ([`crate::ros2`]) over Zenoh instead of DDS, laid out as ROS 2's `rmw_zenoh_cpp`
+//! lays them out, so fleets grow past one DDS domain: discovery goes through routers, not
+//! N×N between every pair of participants (`docs/zenoh.md`).
+//!
+//! - [`keys`]: key expressions and liveliness tokens in rmw_zenoh's format.
+//! - [`wire`]: CDR payloads, attachments, ROS 2 type hashes.
+//! - [`action`]: the request and response messages of the ExecPlace action's services.
+//! - [`presence`]: who is there, from liveliness tokens (a token gone for `lost_after` →
+//!   lost).
+//! - [`supervisor`]: the supervisor's side of `plan-runner run --zenoh`.
+//! - [`remote_place`]: the `ros2` action over Zenoh (ExecPlace as three queryables).
+//! - [`robot`]: robots (`plan-runner robot --zenoh`, `plan-runner fleet`), any number per
+//!   session.
+//!
+//! Every session here is a Zenoh *client* of a router (`plan-runner router`, or `zenohd`):
+//! no multicast scouting, nothing listens but the router.
+
+pub mod action;
+pub mod keys;
+pub mod presence;
+pub mod remote_place;
+pub mod robot;
+pub mod supervisor;
+pub mod wire;
+
+use std::time::Duration;
+
+pub use supervisor::ZenohBackend;
+pub use ::zenoh::Session;
+
+/// What went wrong in the Zenoh transport.
+#[derive(Debug, thiserror::Error)]
+pub enum ZenohError {
+    /// Zenoh refused a configuration or a declaration.
+    #[error("zenoh: {0}")]
+    Zenoh(String),
+    /// Robots (or subscribers) did not show up in time.
+    #[error("{0}")]
+    Startup(String),
+}
+
+impl ZenohError {
+    /// A Zenoh error (its errors are boxed `dyn Error`).
+    pub fn zenoh(e: impl std::fmt::Display) -> ZenohError {
+        ZenohError::Zenoh(e.to_string())
+    }
+}
+
+/// How the processes of a fleet meet over Zenoh.
+#[derive(Clone, Debug)]
+pub struct ZenohConfig {
+    /// The router every session connects to (`tcp/127.0.0.1:7447`).
+    pub endpoint: String,
+    /// The ROS domain id: the first chunk of every key expression.
+    pub domain: u16,
+    /// A robot (or the supervisor) whose liveliness token is gone this long is lost.
+    pub lost_after: Duration,
+    /// How long the supervisor waits for its robots.
+    pub startup: Duration,
+}
+
+/// The session settings shared by clients and routers: no multicast scouting (sessions find
+/// each other through the router they are given), the endpoints to connect to.
+fn base_config(mode: &str, connect: &[String]) -> Result<::zenoh::Config, ZenohError> {
+    let mut c = ::zenoh::Config::default();
+    c.insert_json5("mode", &json5(&mode))
+        .map_err(ZenohError::zenoh)?;
+    c.insert_json5("scouting/multicast/enabled", "false")
+        .map_err(ZenohError::zenoh)?;
+    c.insert_json5("connect/endpoints", &json5(&connect))
+        .map_err(ZenohError::zenoh)?;
+    Ok(c)
+}
+
+/// A value as configuration text (JSON is JSON5).
+fn json5<T: serde::Serialize + ?Sized>(v: &T) -> String {
+    serde_json::to_string(v).unwrap_or_default()
+}
+
+/// Opens a client session to the router at `endpoint` (retrying the connection until it is
+/// there, so robots may start before their router).
+pub async fn client(endpoint: &str) -> Result<Session, ZenohError> {
+    let mut c = base_config("client", &[endpoint.to_string()])?;
+    // Keep trying to reach the router (a client that loses it reconnects by itself).
+    c.insert_json5("connect/timeout_ms", "-1")
+        .map_err(ZenohError::zenoh)?;
+    ::zenoh::open(c).await.map_err(ZenohError::zenoh)
+}
+
+/// Opens a router listening on `listen` and connected to the routers `connect` (another
+/// site's): the session routes the others' traffic for as long as it is kept.
+pub async fn router(listen: &[String], connect: &[String]) -> Result<Session, ZenohError> {
+    let mut c = base_config("router", connect)?;
+    c.insert_json5("listen/endpoints", &json5(listen))
+        .map_err(ZenohError::zenoh)?;
+    ::zenoh::open(c).await.map_err(ZenohError::zenoh)
+}

@@ -1,0 +1,305 @@
+//! The supervisor's side of a `ros2` place over Zenoh: an [`Action`] that sends an ExecPlace
+//! goal to `/<robot>/<server>` through the action's three queryables and turns the result
+//! into an [`Outcome`], as the DDS [`crate::ros2::remote_place`] does:
+//!
+//! - a result `transition` → [`Outcome::Fire`], empty → [`Outcome::Decide`], a goal rejected,
+//!   aborted or cancelled by the robot → [`Outcome::Failed`];
+//! - the run stopped, or the action dropped (the place's timeout) → the goal is cancelled on
+//!   the robot;
+//! - the robot's token gone for `lost_after` ([`Liveness::Lost`]) → `Failed("robot … lost")`.
+//!
+//! A call is a Zenoh query whose attachment carries the client's GID and a sequence
+//! number, as rmw_zenoh's service clients send it; `get_result` is a query the robot answers
+//! when the goal ends.
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use tokio::sync::watch;
+use zenoh::Session;
+
+use super::action::{
+    CancelGoalRequest, GetResultRequest, GetResultResponse, GoalId, GoalInfo, STATUS_SUCCEEDED,
+    SendGoalRequest, SendGoalResponse,
+};
+use super::keys::{self, ActionService};
+use super::presence::Liveness;
+use super::wire::{self, Attachment};
+use crate::net::PlaceId;
+use crate::ros2::msgs::{ExecPlaceGoal, Time};
+use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
+
+/// How long a goal or cancel request may wait for its answer.
+const CALL_WAIT: Duration = Duration::from_secs(10);
+/// How long a result may take: a goal runs as long as the robot's action does (the place's
+/// own timeout, applied by the runtime, bounds it when the plan has one).
+const RESULT_WAIT: Duration = Duration::from_secs(7 * 24 * 3600);
+
+/// A service client's identity: its GID and the sequence number of its next request. The
+/// GID is derived from the client's name and the process (no random draw): unique enough
+/// to pair replies, the same for the same run.
+#[derive(Debug)]
+pub struct ClientId {
+    gid: [u8; 16],
+    seq: AtomicI64,
+}
+
+impl ClientId {
+    /// The client named `name` (`/<robot>/<server>`) of this process.
+    pub fn new(name: &str) -> ClientId {
+        let h = crate::ros2::robot::id_hash(name);
+        let mut gid = [0; 16];
+        gid[..8].copy_from_slice(&h.to_le_bytes());
+        gid[8..12].copy_from_slice(&std::process::id().to_le_bytes());
+        ClientId {
+            gid,
+            seq: AtomicI64::new(1),
+        }
+    }
+
+    fn next(&self) -> Attachment {
+        Attachment::now(self.seq.fetch_add(1, Ordering::Relaxed), self.gid)
+    }
+
+    /// A fresh goal id: the GID's first 12 bytes and a counter.
+    fn goal_id(&self) -> GoalId {
+        let mut id = self.gid;
+        let n = self.seq.fetch_add(1, Ordering::Relaxed) as u32;
+        id[12..].copy_from_slice(&n.to_le_bytes());
+        id
+    }
+}
+
+/// Calls service `key` with `req`; the first reply, decoded.
+pub async fn call<Req: Serialize, Resp: DeserializeOwned>(
+    session: &Session,
+    client: &ClientId,
+    key: &str,
+    req: &Req,
+    wait: Duration,
+) -> Result<Resp, String> {
+    let replies = session
+        .get(key)
+        .payload(wire::encode(req))
+        .attachment(client.next().to_bytes())
+        .timeout(wait)
+        .await
+        .map_err(|e| e.to_string())?;
+    let reply = replies
+        .recv_async()
+        .await
+        .map_err(|_| "no reply (is the robot's server up?)".to_string())?;
+    match reply.result() {
+        Ok(sample) => wire::decode(&sample.payload().to_bytes()),
+        Err(e) => Err(format!(
+            "the server answered an error: {}",
+            String::from_utf8_lossy(&e.payload().to_bytes())
+        )),
+    }
+}
+
+/// One robot's ExecPlace server as the supervisor reaches it.
+#[derive(Debug)]
+pub struct RobotLink {
+    /// The robot.
+    pub robot: String,
+    session: Session,
+    client: ClientId,
+    keys: [String; 3],
+    liveness: watch::Receiver<Liveness>,
+}
+
+impl RobotLink {
+    /// A link to `/<robot>/<server>` in `domain`, failing goals when `liveness` turns lost.
+    pub fn new(
+        session: Session,
+        domain: u16,
+        robot: String,
+        server: &str,
+        liveness: watch::Receiver<Liveness>,
+    ) -> RobotLink {
+        let key = |s| keys::exec_place(domain, &robot, server, s);
+        let client = ClientId::new(&format!("/{robot}/{server}"));
+        RobotLink {
+            keys: [
+                key(ActionService::SendGoal),
+                key(ActionService::GetResult),
+                key(ActionService::CancelGoal),
+            ],
+            robot,
+            session,
+            client,
+            liveness,
+        }
+    }
+
+    async fn send_goal(&self, goal: ExecPlaceGoal) -> Result<(GoalId, bool), String> {
+        let goal_id = self.client.goal_id();
+        let req = SendGoalRequest { goal_id, goal };
+        let r: SendGoalResponse =
+            call(&self.session, &self.client, &self.keys[0], &req, CALL_WAIT).await?;
+        Ok((goal_id, r.accepted))
+    }
+
+    async fn result(&self, goal_id: GoalId) -> Result<GetResultResponse, String> {
+        let req = GetResultRequest { goal_id };
+        call(&self.session, &self.client, &self.keys[1], &req, RESULT_WAIT).await
+    }
+
+    async fn cancel(&self, goal_id: GoalId) {
+        let req = CancelGoalRequest {
+            goal_info: GoalInfo {
+                goal_id,
+                stamp: Time::default(),
+            },
+        };
+        let r: Result<super::action::CancelGoalResponse, String> =
+            call(&self.session, &self.client, &self.keys[2], &req, CALL_WAIT).await;
+        if let Err(e) = r {
+            tracing::warn!("cancelling a goal of robot `{}`: {e}", self.robot);
+        }
+    }
+}
+
+/// The [`Action`] of every `ros2` place of a plan, over Zenoh.
+#[derive(Debug, Clone)]
+pub struct ZenohPlaces {
+    servers: Arc<HashMap<PlaceId, String>>,
+    links: Arc<HashMap<(String, String), Arc<RobotLink>>>,
+}
+
+impl ZenohPlaces {
+    /// The action for places `servers` (place → server name) over `links` (server, link).
+    pub fn new(servers: HashMap<PlaceId, String>, links: Vec<(String, Arc<RobotLink>)>) -> Self {
+        ZenohPlaces {
+            servers: Arc::new(servers),
+            links: Arc::new(
+                links
+                    .into_iter()
+                    .map(|(server, l)| ((l.robot.clone(), server), l))
+                    .collect(),
+            ),
+        }
+    }
+}
+
+impl Action for ZenohPlaces {
+    fn run(&self, ctx: ActionContext) -> ActionFuture {
+        let Some(server) = self.servers.get(&ctx.place) else {
+            let m = format!("place `{}` is not a ros2 place", ctx.place_name());
+            return Box::pin(async move { Outcome::Failed(m) });
+        };
+        let Some(robot) = ctx.robot.clone() else {
+            let m = format!(
+                "agent {} in ros2 place `{}` has no robot (give the plan `robots = [...]`)",
+                ctx.agent.0,
+                ctx.place_name()
+            );
+            return Box::pin(async move { Outcome::Failed(m) });
+        };
+        let Some(link) = self.links.get(&(robot.to_string(), server.clone())) else {
+            let m = format!("robot `{robot}` has no link to server `{server}`");
+            return Box::pin(async move { Outcome::Failed(m) });
+        };
+        Box::pin(exec(Arc::clone(link), ctx))
+    }
+}
+
+/// Cancels the goal on the robot if the action is dropped before the goal ended.
+struct GoalGuard {
+    link: Arc<RobotLink>,
+    goal: Mutex<Option<GoalId>>,
+}
+
+impl GoalGuard {
+    fn set(&self, g: Option<GoalId>) {
+        if let Ok(mut s) = self.goal.lock() {
+            *s = g;
+        }
+    }
+    fn take(&self) -> Option<GoalId> {
+        self.goal.lock().ok().and_then(|mut s| s.take())
+    }
+}
+
+impl Drop for GoalGuard {
+    fn drop(&mut self) {
+        if let Some(id) = self.take() {
+            let link = Arc::clone(&self.link);
+            if let Ok(rt) = tokio::runtime::Handle::try_current() {
+                rt.spawn(async move { link.cancel(id).await });
+            }
+        }
+    }
+}
+
+enum Ended {
+    Result(Result<GetResultResponse, String>),
+    Lost,
+    Cancel,
+}
+
+async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
+    let robot = link.robot.clone();
+    let lost_msg = || format!("robot `{robot}` lost (its liveliness token is gone)");
+    let mut live = link.liveness.clone();
+    if *live.borrow() == Liveness::Lost {
+        return Outcome::Failed(lost_msg());
+    }
+    let guard = GoalGuard {
+        link: Arc::clone(&link),
+        goal: Mutex::new(None),
+    };
+    let goal = ExecPlaceGoal {
+        place: ctx.place_name().to_string(),
+        agent: ctx.agent.0.to_string(),
+    };
+    let work = async {
+        let (id, accepted) = link
+            .send_goal(goal)
+            .await
+            .map_err(|e| format!("sending the goal to robot `{robot}`: {e}"))?;
+        if !accepted {
+            return Err(format!("robot `{robot}` rejected the goal"));
+        }
+        guard.set(Some(id));
+        link.result(id)
+            .await
+            .map_err(|e| format!("result from robot `{robot}`: {e}"))
+    };
+    let ended = tokio::select! {
+        r = work => Ended::Result(r),
+        _ = live.wait_for(|s| *s == Liveness::Lost) => Ended::Lost,
+        _ = ctx.cancel.cancelled() => Ended::Cancel,
+    };
+    match ended {
+        Ended::Result(r) => {
+            guard.set(None);
+            match r {
+                Ok(r) if r.status == STATUS_SUCCEEDED && r.result.transition.is_empty() => {
+                    Outcome::Decide
+                }
+                Ok(r) if r.status == STATUS_SUCCEEDED => ctx.fire(&r.result.transition),
+                Ok(r) => Outcome::Failed(format!(
+                    "robot `{robot}` ended the goal with status {}: {}",
+                    r.status, r.result.outcome
+                )),
+                Err(e) => Outcome::Failed(e),
+            }
+        }
+        Ended::Lost => {
+            guard.set(None);
+            Outcome::Failed(lost_msg())
+        }
+        Ended::Cancel => {
+            if let Some(id) = guard.take() {
+                link.cancel(id).await;
+            }
+            Outcome::Cancelled
+        }
+    }
+}

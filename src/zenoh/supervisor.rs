@@ -1,0 +1,296 @@
+//! [`ZenohBackend`]: the supervisor's side of `plan-runner run --zenoh`, the Zenoh twin of
+//! [`crate::ros2::Ros2Backend`].
+//!
+//! ```text
+//! connect   the supervisor's node token (robots leave when it is gone), the robots'
+//!           presence from their tokens, publishers of /gspn/firings, /gspn/marking,
+//!           /gspn/run, /gspn/drift; waits (≤ startup) for every robot's token and, when
+//!           asked, for a firings subscriber
+//! attach    registers the `ros2` action (ZenohPlaces), says the run is `running`
+//! publish   a task that publishes every firing and the marking from the run's events
+//! finish    waits for the publisher, says the run is `over` (robots leave), lingers so
+//!           the last samples leave the process
+//! ```
+//!
+//! Publications block rather than drop when the network is congested: a firing is never
+//! lost between the supervisor and the router.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicI64, Ordering};
+use std::time::Duration;
+
+use serde::Serialize;
+use tokio::task::JoinHandle;
+use zenoh::Session;
+use zenoh::liveliness::LivelinessToken;
+use zenoh::pubsub::Publisher;
+use zenoh::qos::CongestionControl;
+
+use super::keys::{self, Topic};
+use super::presence::Presence;
+use super::remote_place::{RobotLink, ZenohPlaces};
+use super::wire::{self, Attachment};
+use super::{ZenohConfig, ZenohError};
+use crate::net::Net;
+use crate::ros2::firings::{Published, drift_message};
+use crate::ros2::msgs::{Firing, Marking, RUN_OVER, RUN_RUNNING, RunState, Time};
+use crate::ros2::settings::{ROS2_ACTION, Ros2Settings};
+use crate::runtime::{EventKind, Events, Received, RuntimeBuilder};
+
+/// A publisher and its rmw_zenoh attachment (GID, sequence numbers).
+struct TopicPublisher {
+    publisher: Publisher<'static>,
+    gid: [u8; 16],
+    seq: AtomicI64,
+}
+
+impl TopicPublisher {
+    async fn new(session: &Session, domain: u16, topic: Topic) -> Result<Self, ZenohError> {
+        let publisher = session
+            .declare_publisher(topic.key(domain))
+            .congestion_control(CongestionControl::Block)
+            .await
+            .map_err(ZenohError::zenoh)?;
+        let mut gid = [0; 16];
+        gid[..8].copy_from_slice(&crate::ros2::robot::id_hash(topic.name()).to_le_bytes());
+        gid[8..12].copy_from_slice(&std::process::id().to_le_bytes());
+        Ok(TopicPublisher {
+            publisher,
+            gid,
+            seq: AtomicI64::new(1),
+        })
+    }
+
+    async fn put<M: Serialize>(&self, m: &M) -> bool {
+        let att = Attachment::now(self.seq.fetch_add(1, Ordering::Relaxed), self.gid);
+        self.publisher
+            .put(wire::encode(m))
+            .attachment(att.to_bytes())
+            .await
+            .is_ok()
+    }
+}
+
+/// The four topics of a run.
+struct RunTopics {
+    firings: TopicPublisher,
+    marking: TopicPublisher,
+    run: TopicPublisher,
+    drift: TopicPublisher,
+    net: Arc<Net>,
+}
+
+impl RunTopics {
+    fn marking_msg(&self, seq: u64, tokens: &[u32]) -> Marking {
+        Marking {
+            seq,
+            places: self.net.places().iter().map(|p| p.name.clone()).collect(),
+            tokens: tokens.to_vec(),
+        }
+    }
+
+    /// Publishes the initial marking, then every firing of `events` until the run is over
+    /// (the same messages as the DDS publisher).
+    async fn run(&self, mut events: Events) -> Published {
+        let mut out = Published::default();
+        let initial = self.net.initial_marking();
+        if !self.marking.put(&self.marking_msg(0, &initial)).await {
+            out.errors += 1;
+        }
+        while let Some(r) = events.recv().await {
+            let e = match r {
+                Received::Event(e) => e,
+                Received::Lagged(n) => {
+                    tracing::error!("firing publisher fell behind: {n} events lost");
+                    out.lagged += n;
+                    continue;
+                }
+            };
+            if let EventKind::Drift(d) = &e.kind {
+                if !self.drift.put(&drift_message(&self.net, e.time, d)).await {
+                    out.errors += 1;
+                }
+                continue;
+            }
+            let EventKind::Fired {
+                transition,
+                marking,
+                robots,
+                ..
+            } = e.kind
+            else {
+                continue;
+            };
+            out.firings += 1;
+            let msg = Firing {
+                seq: out.firings,
+                transition: self.net.transition(transition).name.clone(),
+                marking: marking.to_vec(),
+                robots: robots.iter().map(|r| r.to_string()).collect(),
+                stamp: Time::now(),
+            };
+            if !self.firings.put(&msg).await {
+                out.errors += 1;
+            }
+            if !self.marking.put(&self.marking_msg(out.firings, &marking)).await {
+                out.errors += 1;
+            }
+        }
+        out
+    }
+}
+
+/// The supervisor's Zenoh side: its session, links to the robots and the publishers.
+pub struct ZenohBackend {
+    session: Session,
+    _token: LivelinessToken,
+    topics: Arc<RunTopics>,
+    task: Option<JoinHandle<Published>>,
+    places: ZenohPlaces,
+    presence: Presence,
+}
+
+impl std::fmt::Debug for ZenohBackend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ZenohBackend")
+            .field("places", &self.places)
+            .finish()
+    }
+}
+
+impl ZenohBackend {
+    /// Joins through `session` and links to every robot of `robots` for the `ros2` places
+    /// of `settings`; waits (at most `cfg.startup`) for every robot's token and, when
+    /// `subscribers` > 0, for a subscriber of `/gspn/firings` (Zenoh tells whether one
+    /// matches, not how many).
+    pub async fn connect(
+        session: Session,
+        net: &Net,
+        settings: &Ros2Settings,
+        robots: &[String],
+        cfg: &ZenohConfig,
+        subscribers: usize,
+    ) -> Result<ZenohBackend, ZenohError> {
+        let d = cfg.domain;
+        let token = session
+            .liveliness()
+            .declare_token(keys::node_token(
+                d,
+                &session.zid().to_string(),
+                0,
+                keys::SUPERVISOR_NS,
+                keys::SUPERVISOR_NODE,
+            ))
+            .await
+            .map_err(ZenohError::zenoh)?;
+        let presence = Presence::robots(&session, d, robots, cfg.lost_after).await?;
+        let topics = RunTopics {
+            firings: TopicPublisher::new(&session, d, Topic::Firings).await?,
+            marking: TopicPublisher::new(&session, d, Topic::Marking).await?,
+            run: TopicPublisher::new(&session, d, Topic::Run).await?,
+            drift: TopicPublisher::new(&session, d, Topic::Drift).await?,
+            net: Arc::new(net.clone()),
+        };
+        let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
+        servers.sort_unstable();
+        servers.dedup();
+        let mut links = Vec::new();
+        for robot in robots {
+            let live = presence
+                .liveness(robot)
+                .ok_or_else(|| ZenohError::Startup(format!("robot `{robot}` is not watched")))?;
+            for &server in &servers {
+                let link = RobotLink::new(session.clone(), d, robot.clone(), server, live.clone());
+                links.push((server.to_string(), Arc::new(link)));
+            }
+        }
+        let startup = cfg.startup;
+        presence.all_alive(startup).await.map_err(|missing| {
+            let shown: Vec<&str> = missing.iter().take(10).map(String::as_str).collect();
+            ZenohError::Startup(format!(
+                "no liveliness token from {} robot(s) ({}{}) within {startup:?} via {} (domain {d}): are `plan-runner robot --zenoh` or `fleet` processes running?",
+                missing.len(),
+                shown.join(", "),
+                if missing.len() > shown.len() { ", …" } else { "" },
+                cfg.endpoint
+            ))
+        })?;
+        if subscribers > 0 {
+            let matched = async {
+                loop {
+                    if let Ok(m) = topics.firings.publisher.matching_status().await
+                        && m.matching()
+                    {
+                        break;
+                    }
+                    tokio::time::sleep(Duration::from_millis(20)).await;
+                }
+            };
+            tokio::time::timeout(startup, matched).await.map_err(|_| {
+                ZenohError::Startup(format!(
+                    "no subscriber of /gspn/firings within {startup:?}"
+                ))
+            })?;
+        }
+        let servers: HashMap<_, _> = settings.servers.iter().cloned().collect();
+        Ok(ZenohBackend {
+            session,
+            _token: token,
+            topics: Arc::new(topics),
+            task: None,
+            places: ZenohPlaces::new(servers, links),
+            presence,
+        })
+    }
+
+    /// Registers the `ros2` action on `b`.
+    pub fn attach(&self, b: RuntimeBuilder) -> RuntimeBuilder {
+        b.action(ROS2_ACTION, self.places.clone())
+    }
+
+    /// Says the run is `running` and starts publishing its firings and marking from
+    /// `events`.
+    pub async fn publish(&mut self, events: Events) {
+        let running = RunState {
+            state: RUN_RUNNING.into(),
+            stopped: String::new(),
+            firings: 0,
+        };
+        self.topics.run.put(&running).await;
+        if self.task.is_none() {
+            let t = Arc::clone(&self.topics);
+            self.task = Some(tokio::spawn(async move { t.run(events).await }));
+        }
+    }
+
+    /// The robots' presence.
+    pub fn presence(&self) -> &Presence {
+        &self.presence
+    }
+
+    /// The session.
+    pub fn session(&self) -> &Session {
+        &self.session
+    }
+
+    /// Waits for the publisher to have sent every firing (the run must be over), says the
+    /// run is over (`stopped`: why) so robots leave, then lingers `linger` so the last
+    /// samples leave the process before it exits.
+    pub async fn finish(mut self, linger: Duration, stopped: &str) -> Published {
+        let mut published = match self.task.take() {
+            Some(t) => t.await.unwrap_or_default(),
+            None => Published::default(),
+        };
+        let over = RunState {
+            state: RUN_OVER.into(),
+            stopped: stopped.to_string(),
+            firings: published.firings,
+        };
+        if !self.topics.run.put(&over).await {
+            published.errors += 1;
+        }
+        tokio::time::sleep(linger).await;
+        published
+    }
+}

@@ -1,0 +1,40 @@
+"""A subscriber of the run's firings on the PyPI `eclipse-zenoh` package (not our code):
+connects to the router given as argv[1] as a client, subscribes to `*/gspn/firings/**`
+(any domain, any type hash), and prints `seq transition` for each firing, decoding the
+CDR payload by hand (header 00 01 00 00, then uint64 seq, then the transition string).
+Prints `ready` once subscribed; exits after argv[2] firings or argv[3] seconds."""
+
+import json
+import struct
+import sys
+import time
+
+import zenoh
+
+
+def main() -> None:
+    endpoint, want, limit = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
+    conf = zenoh.Config()
+    conf.insert_json5("mode", '"client"')
+    conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    conf.insert_json5("scouting/multicast/enabled", "false")
+    with zenoh.open(conf) as session:
+        sub = session.declare_subscriber("*/gspn/firings/**")
+        print("ready", flush=True)
+        got, end = 0, time.monotonic() + limit
+        while got < want and time.monotonic() < end:
+            sample = sub.try_recv()
+            if sample is None:
+                time.sleep(0.005)
+                continue
+            b = sample.payload.to_bytes()
+            assert b[:4] == b"\x00\x01\x00\x00", b[:4]
+            (seq,) = struct.unpack_from("<Q", b, 4)
+            (n,) = struct.unpack_from("<I", b, 12)
+            name = b[16 : 16 + n - 1].decode()
+            print(seq, name, str(sample.key_expr), flush=True)
+            got += 1
+
+
+if __name__ == "__main__":
+    main()
