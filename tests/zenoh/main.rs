@@ -100,6 +100,20 @@ async fn finish(p: Proc, limit: Duration) -> (Option<i32>, String) {
     }
 }
 
+/// Asks a process to end (SIGTERM), waits (at most `limit`); its log.
+async fn terminate(mut p: Proc, limit: Duration) -> String {
+    if let Some(pid) = p.child.id() {
+        // SAFETY: plain kill(2) on our own child's pid.
+        unsafe {
+            libc::kill(pid as libc::pid_t, libc::SIGTERM);
+        }
+    }
+    let _ = tokio::time::timeout(limit, p.child.wait()).await;
+    p.log()
+}
+
+mod netns;
+
 const PATROL: &str = "plans/temperature_patrol_ros2.toml";
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -44,7 +44,7 @@ pub(crate) struct BackendArgs {
     /// `--zenoh ENDPOINT`: the same over Zenoh (feature `zenoh`).
     #[cfg(feature = "zenoh")]
     #[command(flatten)]
-    zenoh: crate::zenoh::RunArgs,
+    zenoh: crate::zenoh::ZenohRunArgs,
 }
 
 /// Refuses flags the plan cannot honour, before anything starts.

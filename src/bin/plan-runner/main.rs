@@ -113,7 +113,8 @@ fn main() -> ExitCode {
 /// sends one in the Enhanced mapping; the server then uses the request's own identity, as
 /// it should): all three would flood stderr, so only their errors show.
 const DEFAULT_LOG: &str = "warn,gspn=info,rustdds::rtps::writer=error,\
-     ros2_client::distributions=error,ros2_client::service::wrappers=error";
+     ros2_client::distributions=error,ros2_client::service::wrappers=error,\
+     zenoh::api::handlers::fifo=off";
 
 /// Warnings and errors of the library and of its dependencies (RustDDS and ros2-client log
 /// through `log`, bridged) go to stderr; `RUST_LOG` overrides the default filter

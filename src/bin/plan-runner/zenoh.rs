@@ -26,14 +26,14 @@ pub(crate) const DEFAULT_ENDPOINT: &str = "tcp/127.0.0.1:7447";
 
 /// The Zenoh flag of `run`.
 #[derive(clap::Args, Debug, Clone, Default)]
-pub(crate) struct RunArgs {
+pub(crate) struct ZenohRunArgs {
     /// Reach the robots over Zenoh through the router at ENDPOINT (`tcp/127.0.0.1:7447`)
     /// instead of DDS [default: DDS, unless the plan says `[ros2] transport = "zenoh"`].
     #[arg(long, value_name = "ENDPOINT")]
     zenoh: Option<String>,
 }
 
-impl RunArgs {
+impl ZenohRunArgs {
     /// `--zenoh`, when given.
     pub(crate) fn zenoh(&self) -> Option<&str> {
         self.zenoh.as_deref()

@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Fleet figures over Zenoh (docs/zenoh.md): a router, N robots in ceil(N/100) `fleet`
+# processes, the supervisor running the patrol (N robots, a third per location) to F firings.
+# Prints: robots, fleet processes, robots ready after (s), firings/s after ready, supervisor
+# CPU seconds and peak RSS (MB), router CPU seconds.
+#
+#   benches/zenoh_fleet.sh BIN N [F]     # BIN: a plan-runner built with --features zenoh
+set -euo pipefail
+BIN=$1 N=$2 F=${3:-1000}
+cd "$(dirname "$0")/.."
+DIR=$(mktemp -d)
+trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$DIR"' EXIT
+PORT=$((20000 + RANDOM % 20000))
+E=tcp/127.0.0.1:$PORT
+python3 - "$N" "$DIR" "$E" <<'PY'
+import sys
+n, d, e = int(sys.argv[1]), sys.argv[2], sys.argv[3]
+xml = open("plans/nets/temperature_patrol.xml").read()
+one = "<initialMarking>\n      <value>Default,1</value>"
+parts = xml.split(one)
+counts = [n - 2 * (n // 3), n // 3, n // 3]
+out = parts[0] + "".join(one.replace("Default,1", f"Default,{c}") + p for c, p in zip(counts, parts[1:]))
+open(f"{d}/patrol.xml", "w").write(out)
+plan = open("plans/fleet-zenoh/patrol.toml").read()
+ids = ", ".join(f'"r{i:04}"' for i in range(1, n + 1))
+import re
+plan = re.sub(r"robots = \[[^\]]*\]", f"robots = [{ids}]", plan)
+plan = plan.replace('net = "patrol-210.xml"', 'net = "patrol.xml"').replace('tcp/127.0.0.1:7447', e)
+open(f"{d}/plan.toml", "w").write(plan)
+PY
+"$BIN" router --listen "$E" 2> "$DIR/router.log" &
+ROUTER=$!
+sleep 1
+P=$(( (N + 99) / 100 ))
+for k in $(seq 0 $((P - 1))); do
+    a=$((k * 100)); b=$(( (k + 1) * 100 < N ? (k + 1) * 100 : N ))
+    "$BIN" fleet --plan "$DIR/plan.toml" --robots "$a..$b" 2> "$DIR/fleet$k.log" &
+done
+"$BIN" run "$DIR/plan.toml" --max-firings "$F" --json > "$DIR/out.json" 2> "$DIR/sup.log" &
+SUP=$!
+HZ=$(getconf CLK_TCK)
+PEAK=0
+T_READY=""
+while kill -0 $SUP 2>/dev/null; do
+    if [ -z "$T_READY" ] && grep -q "robots ready" "$DIR/sup.log"; then T_READY=$(date +%s.%N); fi
+    if [ -r /proc/$SUP/status ]; then
+        R=$(awk '/VmHWM/ {print $2}' /proc/$SUP/status 2>/dev/null || echo 0)
+        T=$(awk '{print $14 + $15}' /proc/$SUP/stat 2>/dev/null || echo 0)
+        [ -n "$R" ] && PEAK=$R
+        [ -n "$T" ] && CPU=$T
+    fi
+    sleep 0.2
+done
+T_END=$(date +%s.%N)
+wait $SUP || { echo "supervisor failed:"; tail -20 "$DIR/sup.log"; exit 1; }
+RCPU=$(awk '{print $14 + $15}' /proc/$ROUTER/stat)
+READY=$(grep -o 'robots ready after [0-9.]*' "$DIR/sup.log" | awk '{print $4}')
+RATE=$(python3 -c "import json;s=json.load(open('$DIR/out.json'));print(round(s['firings']/($T_END-$T_READY),1))")
+echo "robots=$N fleets=$P ready_after_s=$READY firings=$F firings_per_s=$RATE sup_cpu_s=$(echo "scale=2; ${CPU:-0}/$HZ" | bc) sup_peak_rss_mb=$((PEAK / 1024)) router_cpu_s=$(echo "scale=2; $RCPU/$HZ" | bc)"
+grep -h "published\|fleet:" "$DIR/sup.log" "$DIR"/fleet*.log | head -3
