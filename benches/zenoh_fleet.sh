@@ -9,7 +9,7 @@ set -euo pipefail
 BIN=$1 N=$2 F=${3:-1000}
 cd "$(dirname "$0")/.."
 DIR=$(mktemp -d)
-trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$DIR"' EXIT
+trap 'kill $(jobs -p) 2>/dev/null || true; [ -n "${KEEP:-}" ] || rm -rf "$DIR"' EXIT
 PORT=$((20000 + RANDOM % 20000))
 E=tcp/127.0.0.1:$PORT
 python3 - "$N" "$DIR" "$E" <<'PY'

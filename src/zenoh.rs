@@ -26,8 +26,8 @@ pub mod wire;
 
 use std::time::Duration;
 
-pub use supervisor::ZenohBackend;
 pub use ::zenoh::Session;
+pub use supervisor::ZenohBackend;
 
 /// What went wrong in the Zenoh transport.
 #[derive(Debug, thiserror::Error)]
@@ -89,9 +89,21 @@ pub async fn client(endpoint: &str) -> Result<Session, ZenohError> {
 }
 
 /// Opens a router listening on `listen` and connected to the routers `connect` (another
-/// site's): the session routes the others' traffic for as long as it is kept.
-pub async fn router(listen: &[String], connect: &[String]) -> Result<Session, ZenohError> {
+/// site's): the session routes the others' traffic for as long as it is kept. `lease`:
+/// how long a peer may hear nothing from it before dropping the link (Zenoh's default
+/// 10 s); a router whose link to another site is cut withdraws that site's liveliness
+/// tokens after the other router's lease.
+pub async fn router(
+    listen: &[String],
+    connect: &[String],
+    lease: Option<Duration>,
+) -> Result<Session, ZenohError> {
     let mut c = base_config("router", connect)?;
+    if let Some(l) = lease {
+        let ms = u64::try_from(l.as_millis()).unwrap_or(u64::MAX).max(1);
+        c.insert_json5("transport/link/tx/lease", &ms.to_string())
+            .map_err(ZenohError::zenoh)?;
+    }
     c.insert_json5("listen/endpoints", &json5(listen))
         .map_err(ZenohError::zenoh)?;
     ::zenoh::open(c).await.map_err(ZenohError::zenoh)

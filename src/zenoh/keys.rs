@@ -100,9 +100,17 @@ pub fn node_tokens(domain: u16) -> String {
 pub fn parse_node_token(key: &str) -> Option<(String, String)> {
     let parts: Vec<&str> = key.split('/').collect();
     match parts.as_slice() {
-        [ADMIN_SPACE, _domain, _zid, _nid, _eid, "NN", _enclave, ns, name] => {
-            Some((unmangle(ns), name.to_string()))
-        }
+        [
+            ADMIN_SPACE,
+            _domain,
+            _zid,
+            _nid,
+            _eid,
+            "NN",
+            _enclave,
+            ns,
+            name,
+        ] => Some((unmangle(ns), name.to_string())),
         _ => None,
     }
 }
@@ -213,7 +221,10 @@ mod tests {
     fn keys_follow_rmw_zenoh() {
         let k = Topic::Firings.key(0);
         assert!(k.starts_with("0/gspn/firings/gspn_msgs::msg::dds_::Firing_/RIHS01_"));
-        assert_eq!(k.len(), "0/gspn/firings/gspn_msgs::msg::dds_::Firing_/RIHS01_".len() + 64);
+        assert_eq!(
+            k.len(),
+            "0/gspn/firings/gspn_msgs::msg::dds_::Firing_/RIHS01_".len() + 64
+        );
         assert_eq!(
             Topic::Drift.key(3),
             "3/gspn/drift/std_msgs::msg::dds_::String_/RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"

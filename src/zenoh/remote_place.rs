@@ -147,7 +147,14 @@ impl RobotLink {
 
     async fn result(&self, goal_id: GoalId) -> Result<GetResultResponse, String> {
         let req = GetResultRequest { goal_id };
-        call(&self.session, &self.client, &self.keys[1], &req, RESULT_WAIT).await
+        call(
+            &self.session,
+            &self.client,
+            &self.keys[1],
+            &req,
+            RESULT_WAIT,
+        )
+        .await
     }
 
     async fn cancel(&self, goal_id: GoalId) {

@@ -212,7 +212,10 @@ async fn leave(
 /// Replies `resp` to `query`, echoing its attachment's sequence number and GID.
 async fn reply<M: serde::Serialize>(query: &Query, resp: &M) {
     let mut r = query.reply(query.key_expr().clone(), wire::encode(resp));
-    if let Some(a) = query.attachment().and_then(|a| Attachment::parse(&a.to_bytes())) {
+    if let Some(a) = query
+        .attachment()
+        .and_then(|a| Attachment::parse(&a.to_bytes()))
+    {
         r = r.attachment(Attachment::now(a.seq, a.gid).to_bytes());
     }
     if let Err(e) = r.await {
@@ -272,9 +275,10 @@ async fn answer(robot: &Arc<Robot>, service: ActionService, query: Query) {
         ActionService::CancelGoal => match request::<CancelGoalRequest>(&query) {
             Ok(req) => {
                 let id = req.goal_info.goal_id;
-                let found = robot.goals.lock().ok().and_then(|mut g| {
-                    g.get_mut(&id).map(|g| g.cancel.take().map(|c| c.send(())))
-                });
+                let found =
+                    robot.goals.lock().ok().and_then(|mut g| {
+                        g.get_mut(&id).map(|g| g.cancel.take().map(|c| c.send(())))
+                    });
                 let resp = CancelGoalResponse {
                     return_code: if found.is_some() {
                         CANCEL_NONE

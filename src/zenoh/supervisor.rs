@@ -133,7 +133,11 @@ impl RunTopics {
             if !self.firings.put(&msg).await {
                 out.errors += 1;
             }
-            if !self.marking.put(&self.marking_msg(out.firings, &marking)).await {
+            if !self
+                .marking
+                .put(&self.marking_msg(out.firings, &marking))
+                .await
+            {
                 out.errors += 1;
             }
         }
@@ -228,9 +232,7 @@ impl ZenohBackend {
                 }
             };
             tokio::time::timeout(startup, matched).await.map_err(|_| {
-                ZenohError::Startup(format!(
-                    "no subscriber of /gspn/firings within {startup:?}"
-                ))
+                ZenohError::Startup(format!("no subscriber of /gspn/firings within {startup:?}"))
             })?;
         }
         let servers: HashMap<_, _> = settings.servers.iter().cloned().collect();

@@ -214,7 +214,9 @@ mod tests {
         // header, u64 7 (aligned at 0 of the body), then length 3 and "go\0".
         assert_eq!(
             b,
-            [0, 1, 0, 0, 7, 0, 0, 0, 0, 0, 0, 0, 3, 0, 0, 0, b'g', b'o', 0]
+            [
+                0, 1, 0, 0, 7, 0, 0, 0, 0, 0, 0, 0, 3, 0, 0, 0, b'g', b'o', 0
+            ]
         );
         assert_eq!(decode::<M>(&b).unwrap(), m);
         assert!(decode::<M>(&b[..3]).unwrap_err().contains("shorter"));

@@ -38,7 +38,11 @@ fn spawn(dir: &Path, name: &str, mut cmd: Command, args: &[String], stdout: bool
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .env_remove("RUST_LOG")
         .stdin(Stdio::null())
-        .stdout(if stdout { Stdio::piped() } else { Stdio::null() })
+        .stdout(if stdout {
+            Stdio::piped()
+        } else {
+            Stdio::null()
+        })
         .stderr(err)
         .kill_on_drop(true)
         .spawn()
@@ -70,7 +74,11 @@ fn endpoint() -> String {
 /// `plan-runner router --listen ENDPOINT`, once it listens.
 async fn router(dir: &Path, name: &str, endpoint: &str) -> Proc {
     let r = plan_runner(dir, name, &["router", "--listen", endpoint], false);
-    assert!(wait_for_log(&r, "listening on", Duration::from_secs(60)).await, "{}", r.log());
+    assert!(
+        wait_for_log(&r, "listening on", Duration::from_secs(60)).await,
+        "{}",
+        r.log()
+    );
     r
 }
 
@@ -135,7 +143,15 @@ async fn three_robots_run_the_patrol_through_a_router_and_leave() {
     let sup = plan_runner(
         dir.path(),
         "supervisor",
-        &["run", PATROL, "--json", "--zenoh", &e, "--max-firings", "40"],
+        &[
+            "run",
+            PATROL,
+            "--json",
+            "--zenoh",
+            &e,
+            "--max-firings",
+            "40",
+        ],
         true,
     );
     let log = sup.log.clone();
@@ -145,7 +161,10 @@ async fn three_robots_run_the_patrol_through_a_router_and_leave() {
     let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
     assert_eq!(summary["stopped"], "max_firings", "{out}");
     assert_eq!(summary["firings"], 40);
-    assert!(log.contains("zenoh: published 40 firings (0 events lost, 0 publish errors)"), "{log}");
+    assert!(
+        log.contains("zenoh: published 40 firings (0 events lost, 0 publish errors)"),
+        "{log}"
+    );
     for r in robots {
         let (name, rlog) = (r.name.clone(), r.log.clone());
         let (code, _) = finish(r, Duration::from_secs(30)).await;
@@ -175,8 +194,17 @@ async fn a_robot_whose_token_is_gone_fails_its_goal_and_the_plan_stops() {
             )
         })
         .collect();
-    let sup = plan_runner(dir.path(), "supervisor", &["run", PATROL, "--json", "--zenoh", &e], true);
-    assert!(wait_for_log(&sup, "robots ready", Duration::from_secs(60)).await, "{}", sup.log());
+    let sup = plan_runner(
+        dir.path(),
+        "supervisor",
+        &["run", PATROL, "--json", "--zenoh", &e],
+        true,
+    );
+    assert!(
+        wait_for_log(&sup, "robots ready", Duration::from_secs(60)).await,
+        "{}",
+        sup.log()
+    );
     tokio::time::sleep(Duration::from_millis(500)).await;
     robots[1].child.start_kill().unwrap();
     let log = sup.log.clone();
@@ -184,10 +212,16 @@ async fn a_robot_whose_token_is_gone_fails_its_goal_and_the_plan_stops() {
     let log = std::fs::read_to_string(log).unwrap();
     // on_failure = "stop": the run ends on the failed action (exit 1).
     assert_eq!(code, Some(1), "{out}\n{log}");
-    assert!(log.contains("zenoh: robot `r2` lost: no liveliness token for 1s"), "{log}");
+    assert!(
+        log.contains("zenoh: robot `r2` lost: no liveliness token for 1s"),
+        "{log}"
+    );
     let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
     assert_eq!(summary["stopped"], "failure", "{out}");
-    assert!(out.contains("robot `r2` lost (its liveliness token is gone)"), "{out}");
+    assert!(
+        out.contains("robot `r2` lost (its liveliness token is gone)"),
+        "{out}"
+    );
 }
 
 /// The venv `.ci/run` makes (`target/venv-ros2`, or `$GSPN_ROS2_VENV`), with `eclipse-zenoh`.
@@ -222,7 +256,9 @@ async fn a_python_subscriber_gets_500_firings_of_the_210_robot_fleet() {
         "listener",
         Command::new(python()),
         &[
-            repo("tests/zenoh/firings_listener.py").to_string_lossy().into_owned(),
+            repo("tests/zenoh/firings_listener.py")
+                .to_string_lossy()
+                .into_owned(),
             e.clone(),
             N.to_string(),
             "300".into(),
@@ -236,7 +272,12 @@ async fn a_python_subscriber_gets_500_firings_of_the_210_robot_fleet() {
         "{first:?}: {}",
         listener.log()
     );
-    let fleet = plan_runner(dir.path(), "fleet", &["fleet", "--plan", plan, "--zenoh", &e], false);
+    let fleet = plan_runner(
+        dir.path(),
+        "fleet",
+        &["fleet", "--plan", plan, "--zenoh", &e],
+        false,
+    );
     let sup = plan_runner(
         dir.path(),
         "supervisor",
@@ -267,7 +308,10 @@ async fn a_python_subscriber_gets_500_firings_of_the_210_robot_fleet() {
                 let mut w = l.split_whitespace();
                 seqs.push(w.next().unwrap().parse::<u64>().unwrap());
                 let key = w.nth(1).unwrap_or_default();
-                assert!(key.starts_with("0/gspn/firings/gspn_msgs::msg::dds_::Firing_/RIHS01_"), "{l}");
+                assert!(
+                    key.starts_with("0/gspn/firings/gspn_msgs::msg::dds_::Firing_/RIHS01_"),
+                    "{l}"
+                );
             }
             other => panic!(
                 "after {} firings: {other:?}\nsupervisor: {}\nlistener: {}",
@@ -278,7 +322,11 @@ async fn a_python_subscriber_gets_500_firings_of_the_210_robot_fleet() {
         }
     }
     let took = started.elapsed();
-    assert_eq!(seqs, (1..=N).collect::<Vec<_>>(), "no gap, no repeat, in order");
+    assert_eq!(
+        seqs,
+        (1..=N).collect::<Vec<_>>(),
+        "no gap, no repeat, in order"
+    );
     let log = sup.log.clone();
     let (code, out) = finish(sup, Duration::from_secs(60)).await;
     let log = std::fs::read_to_string(log).unwrap();

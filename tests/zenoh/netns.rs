@@ -37,7 +37,9 @@ impl Sites {
     fn new() -> Sites {
         let ns = [0, 1].map(|k| format!("gspnz{}-{k}", std::process::id()));
         for (k, n) in ns.iter().enumerate() {
-            let _ = std::process::Command::new("ip").args(["netns", "del", n]).output();
+            let _ = std::process::Command::new("ip")
+                .args(["netns", "del", n])
+                .output();
             ip(&["netns", "add", n]);
             ip(&["-n", n, "link", "set", "lo", "up"]);
             let _ = k;
@@ -47,7 +49,15 @@ impl Sites {
             "netns", &ns[1],
         ]);
         for (k, n) in ns.iter().enumerate() {
-            ip(&["-n", n, "addr", "add", &format!("10.79.0.{}/24", k + 1), "dev", "eth0"]);
+            ip(&[
+                "-n",
+                n,
+                "addr",
+                "add",
+                &format!("10.79.0.{}/24", k + 1),
+                "dev",
+                "eth0",
+            ]);
             ip(&["-n", n, "link", "set", "eth0", "up"]);
         }
         Sites { ns }
@@ -55,13 +65,25 @@ impl Sites {
 
     /// Site B's end of the link down or up.
     fn link(&self, up: bool) {
-        ip(&["-n", &self.ns[1], "link", "set", "eth0", if up { "up" } else { "down" }]);
+        ip(&[
+            "-n",
+            &self.ns[1],
+            "link",
+            "set",
+            "eth0",
+            if up { "up" } else { "down" },
+        ]);
     }
 
     fn spawn(&self, site: usize, dir: &Path, name: &str, args: &[&str]) -> Proc {
         let log = dir.join(format!("{name}.log"));
         let child = tokio::process::Command::new("ip")
-            .args(["netns", "exec", &self.ns[site], env!("CARGO_BIN_EXE_plan-runner")])
+            .args([
+                "netns",
+                "exec",
+                &self.ns[site],
+                env!("CARGO_BIN_EXE_plan-runner"),
+            ])
             .args(args)
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .env_remove("RUST_LOG")
@@ -82,7 +104,9 @@ impl Sites {
 impl Drop for Sites {
     fn drop(&mut self) {
         for n in &self.ns {
-            let _ = std::process::Command::new("ip").args(["netns", "del", n]).output();
+            let _ = std::process::Command::new("ip")
+                .args(["netns", "del", n])
+                .output();
         }
     }
 }
@@ -137,23 +161,42 @@ async fn a_site_cut_off_for_5_s_is_lost_and_comes_back_without_a_gap_in_the_firi
             "--listen",
             "tcp/10.79.0.1:7447",
             "--allow-remote",
+            "--lease",
+            "1",
         ],
     );
     let router_b = sites.spawn(
         1,
         dir.path(),
         "router-b",
-        &["router", "--listen", "tcp/127.0.0.1:7447", "--connect", "tcp/10.79.0.1:7447"],
+        &[
+            "router",
+            "--listen",
+            "tcp/127.0.0.1:7447",
+            "--connect",
+            "tcp/10.79.0.1:7447",
+            "--lease",
+            "1",
+        ],
     );
     for r in [&router_a, &router_b] {
-        assert!(wait_for_log(r, "listening on", Duration::from_secs(60)).await, "{}", r.log());
+        assert!(
+            wait_for_log(r, "listening on", Duration::from_secs(60)).await,
+            "{}",
+            r.log()
+        );
     }
     // --stay: a robot cut off from its supervisor keeps serving for when it is back.
     let robots: Vec<Proc> = ["r1", "r2", "r3", "r4"]
         .iter()
         .enumerate()
         .map(|(k, id)| {
-            sites.spawn(k / 2, dir.path(), id, &["robot", "--id", id, "--plan", plan, "--stay"])
+            sites.spawn(
+                k / 2,
+                dir.path(),
+                id,
+                &["robot", "--id", id, "--plan", plan, "--stay"],
+            )
         })
         .collect();
     let journal = dir.path().join("journal.jsonl");
@@ -161,7 +204,13 @@ async fn a_site_cut_off_for_5_s_is_lost_and_comes_back_without_a_gap_in_the_firi
         0,
         dir.path(),
         "supervisor",
-        &["run", plan, "--json", "--journal", journal.to_str().unwrap()],
+        &[
+            "run",
+            plan,
+            "--json",
+            "--journal",
+            journal.to_str().unwrap(),
+        ],
     );
     assert!(
         wait_for_log(&sup, "zenoh: robots ready", Duration::from_secs(120)).await,
@@ -174,7 +223,12 @@ async fn a_site_cut_off_for_5_s_is_lost_and_comes_back_without_a_gap_in_the_firi
     let down = Instant::now();
     for r in ["r3", "r4"] {
         assert!(
-            wait_for_log(&sup, &format!("zenoh: robot `{r}` lost"), Duration::from_secs(30)).await,
+            wait_for_log(
+                &sup,
+                &format!("zenoh: robot `{r}` lost"),
+                Duration::from_secs(30)
+            )
+            .await,
             "{}",
             sup.log()
         );
@@ -185,7 +239,12 @@ async fn a_site_cut_off_for_5_s_is_lost_and_comes_back_without_a_gap_in_the_firi
     let up = Instant::now();
     for r in ["r3", "r4"] {
         assert!(
-            wait_for_log(&sup, &format!("zenoh: robot `{r}` is back"), Duration::from_secs(60)).await,
+            wait_for_log(
+                &sup,
+                &format!("zenoh: robot `{r}` is back"),
+                Duration::from_secs(60)
+            )
+            .await,
             "{}\n{}",
             sup.log(),
             router_b.log()
@@ -198,7 +257,10 @@ async fn a_site_cut_off_for_5_s_is_lost_and_comes_back_without_a_gap_in_the_firi
     assert_eq!(code, Some(0), "{out}\n{log}");
     let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
     assert_eq!(summary["stopped"], "time_limit", "{summary}");
-    assert!(!log.contains("robot `r1` lost") && !log.contains("robot `r2` lost"), "{log}");
+    assert!(
+        !log.contains("robot `r1` lost") && !log.contains("robot `r2` lost"),
+        "{log}"
+    );
     // The site-A robots were never cut off: they got every firing, once.
     let fired = std::fs::read_to_string(&journal)
         .unwrap()
@@ -207,7 +269,12 @@ async fn a_site_cut_off_for_5_s_is_lost_and_comes_back_without_a_gap_in_the_firi
         .filter(|e| e["event"] == "fired")
         .count() as u64;
     assert_eq!(summary["firings"], fired);
-    assert!(log.contains(&format!("zenoh: published {fired} firings (0 events lost, 0 publish errors)")), "{log}");
+    assert!(
+        log.contains(&format!(
+            "zenoh: published {fired} firings (0 events lost, 0 publish errors)"
+        )),
+        "{log}"
+    );
     let mut received = Vec::new();
     for r in robots {
         let name = r.name.clone();

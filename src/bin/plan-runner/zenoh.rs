@@ -83,7 +83,8 @@ fn check_endpoint(e: &str, listen_remote: bool) -> anyhow::Result<()> {
     }
     if listen_remote {
         let host = host.trim_matches(['[', ']']);
-        let loopback = host == "localhost" || host.parse::<IpAddr>().is_ok_and(|ip| ip.is_loopback());
+        let loopback =
+            host == "localhost" || host.parse::<IpAddr>().is_ok_and(|ip| ip.is_loopback());
         if !loopback {
             return Err(BadInput(format!(
                 "zenoh endpoint `{e}`: listening off the loopback needs --allow-remote"
@@ -291,8 +292,14 @@ fn pick_robots(all: &[String], spec: Option<&str>) -> Result<Vec<String>, String
         return Ok(all.to_vec());
     };
     if let Some((a, b)) = spec.split_once("..") {
-        let a: usize = a.trim().parse().map_err(|_| format!("`{a}` is not a position"))?;
-        let b: usize = b.trim().parse().map_err(|_| format!("`{b}` is not a position"))?;
+        let a: usize = a
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{a}` is not a position"))?;
+        let b: usize = b
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{b}` is not a position"))?;
         if a >= b || b > all.len() {
             return Err(format!(
                 "{a}..{b} is not a range within the plan's {} robots",
@@ -327,8 +334,8 @@ pub(crate) fn fleet(args: FleetArgs) -> anyhow::Result<ExitCode> {
     if !(scale.is_finite() && scale >= 0.0) {
         return Err(BadInput(format!("--time-scale {scale}: must be ≥ 0")).into());
     }
-    let endpoint = endpoint(&plan, args.zenoh.as_deref())
-        .unwrap_or_else(|| DEFAULT_ENDPOINT.to_string());
+    let endpoint =
+        endpoint(&plan, args.zenoh.as_deref()).unwrap_or_else(|| DEFAULT_ENDPOINT.to_string());
     let opts = FleetOptions {
         ids,
         seed: args.seed.or(plan.seed).unwrap_or(0),
@@ -350,6 +357,11 @@ pub(crate) struct RouterArgs {
     /// Let --listen use an address off the loopback.
     #[arg(long)]
     allow_remote: bool,
+    /// Seconds another router or a client may hear nothing from this one before it drops
+    /// the link [default: Zenoh's, 10]; a cut between sites is noticed after the far
+    /// router's lease.
+    #[arg(long, value_name = "SECS")]
+    lease: Option<f64>,
 }
 
 /// `plan-runner router`: routes until Ctrl-C or SIGTERM.
@@ -365,13 +377,22 @@ pub(crate) fn router(args: RouterArgs) -> anyhow::Result<ExitCode> {
     for e in &args.connect {
         check_endpoint(e, false)?;
     }
+    let lease = match args.lease {
+        None => None,
+        Some(s) if s.is_finite() && (0.001..=3600.0).contains(&s) => {
+            Some(Duration::from_secs_f64(s))
+        }
+        Some(s) => {
+            return Err(BadInput(format!("--lease {s}: must be in 0.001..=3600 seconds")).into());
+        }
+    };
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
         .build()
         .context("starting tokio")?;
     rt.block_on(async {
-        let session = gspn::zenoh::router(&listen, &args.connect).await?;
+        let session = gspn::zenoh::router(&listen, &args.connect, lease).await?;
         eprintln!(
             "router {}: listening on {}{}",
             session.zid(),
@@ -398,7 +419,11 @@ mod tests {
         let all: Vec<String> = (0..5).map(|i| format!("r{i}")).collect();
         assert_eq!(pick_robots(&all, Some("1..3")).unwrap(), ["r1", "r2"]);
         assert_eq!(pick_robots(&all, Some("r4,r0")).unwrap(), ["r4", "r0"]);
-        assert!(pick_robots(&all, Some("3..9")).unwrap_err().contains("5 robots"));
+        assert!(
+            pick_robots(&all, Some("3..9"))
+                .unwrap_err()
+                .contains("5 robots")
+        );
         assert!(pick_robots(&all, Some("r9")).unwrap_err().contains("`r9`"));
         assert_eq!(pick_robots(&all, None).unwrap().len(), 5);
     }
