@@ -200,6 +200,27 @@ mod tests {
     }
 
     #[test]
+    fn nested_types_hash_as_ros2_computes_them() {
+        // The hashes ROS 2 (Jazzy) gives builtin_interfaces/msg/Time and std_msgs/msg/Header
+        // (a nested Time and a string), as published type descriptions list them.
+        assert_eq!(
+            TypeHash::of(&TIME, &[]).0,
+            "RIHS01_b106235e25a4c5ed35098aa0a61a3ee9c9b18d197f398b0e4206cea9acf9c197"
+        );
+        let header = TypeDescription {
+            name: "std_msgs/msg/Header",
+            fields: &[
+                ("stamp", Field::Nested("builtin_interfaces/msg/Time")),
+                ("frame_id", Field::String),
+            ],
+        };
+        assert_eq!(
+            TypeHash::of(&header, &[TIME]).0,
+            "RIHS01_f49fb3ae2cf070f793645ff749683ac6b06203e41c891e17701b1cb597ce6a01"
+        );
+    }
+
+    #[test]
     fn payloads_are_cdr_behind_the_little_endian_header() {
         #[derive(Serialize, serde::Deserialize, Debug, PartialEq)]
         struct M {

@@ -36,13 +36,12 @@ struct Sites {
 impl Sites {
     fn new() -> Sites {
         let ns = [0, 1].map(|k| format!("gspnz{}-{k}", std::process::id()));
-        for (k, n) in ns.iter().enumerate() {
+        for n in &ns {
             let _ = std::process::Command::new("ip")
                 .args(["netns", "del", n])
                 .output();
             ip(&["netns", "add", n]);
             ip(&["-n", n, "link", "set", "lo", "up"]);
-            let _ = k;
         }
         ip(&[
             "link", "add", "eth0", "netns", &ns[0], "type", "veth", "peer", "name", "eth0",
