@@ -5,6 +5,7 @@
 mod support;
 
 mod analysis;
+mod bounded_under_abuse;
 mod api;
 mod browser;
 mod conform;
