@@ -72,7 +72,15 @@ async fn main() {
         .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/fixtures").into());
     let net = format!("{fixtures}/greatspn/cyc3/cyc3.PNPRO");
     let mut server = Command::new(&bin)
-        .args(["run", &net, "--time-scale", "0.001", "--seed", "1", "--quiet"])
+        .args([
+            "run",
+            &net,
+            "--time-scale",
+            "0.001",
+            "--seed",
+            "1",
+            "--quiet",
+        ])
         .arg("--web")
         .arg(format!("127.0.0.1:{port}"))
         .stdout(Stdio::null())

@@ -109,7 +109,9 @@ impl Stays {
                 ..
             } => {
                 for a in consumed {
-                    let Some(s) = self.open.remove(a) else { continue };
+                    let Some(s) = self.open.remove(a) else {
+                        continue;
+                    };
                     let Some(p) = s.place else { continue };
                     self.ended.push(Holding {
                         agent: *a,

@@ -200,7 +200,7 @@ mod tests {
             "transient: 4000 time points: at most 1000 per question"
         );
         let long = format!("#P >= 0 && {}", "#P >= 0 && ".repeat(9_000));
-        let err = check_question(&net, &times[..10], &[long.clone()]).unwrap_err();
+        let err = check_question(&net, &times[..10], std::slice::from_ref(&long)).unwrap_err();
         assert_eq!(
             err.message,
             format!(
@@ -213,11 +213,17 @@ mod tests {
     #[test]
     fn an_answer_past_its_size_is_refused_with_413() {
         let net = two_places();
-        let preds: Vec<String> = (0..64).map(|i| format!("{}#P >= {i}", " ".repeat(4000))).collect();
+        let preds: Vec<String> = (0..64)
+            .map(|i| format!("{}#P >= {i}", " ".repeat(4000)))
+            .collect();
         let err = check_question(&net, &vec![1.0; 1_000], &preds).unwrap_err();
         assert_eq!(err.status, StatusCode::PAYLOAD_TOO_LARGE);
         // 1,001 × 64 predicates × ~4,040 bytes each ≈ 247 MiB.
-        assert!(err.message.starts_with("the answer would be about 24"), "{}", err.message);
+        assert!(
+            err.message.starts_with("the answer would be about 24"),
+            "{}",
+            err.message
+        );
         assert!(err.message.contains("at most 16 MB per question"));
         assert_eq!(check_question(&net, &vec![1.0; 1_000], &preds[..1]), Ok(()));
     }

@@ -66,7 +66,10 @@ exit $code"#;
         .iter()
         .map(|l| l["seq"].as_u64().unwrap())
         .collect();
-    assert!(seqs.windows(2).all(|w| w[1] == w[0] + 1), "a gap in {seqs:?}");
+    assert!(
+        seqs.windows(2).all(|w| w[1] == w[0] + 1),
+        "a gap in {seqs:?}"
+    );
     assert_eq!(seqs[0], 0);
 }
 

@@ -146,7 +146,8 @@ fn idle_connections_past_the_file_limit_do_not_lock_out_the_page() {
         .collect();
     // Past the cap (1,024 − 128 = 896) a connection is answered 503 at once, limit named.
     let mut last = idle.last().unwrap();
-    last.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    last.set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
     let mut refused = String::new();
     let _ = last.read_to_string(&mut refused);
     assert!(

@@ -5,8 +5,8 @@
 mod support;
 
 mod analysis;
-mod bounded_under_abuse;
 mod api;
+mod bounded_under_abuse;
 mod browser;
 mod conform;
 mod edit;

@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use gspn::conform::{
-    Fitted, Monitor, Options, Predictions, Report, RowKind, Trace, TraceBuilder, Verdict,
-    compare, fit, marking_before, observe, steady_predictions,
+    Fitted, Monitor, Options, Predictions, Report, RowKind, Trace, TraceBuilder, Verdict, compare,
+    fit, marking_before, observe, steady_predictions,
 };
 use gspn::io::{Format, write_net};
 use gspn::net::Net;
@@ -93,21 +93,25 @@ pub(crate) fn journal_trace(path: &Path, net: &Net) -> anyhow::Result<Trace> {
 /// with `--robots N` scales it, and the journal's hash is of the scaled net): the marking
 /// before the journal's first firing (read from `journal` up to it).
 pub(crate) fn scaled_net(journal: impl BufRead, net: &Net) -> Option<Net> {
-    let (t, marking) = journal.lines().map_while(Result::ok).skip(1).find_map(|l| {
-        let e: Event = serde_json::from_str(&l).ok()?;
-        match e.kind {
-            EventKind::Fired {
-                transition,
-                marking,
-                ..
-            } if transition.index() < net.transition_count()
-                && marking.len() == net.place_count() =>
-            {
-                Some((transition, marking))
+    let (t, marking) = journal
+        .lines()
+        .map_while(Result::ok)
+        .skip(1)
+        .find_map(|l| {
+            let e: Event = serde_json::from_str(&l).ok()?;
+            match e.kind {
+                EventKind::Fired {
+                    transition,
+                    marking,
+                    ..
+                } if transition.index() < net.transition_count()
+                    && marking.len() == net.place_count() =>
+                {
+                    Some((transition, marking))
+                }
+                _ => None,
             }
-            _ => None,
-        }
-    })?;
+        })?;
     net.with_initial_marking(&marking_before(net, t, &marking)?)
         .ok()
 }

@@ -122,7 +122,7 @@ fn thousands(n: u64) -> String {
     let digits = n.to_string();
     let mut out = String::new();
     for (i, c) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i) % 3 == 0 {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
             out.push(',');
         }
         out.push(c);
@@ -149,10 +149,7 @@ mod tests {
         // Another callsite has its own window.
         assert_eq!(r.admit("other", t0), Verdict::Show { held: 0 });
         // The first line after the window carries the count.
-        assert_eq!(
-            r.admit("dds", t0 + WINDOW),
-            Verdict::Show { held: 1_204 }
-        );
+        assert_eq!(r.admit("dds", t0 + WINDOW), Verdict::Show { held: 1_204 });
         assert_eq!(thousands(1_204), "1,204");
         assert_eq!(thousands(897_000), "897,000");
         assert_eq!(thousands(12), "12");

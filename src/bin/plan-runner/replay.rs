@@ -52,7 +52,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     match args.web {
         Some(addr) => {
             let (recording, torn) = journal
-                .into_replay()
+                .into_recording()
                 .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
             warn_torn(&args.journal, torn.as_ref());
             viewer(addr, &args.journal, recording)
@@ -108,11 +108,18 @@ pub(crate) fn warn_torn(path: &Path, torn: Option<&JournalError>) {
 
 /// Prints the initial marking and the marking after each firing (time, transition,
 /// marking) as the journal is read.
-fn print_firings(path: &Path, mut journal: JournalReader<BufReader<File>>) -> anyhow::Result<ExitCode> {
+fn print_firings(
+    path: &Path,
+    mut journal: JournalReader<BufReader<File>>,
+) -> anyhow::Result<ExitCode> {
     let net = journal.net().clone();
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     let row = |out: &mut dyn Write, time: f64, name: &str, tokens: &[u32]| {
-        writeln!(out, "{time:>14.6}  {name:<24}  {}", net.format_marking(tokens))
+        writeln!(
+            out,
+            "{time:>14.6}  {name:<24}  {}",
+            net.format_marking(tokens)
+        )
     };
     row(&mut out, 0.0, "(initial)", net.initial_marking().as_slice())?;
     for entry in journal.by_ref() {

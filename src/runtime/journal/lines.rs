@@ -90,7 +90,9 @@ impl<R: BufRead> JournalReader<R> {
         loop {
             buf.clear();
             line += 1;
-            let n = input.read_line(&mut buf).map_err(|e| read_error(line, &e))?;
+            let n = input
+                .read_line(&mut buf)
+                .map_err(|e| read_error(line, &e))?;
             if n == 0 {
                 return Err(JournalError::BadLine {
                     line: 1,
@@ -147,16 +149,14 @@ impl<R: BufRead> JournalReader<R> {
         self.torn.as_ref()
     }
 
-    /// Reads the rest into a [`Recording`] of what a replay shows: the firings and the side
-    /// records (the other events are dropped as they are read, so a journal needs the
-    /// memory of its firings, not of its text); with the cut last line, if any.
-    pub fn into_replay(mut self) -> Result<(Recording, Option<JournalError>), JournalError> {
+    /// Reads the rest into a [`Recording`] (as [`super::read_recording`] gives it, without
+    /// ever holding the file's text); with the cut last line, if any.
+    pub fn into_recording(mut self) -> Result<(Recording, Option<JournalError>), JournalError> {
         let mut events = Vec::new();
         let mut records = Vec::new();
         for entry in self.by_ref() {
             match entry? {
-                Entry::Event(e) if matches!(e.kind, EventKind::Fired { .. }) => events.push(e),
-                Entry::Event(_) => {}
+                Entry::Event(e) => events.push(e),
                 Entry::Record(r) => records.push(r),
             }
         }
@@ -270,7 +270,10 @@ mod tests {
         assert!(r.next().is_none());
         let (_, torn) = split_torn(&text);
         assert_eq!(r.torn(), torn.as_ref());
-        assert!(matches!(r.torn(), Some(JournalError::BadLine { line: 3, .. })));
+        assert!(matches!(
+            r.torn(),
+            Some(JournalError::BadLine { line: 3, .. })
+        ));
 
         let bad = journal(&net, &[FIRED.replace("[1,1,0]", "[1,1]").as_str()]);
         let mut r = JournalReader::new(bad.as_bytes(), &net).unwrap();
