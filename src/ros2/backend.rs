@@ -26,8 +26,7 @@ use super::config::DdsConfig;
 use super::firings::{FiringPublisher, Published, RunStatePublisher};
 use super::heartbeat::{self, RobotWatch};
 use super::msgs::{
-    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RUN_OVER, RUN_RUNNING, RunState,
-    exec_place_type,
+    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, exec_place_type,
 };
 use super::remote_place::{RemotePlaces, RobotLink};
 use super::settings::{ROS2_ACTION, Ros2Settings};
@@ -163,7 +162,7 @@ impl Ros2Backend {
         let servers: HashMap<_, _> = settings.servers.iter().cloned().collect();
         run_state
             .publish(RunState {
-                state: RUN_RUNNING.into(),
+                state: RunState::RUNNING,
                 stopped: String::new(),
                 firings: 0,
             })
@@ -175,7 +174,7 @@ impl Ros2Backend {
             beat,
             publisher: Arc::new(publisher),
             task: None,
-            places: RemotePlaces::new(servers, links),
+            places: RemotePlaces::new(servers, settings.args.iter().cloned().collect(), links),
             watch,
             rosout,
         })
@@ -225,7 +224,7 @@ impl Ros2Backend {
             );
         }
         let over = RunState {
-            state: RUN_OVER.into(),
+            state: RunState::OVER,
             stopped: stopped.to_string(),
             firings: published.firings,
         };

@@ -30,7 +30,7 @@ use super::config::DdsConfig;
 use super::firings::FiringListener;
 use super::heartbeat::{Liveness, RobotWatch, SUPERVISOR};
 use super::msgs::{
-    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RUN_OVER, Time, exec_place_type,
+    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, Time, exec_place_type,
 };
 use super::settings::Ros2Settings;
 use super::{Ros2Error, heartbeat};
@@ -354,7 +354,7 @@ async fn run_over(listener: &FiringListener, opts: &RobotOptions) -> Leave {
     let states = listener.run_states();
     futures::pin_mut!(states);
     while let Some(s) = states.next().await {
-        if s.state != RUN_OVER {
+        if s.state != RunState::OVER {
             continue;
         }
         let over = Leave::RunOver(format!("{} after {} firings", s.stopped, s.firings));
@@ -400,7 +400,7 @@ async fn listen(
         }
         if let Some(out) = &mut out {
             // One line per firing, written at once: a killed robot loses nothing logged.
-            let _ = writeln!(out, "{} {} {}", f.seq, f.stamp.as_nanos(), now.as_nanos());
+            let _ = writeln!(out, "{} {} {}", f.seq, f.header.stamp.as_nanos(), now.as_nanos());
         }
     }
     Ok(())
@@ -519,20 +519,16 @@ async fn run_decision(
     loop {
         tokio::select! {
             _ = &mut done => {
-                let outcome = if decision.transition.is_empty() { "decide" } else { "fire" };
                 return (
                     GoalEndStatus::Succeeded,
-                    ExecPlaceResult { transition: decision.transition, outcome: outcome.into() },
+                    ExecPlaceResult::fire_or_decide(decision.transition, "net-timed"),
                 );
             }
             _ = &mut cancelled => {
                 if let Ok(mut s) = shared.stats.lock() {
                     s.cancelled += 1;
                 }
-                return (
-                    GoalEndStatus::Canceled,
-                    ExecPlaceResult { transition: String::new(), outcome: "cancelled".into() },
-                );
+                return (GoalEndStatus::Canceled, ExecPlaceResult::cancelled());
             }
             _ = feedback.tick() => {
                 let elapsed = start.elapsed().as_secs_f64();

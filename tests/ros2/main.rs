@@ -16,6 +16,7 @@ mod ros2_hub;
 mod concurrent_goals;
 mod ctrl_c_while_waiting_for_robots;
 mod fleet;
+mod interfaces;
 mod interop;
 mod lifecycle;
 mod multiprocess;
