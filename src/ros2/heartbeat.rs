@@ -31,6 +31,15 @@ pub enum Liveness {
     Alive,
     /// Heartbeats stopped: no heartbeat for `lost_after`.
     Lost,
+    /// Its ExecPlace server left DDS discovery ([`super::presence`]).
+    Gone,
+}
+
+impl Liveness {
+    /// Lost or gone: its goals fail.
+    pub fn is_lost(self) -> bool {
+        matches!(self, Liveness::Lost | Liveness::Gone)
+    }
 }
 
 fn qos() -> QosProfile {

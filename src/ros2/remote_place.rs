@@ -6,7 +6,8 @@
 //! - the run being stopped → the goal is cancelled on the robot, [`Outcome::Cancelled`];
 //! - the place's timeout (applied by the runtime, which drops the action) → the goal is
 //!   cancelled on the robot too (a drop guard sends the cancel request);
-//! - the robot's heartbeats stop ([`Liveness::Lost`]) → `Failed("robot … lost")`, and the
+//! - the robot's heartbeats stop ([`Liveness::Lost`]) or its server leaves DDS discovery
+//!   ([`Liveness::Gone`], [`super::presence`]) → `Failed("robot … lost")`, and the
 //!   plan's failure policy decides.
 //!
 //! Any number of goals at a time per robot and server: one task per link owns the action
@@ -161,7 +162,7 @@ impl std::fmt::Debug for RobotLink {
 
 impl RobotLink {
     /// A link through `client` (its task is spawned on the current tokio runtime), failing
-    /// goals when `liveness` turns [`Liveness::Lost`].
+    /// goals when `liveness` turns [`Liveness::Lost`] or [`Liveness::Gone`].
     pub fn new(
         robot: String,
         client: ExecPlaceClient,
@@ -326,16 +327,20 @@ impl Drop for GoalGuard {
 
 enum Ended {
     Result(Result<(GoalStatusEnum, ExecPlaceResult), String>),
-    Lost,
+    Lost(Liveness),
     Cancel,
 }
 
 async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> Outcome {
     let robot = link.robot.clone();
-    let lost_msg = || format!("robot `{robot}` lost (its heartbeats stopped)");
+    let lost_msg = |l: Liveness| match l {
+        Liveness::Gone => format!("robot `{robot}` lost (its ExecPlace server left DDS discovery)"),
+        _ => format!("robot `{robot}` lost (its heartbeats stopped)"),
+    };
     let mut live = link.liveness.clone();
-    if *live.borrow() == Liveness::Lost {
-        return Outcome::Failed(lost_msg());
+    let now = *live.borrow();
+    if now.is_lost() {
+        return Outcome::Failed(lost_msg(now));
     }
     let guard = GoalGuard {
         link: Arc::clone(&link),
@@ -356,7 +361,7 @@ async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> 
     };
     let ended = tokio::select! {
         r = work => Ended::Result(r),
-        _ = live.wait_for(|s| *s == Liveness::Lost) => Ended::Lost,
+        l = live.wait_for(|s| s.is_lost()) => Ended::Lost(l.map(|l| *l).unwrap_or(Liveness::Gone)),
         _ = ctx.cancel.cancelled() => Ended::Cancel,
     };
     match ended {
@@ -367,9 +372,9 @@ async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> 
                 Err(e) => Outcome::Failed(e),
             }
         }
-        Ended::Lost => {
+        Ended::Lost(l) => {
             guard.set(None);
-            Outcome::Failed(lost_msg())
+            Outcome::Failed(lost_msg(l))
         }
         Ended::Cancel => {
             if let Some(id) = guard.take() {

@@ -201,7 +201,10 @@ pub async fn serve(
         .transpose()?;
     let spinner = node.spinner().map_err(Ros2Error::dds)?;
     let spin = tokio::spawn(spinner.spin());
-    let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;
+    // `heartbeat = 0`: none; the supervisor then sees the robot through discovery alone.
+    let beat = (!cfg.heartbeat.is_zero())
+        .then(|| heartbeat::publish(&mut node, &opts.id, cfg.heartbeat))
+        .transpose()?;
     let supervisor = RobotWatch::supervisor(&mut node, cfg.lost_after)?;
     let shared = Arc::new(Shared {
         id: opts.id.clone(),
@@ -263,7 +266,9 @@ pub async fn serve(
     if let Some(r) = rosout {
         r.finish(LEAVE_WAIT).await;
     }
-    beat.abort();
+    if let Some(b) = beat {
+        b.abort();
+    }
     spin.abort();
     let mut stats = shared
         .stats
@@ -325,7 +330,7 @@ async fn supervisor_lost(
                         unheard = None;
                         tracing::info!("robot {}: a supervisor is here", opts.id);
                     }
-                    Liveness::Unknown => {}
+                    Liveness::Unknown | Liveness::Gone => {}
                 }
             }
             _ = goal_seen.notified() => {

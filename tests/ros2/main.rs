@@ -13,6 +13,7 @@ mod ros2_rtps;
 #[path = "hub.rs"]
 mod ros2_hub;
 
+mod any_ros2_node_is_a_robot;
 mod concurrent_goals;
 mod ctrl_c_while_waiting_for_robots;
 mod fleet;

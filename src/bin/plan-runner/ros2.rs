@@ -141,7 +141,7 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2R
     eprintln!("ros2: robots ready");
     // Say when a robot is lost or back (the runs' errors say which action it failed).
     for r in &robots {
-        if let Some(mut live) = backend.watch().liveness(r) {
+        if let Some(mut live) = backend.presence().liveness(r) {
             let r = r.clone();
             let after = cfg.lost_after;
             live.borrow_and_update();
@@ -151,6 +151,9 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2R
                         Liveness::Lost => {
                             eprintln!("ros2: robot `{r}` lost: no heartbeat for {after:?}")
                         }
+                        Liveness::Gone => eprintln!(
+                            "ros2: robot `{r}` lost: its ExecPlace server left DDS discovery"
+                        ),
                         Liveness::Alive => eprintln!("ros2: robot `{r}` is back"),
                         Liveness::Unknown => {}
                     }
