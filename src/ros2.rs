@@ -16,6 +16,7 @@
 //! - [`bag`]: a run's journal exported as MCAP (ROS 2 messages, CDR), for `ros2 bag play`
 //!   and Foxglove.
 //! - [`rosout`]: the ROS 2 layer's warnings and errors on `/rosout` when asked.
+//! - [`names`]: `--ros-args` and the names of topics and actions under the run's namespace.
 //! - [`config`]: domain, networks (loopback by default), timings.
 //! - [`settings`]: what a plan tells the backend ([`Ros2Settings`]); compiled without the
 //!   feature too, so plans read the same everywhere.
@@ -36,6 +37,8 @@ pub mod firings;
 pub mod heartbeat;
 #[cfg(feature = "ros2")]
 pub mod msgs;
+#[cfg(feature = "ros2")]
+pub mod names;
 #[cfg(feature = "ros2")]
 pub mod presence;
 #[cfg(feature = "ros2")]

@@ -243,8 +243,8 @@ class GoalState:
 class ExecPlaceServer:
     """The ExecPlace action at /<robot>/<server>."""
 
-    def __init__(self, dp, robot: str, server: str, delay: float):
-        base = f"{robot}/{server}/_action"
+    def __init__(self, dp, robot: str, server: str, delay: float, namespace: str = ""):
+        base = f"{namespace}/{robot}/{server}/_action".lstrip("/")
         self.delay = delay
         self.goals = {}  # bytes(uuid) -> GoalState
 
@@ -376,6 +376,11 @@ def main() -> int:
     ap.add_argument("--server", action="append", help="ExecPlace servers (default exec_place)")
     ap.add_argument("--delay", type=float, default=0.05, help="seconds each goal takes")
     ap.add_argument(
+        "--namespace",
+        default="",
+        help="the run's namespace, as the supervisor's --ros-args -r __ns:=/NS (default: none)",
+    )
+    ap.add_argument(
         "--heartbeat",
         type=float,
         default=0.1,
@@ -389,11 +394,14 @@ def main() -> int:
     signal.signal(signal.SIGINT, lambda *_: stop.append("SIGINT"))
 
     dp = DomainParticipant(args.domain)
-    servers = [ExecPlaceServer(dp, args.id, s, args.delay) for s in args.server or ["exec_place"]]
+    ns = args.namespace.rstrip("/")
+    servers = [
+        ExecPlaceServer(dp, args.id, s, args.delay, ns) for s in args.server or ["exec_place"]
+    ]
     beat = None
     if args.heartbeat > 0:
-        beat = DataWriter(dp, Topic(dp, "rt/gspn/heartbeat", Heartbeat), qos=HEARTBEAT)
-    run = DataReader(dp, Topic(dp, "rt/gspn/run", RunState), qos=RUN)
+        beat = DataWriter(dp, Topic(dp, f"rt{ns}/gspn/heartbeat", Heartbeat), qos=HEARTBEAT)
+    run = DataReader(dp, Topic(dp, f"rt{ns}/gspn/run", RunState), qos=RUN)
     log(f"serving {', '.join(args.server or ['exec_place'])} on domain {args.domain}")
 
     seq, next_beat, over = 0, 0.0, None

@@ -27,7 +27,8 @@ pub struct Ros2File {
     /// Local IP addresses DDS may use (default `["127.0.0.1"]`: loopback only).
     #[schemars(with = "Option<Vec<String>>")]
     pub networks: Option<Vec<Spanned<String>>>,
-    /// Seconds between a robot's heartbeats (default 0.1).
+    /// Seconds between a `plan-runner robot`'s heartbeats (default 0.1; 0: none, the
+    /// supervisor then sees robots through DDS discovery alone).
     #[schemars(with = "Option<f64>", range(min = 0.0))]
     pub heartbeat: Option<Spanned<f64>>,
     /// Seconds without a heartbeat after which a robot is lost (default 1.0).
@@ -101,7 +102,14 @@ pub(super) fn resolve_ros2(
         ] {
             if let Some(v) = v {
                 let x = *v.get_ref();
-                if !crate::limits::valid_seconds(x) {
+                // `heartbeat = 0`: robots send none (the supervisor sees them through
+                // discovery).
+                let valid = if key == "heartbeat" {
+                    crate::limits::valid_wait(x)
+                } else {
+                    crate::limits::valid_seconds(x)
+                };
+                if !valid {
                     return Err(at(
                         v.span(),
                         out_of_range(key, "ros2", x, crate::limits::SECONDS_EXPECTED),

@@ -112,7 +112,7 @@ impl Ros2Backend {
         let mut clients = Vec::new();
         for robot in robots {
             for &server in &servers {
-                let name = Name::new(&format!("/{robot}"), server).map_err(Ros2Error::dds)?;
+                let name = super::names::action(&node, robot, server)?;
                 let client = node
                     .create_action_client::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
                         cfg.service_mapping,

@@ -43,7 +43,7 @@ fn publisher<M: serde::Serialize>(
     ty: ros2_client::MessageTypeName,
     qos: QosProfile,
 ) -> Result<Publisher<M>, Ros2Error> {
-    let name = Name::parse(name).map_err(Ros2Error::dds)?;
+    let name = super::names::topic(node, name)?;
     let topic = node.create_topic(&name, ty, &qos).map_err(Ros2Error::dds)?;
     node.create_publisher(&topic, Some(qos))
         .map_err(Ros2Error::dds)
@@ -56,7 +56,7 @@ fn subscription<M: serde::de::DeserializeOwned + 'static>(
     ty: ros2_client::MessageTypeName,
     qos: QosProfile,
 ) -> Result<Subscription<M>, Ros2Error> {
-    let name = Name::parse(name).map_err(Ros2Error::dds)?;
+    let name = super::names::topic(node, name)?;
     let topic = node.create_topic(&name, ty, &qos).map_err(Ros2Error::dds)?;
     node.create_subscription(&topic, Some(qos))
         .map_err(Ros2Error::dds)

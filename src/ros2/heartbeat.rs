@@ -49,7 +49,7 @@ fn qos() -> QosProfile {
 }
 
 fn topic(node: &Node, name: &str) -> Result<ros2_client::dds::rustdds::Topic, Ros2Error> {
-    let name = Name::parse(name).map_err(Ros2Error::dds)?;
+    let name = super::names::topic(node, name)?;
     node.create_topic(&name, heartbeat_type(), &qos())
         .map_err(Ros2Error::dds)
 }

@@ -221,7 +221,7 @@ pub async fn serve(
     servers.dedup();
     let mut tasks = Vec::new();
     for s in servers {
-        let name = Name::new(&format!("/{}", opts.id), s).map_err(Ros2Error::dds)?;
+        let name = super::names::action(&node, &opts.id, s)?;
         let server = node
             .create_action_server::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
                 cfg.service_mapping,
