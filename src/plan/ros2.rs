@@ -13,9 +13,7 @@ use super::file::PlaceFile;
 use super::resolve::out_of_range;
 use crate::io::{LoadError, LoadErrorKind};
 use crate::net::Net;
-use crate::ros2::settings::{
-    DEFAULT_SERVER, PlaceArgs, ROS2_ACTION, Ros2Settings, ServiceMapping,
-};
+use crate::ros2::settings::{DEFAULT_SERVER, PlaceArgs, ROS2_ACTION, Ros2Settings, ServiceMapping};
 
 /// The `[ros2]` table: how the ROS 2 backend joins DDS and watches robots.
 #[derive(Debug, Deserialize, JsonSchema)]

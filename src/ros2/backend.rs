@@ -19,17 +19,15 @@ use std::time::Duration;
 
 use ros2_client::action::ActionClientQosPolicies;
 use ros2_client::qos::{Durability, History};
-use ros2_client::{Name, Node, QosProfile};
+use ros2_client::{Node, QosProfile};
 use tokio::task::JoinHandle;
 
 use super::Ros2Error;
 use super::config::DdsConfig;
 use super::firings::{FiringPublisher, Published, RunStatePublisher};
 use super::heartbeat::{self, Liveness, RobotWatch};
+use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, exec_place_type};
 use super::presence::{Presence, ServerCounter};
-use super::msgs::{
-    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, exec_place_type,
-};
 use super::remote_place::{RemotePlaces, RobotLink};
 use super::settings::{ROS2_ACTION, Ros2Settings};
 use crate::net::Net;

@@ -19,9 +19,7 @@ use std::io::{Seek, Write};
 use byteorder::LittleEndian;
 use serde::Serialize;
 
-use super::msgs::{
-    self, Firing, Header, MAP_FRAME, Marking, PoseStamped, Time, schema,
-};
+use super::msgs::{self, Firing, Header, MAP_FRAME, Marking, PoseStamped, Time, schema};
 use crate::runtime::journal::{JournalHeader, Record};
 use crate::runtime::{Event, EventKind, Monitored};
 
@@ -137,7 +135,10 @@ pub fn export<W: Write + Seek>(text: &str, out: W) -> Result<Exported, BagError>
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
         .peekable();
-    let bad = |i: usize, reason: String| BagError::Journal { line: i + 1, reason };
+    let bad = |i: usize, reason: String| BagError::Journal {
+        line: i + 1,
+        reason,
+    };
     let (i, first) = lines
         .next()
         .ok_or_else(|| bad(0, "empty journal: no header".into()))?;
@@ -173,7 +174,12 @@ pub fn export<W: Write + Seek>(text: &str, out: W) -> Result<Exported, BagError>
         }
     };
     if let Some(m) = &header.initial {
-        bag.write(MARKING, "gspn_msgs/msg/Marking", 0.0, &marking(0, 0.0, m.clone()))?;
+        bag.write(
+            MARKING,
+            "gspn_msgs/msg/Marking",
+            0.0,
+            &marking(0, 0.0, m.clone()),
+        )?;
         n.markings += 1;
     }
     let mut robots = std::collections::BTreeSet::new();
@@ -241,12 +247,14 @@ pub fn export<W: Write + Seek>(text: &str, out: W) -> Result<Exported, BagError>
             }
             EventKind::Drift(d) => {
                 let (transition, place) = match d.of {
-                    Monitored::Transition(t) => {
-                        (name_of(&header.transitions, t.index(), "transition", i)?, String::new())
-                    }
-                    Monitored::Place(p) => {
-                        (String::new(), name_of(&header.places, p.index(), "place", i)?)
-                    }
+                    Monitored::Transition(t) => (
+                        name_of(&header.transitions, t.index(), "transition", i)?,
+                        String::new(),
+                    ),
+                    Monitored::Place(p) => (
+                        String::new(),
+                        name_of(&header.places, p.index(), "place", i)?,
+                    ),
                 };
                 let msg = msgs::Drift {
                     header: hdr,
@@ -302,7 +310,9 @@ mod tests {
         // encapsulation, string length 3 ("r1\0"), the bytes, padding to 8, u64 7.
         assert_eq!(
             b,
-            [0, 1, 0, 0, 3, 0, 0, 0, b'r', b'1', 0, 0, 7, 0, 0, 0, 0, 0, 0, 0]
+            [
+                0, 1, 0, 0, 3, 0, 0, 0, b'r', b'1', 0, 0, 7, 0, 0, 0, 0, 0, 0, 0
+            ]
         );
     }
 }

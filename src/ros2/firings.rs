@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use futures::StreamExt;
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
-use ros2_client::{Name, Node, Publisher, QosProfile, Subscription};
+use ros2_client::{Node, Publisher, QosProfile, Subscription};
 
 use super::Ros2Error;
 use super::msgs::{

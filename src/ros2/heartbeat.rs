@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use futures::StreamExt;
 use ros2_client::qos::{Durability, History};
-use ros2_client::{Name, Node, Publisher, QosProfile, Subscription};
+use ros2_client::{Node, Publisher, QosProfile, Subscription};
 use tokio::sync::watch;
 use tokio::time::Instant;
 

@@ -56,7 +56,9 @@ pub struct RosArgs {
 /// Whether `s` is a ROS 2 name token: letters, digits, underscores, not starting with a
 /// digit.
 fn is_token(s: &str) -> bool {
-    s.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+    s.chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
         && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
@@ -88,7 +90,9 @@ impl RosArgs {
             };
             if kind == "param" {
                 if !is_token(from) {
-                    return Err(format!("--ros-args: -p `{rule}`: `{from}` is not a parameter name"));
+                    return Err(format!(
+                        "--ros-args: -p `{rule}`: `{from}` is not a parameter name"
+                    ));
                 }
                 out.params.push((from.to_string(), to.to_string()));
                 continue;
@@ -96,8 +100,8 @@ impl RosArgs {
             match from {
                 "__ns" => {
                     let ns = to.trim_end_matches('/');
-                    let ok = to.starts_with('/')
-                        && (ns.is_empty() || ns[1..].split('/').all(is_token));
+                    let ok =
+                        to.starts_with('/') && (ns.is_empty() || ns[1..].split('/').all(is_token));
                     if !ok {
                         return Err(format!(
                             "--ros-args: -r `{rule}`: a namespace is absolute, `/` and tokens (letters, digits, underscores)"
@@ -107,7 +111,9 @@ impl RosArgs {
                 }
                 "__node" | "__name" => {
                     if !is_token(to) {
-                        return Err(format!("--ros-args: -r `{rule}`: `{to}` is not a node name"));
+                        return Err(format!(
+                            "--ros-args: -r `{rule}`: `{to}` is not a node name"
+                        ));
                     }
                     out.node = Some(to.to_string());
                 }
@@ -148,11 +154,17 @@ mod tests {
             }
         );
         assert_eq!(
-            RosArgs::parse(&args("-r __ns:=/")).unwrap().namespace.as_deref(),
+            RosArgs::parse(&args("-r __ns:=/"))
+                .unwrap()
+                .namespace
+                .as_deref(),
             Some("")
         );
         assert_eq!(
-            RosArgs::parse(&args("-r __ns:=/a/b_2/")).unwrap().namespace.as_deref(),
+            RosArgs::parse(&args("-r __ns:=/a/b_2/"))
+                .unwrap()
+                .namespace
+                .as_deref(),
             Some("/a/b_2")
         );
         assert_eq!(node_namespace("/fleet_a"), "/fleet_a/gspn");
@@ -176,6 +188,9 @@ mod tests {
         );
         assert_eq!(e("-p"), "--ros-args: -p needs FROM:=TO");
         assert_eq!(e("-p x=1"), "--ros-args: -p `x=1`: expected FROM:=TO");
-        assert_eq!(e("-r __node:=9r"), "--ros-args: -r `__node:=9r`: `9r` is not a node name");
+        assert_eq!(
+            e("-r __node:=9r"),
+            "--ros-args: -r `__node:=9r`: `9r` is not a node name"
+        );
     }
 }

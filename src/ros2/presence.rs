@@ -114,15 +114,21 @@ mod tests {
         let mut live = p.liveness("r1").unwrap();
         assert_eq!(*live.borrow(), Liveness::Alive);
         matched.store(0, Ordering::SeqCst);
-        tokio::time::timeout(Duration::from_secs(1), live.wait_for(|s| *s == Liveness::Gone))
-            .await
-            .expect("gone within one check")
-            .unwrap();
+        tokio::time::timeout(
+            Duration::from_secs(1),
+            live.wait_for(|s| *s == Liveness::Gone),
+        )
+        .await
+        .expect("gone within one check")
+        .unwrap();
         matched.store(1, Ordering::SeqCst);
-        tokio::time::timeout(Duration::from_secs(1), live.wait_for(|s| *s == Liveness::Alive))
-            .await
-            .expect("back within one check")
-            .unwrap();
+        tokio::time::timeout(
+            Duration::from_secs(1),
+            live.wait_for(|s| *s == Liveness::Alive),
+        )
+        .await
+        .expect("back within one check")
+        .unwrap();
         assert!(p.liveness("r2").is_none());
     }
 
@@ -135,9 +141,12 @@ mod tests {
         );
         let mut live = p.liveness("r1").unwrap();
         hb_tx.send(Liveness::Lost).unwrap();
-        tokio::time::timeout(Duration::from_millis(10), live.wait_for(|s| *s == Liveness::Lost))
-            .await
-            .expect("at once, not at the next check")
-            .unwrap();
+        tokio::time::timeout(
+            Duration::from_millis(10),
+            live.wait_for(|s| *s == Liveness::Lost),
+        )
+        .await
+        .expect("at once, not at the next check")
+        .unwrap();
     }
 }

@@ -18,12 +18,12 @@ use std::time::Duration;
 
 use futures::StreamExt;
 use rand::SeedableRng;
+use ros2_client::QosProfile;
 use ros2_client::action::{
     ActionServerQosPolicies, AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId,
     NewGoalHandle,
 };
 use ros2_client::qos::{Durability, History};
-use ros2_client::{Name, QosProfile};
 use tokio::sync::oneshot;
 
 use super::config::DdsConfig;
@@ -405,7 +405,13 @@ async fn listen(
         }
         if let Some(out) = &mut out {
             // One line per firing, written at once: a killed robot loses nothing logged.
-            let _ = writeln!(out, "{} {} {}", f.seq, f.header.stamp.as_nanos(), now.as_nanos());
+            let _ = writeln!(
+                out,
+                "{} {} {}",
+                f.seq,
+                f.header.stamp.as_nanos(),
+                now.as_nanos()
+            );
         }
     }
     Ok(())

@@ -118,6 +118,9 @@ async fn robots_without_heartbeat_run_the_patrol_and_a_killed_one_is_found_by_di
             .unwrap();
         let text = std::fs::read_to_string(log).unwrap();
         assert_eq!(status.code(), Some(0), "{text}");
-        assert!(text.contains("the supervisor's run is over (failure after"), "{text}");
+        assert!(
+            text.contains("the supervisor's run is over (failure after"),
+            "{text}"
+        );
     }
 }

@@ -301,8 +301,12 @@ fn rust_fields<T: Serialize>(v: &T) -> Vec<String> {
     t.out
 }
 
-/// Cyclone DDS (Python) `IdlStruct`s of a file: class name → (DDS type name, fields).
-fn python_structs(rel: &str) -> BTreeMap<String, (String, Vec<(String, String)>)> {
+/// Cyclone DDS (Python) `IdlStruct`s of a file: class name → (DDS type name, fields
+/// `(name, type)`).
+type PyStructs = BTreeMap<String, (String, Vec<(String, String)>)>;
+
+/// The `IdlStruct`s of the Python file `rel`.
+fn python_structs(rel: &str) -> PyStructs {
     let text = read(rel);
     let mut out = BTreeMap::new();
     let mut lines = text.lines().peekable();
@@ -324,7 +328,9 @@ fn python_structs(rel: &str) -> BTreeMap<String, (String, Vec<(String, String)>)
         let ty = ty.split('"').next().unwrap().to_string();
         let mut fields = Vec::new();
         while let Some(l) = lines.peek() {
-            let Some(f) = l.strip_prefix("    ") else { break };
+            let Some(f) = l.strip_prefix("    ") else {
+                break;
+            };
             let (n, t) = f.split_once(':').unwrap();
             fields.push((n.trim().to_string(), t.trim().to_string()));
             lines.next();
@@ -334,12 +340,7 @@ fn python_structs(rel: &str) -> BTreeMap<String, (String, Vec<(String, String)>)
     out
 }
 
-fn flatten_python(
-    structs: &BTreeMap<String, (String, Vec<(String, String)>)>,
-    class: &str,
-    prefix: &str,
-    out: &mut Vec<String>,
-) {
+fn flatten_python(structs: &PyStructs, class: &str, prefix: &str, out: &mut Vec<String>) {
     for (name, ty) in &structs[class].1 {
         let (ty, array) = match ty.strip_prefix("sequence[") {
             Some(t) => (t.trim_end_matches(']'), "[]"),
@@ -354,11 +355,7 @@ fn flatten_python(
     }
 }
 
-fn python_fields(
-    structs: &BTreeMap<String, (String, Vec<(String, String)>)>,
-    class: &str,
-    dds_type: &str,
-) -> Vec<String> {
+fn python_fields(structs: &PyStructs, class: &str, dds_type: &str) -> Vec<String> {
     assert_eq!(structs[class].0, dds_type, "Python class {class}");
     let mut out = Vec::new();
     flatten_python(structs, class, "", &mut out);
@@ -373,7 +370,10 @@ fn python_constants(rel: &str) -> BTreeMap<String, String> {
         let Some((names, values)) = line.split_once(" = ") else {
             continue;
         };
-        if !names.chars().all(|c| c.is_ascii_uppercase() || c == '_' || c == ',' || c == ' ') {
+        if !names
+            .chars()
+            .all(|c| c.is_ascii_uppercase() || c == '_' || c == ',' || c == ' ')
+        {
             continue;
         }
         for (n, v) in names.split(',').zip(values.split(',')) {
@@ -460,8 +460,16 @@ fn the_msg_files_the_rust_types_and_the_python_robot_agree() {
     let parts: Vec<Def> = action.split("\n---\n").map(parse).collect();
     assert_eq!(parts.len(), 3, "goal, result, feedback");
     assert_eq!(msg_fields(&parts[0]), rust_fields(&goal), "ExecPlace goal");
-    assert_eq!(msg_fields(&parts[1]), rust_fields(&result), "ExecPlace result");
-    assert_eq!(msg_fields(&parts[2]), rust_fields(&feedback), "ExecPlace feedback");
+    assert_eq!(
+        msg_fields(&parts[1]),
+        rust_fields(&result),
+        "ExecPlace result"
+    );
+    assert_eq!(
+        msg_fields(&parts[2]),
+        rust_fields(&feedback),
+        "ExecPlace feedback"
+    );
     assert!(
         rust_fields(&goal).contains(&"target.pose.orientation.w: float64".to_string()),
         "the goal carries a geometry_msgs/PoseStamped"
@@ -498,7 +506,11 @@ fn the_msg_files_the_rust_types_and_the_python_robot_agree() {
     for (n, v) in consts(&parts[1]) {
         assert_eq!(py[&n], v.to_string(), "{robot}: {n}");
     }
-    assert_eq!(py["RUN_OVER"], RunState::OVER.to_string(), "{robot}: RUN_OVER");
+    assert_eq!(
+        py["RUN_OVER"],
+        RunState::OVER.to_string(),
+        "{robot}: RUN_OVER"
+    );
 
     // The Python robot's and the listener's types, by their DDS names.
     let structs = python_structs(robot);
@@ -529,7 +541,11 @@ fn the_msg_files_the_rust_types_and_the_python_robot_agree() {
             rust_fields(&run),
         ),
     ] {
-        assert_eq!(python_fields(&structs, class, dds), rust, "{robot}: {class}");
+        assert_eq!(
+            python_fields(&structs, class, dds),
+            rust,
+            "{robot}: {class}"
+        );
     }
     let listener = python_structs("tests/ros2/firings_listener.py");
     assert_eq!(
@@ -554,12 +570,23 @@ fn the_package_says_its_version_and_builds_every_file() {
         .collect();
     files.push("action/ExecPlace.action".into());
     for f in &files {
-        assert!(cmake.contains(&format!("\"{f}\"")), "CMakeLists.txt lacks {f}");
+        assert!(
+            cmake.contains(&format!("\"{f}\"")),
+            "CMakeLists.txt lacks {f}"
+        );
     }
     // Every package a definition uses is a dependency of the package.
-    for pkg in ["std_msgs", "geometry_msgs", "diagnostic_msgs", "builtin_interfaces"] {
+    for pkg in [
+        "std_msgs",
+        "geometry_msgs",
+        "diagnostic_msgs",
+        "builtin_interfaces",
+    ] {
         assert!(xml.contains(&format!("<depend>{pkg}</depend>")), "{pkg}");
-        assert!(cmake.contains(&format!("find_package({pkg} REQUIRED)")), "{pkg}");
+        assert!(
+            cmake.contains(&format!("find_package({pkg} REQUIRED)")),
+            "{pkg}"
+        );
     }
     // The definitions compiled into the binary (for MCAP schemas) are these files.
     assert_eq!(

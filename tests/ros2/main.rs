@@ -23,7 +23,7 @@ mod lifecycle;
 mod multiprocess;
 mod netns;
 mod python_robot;
-mod runs_recorded_to_mcap;
 mod rosout;
+mod runs_recorded_to_mcap;
 mod security;
 mod two_plans_in_two_namespaces;

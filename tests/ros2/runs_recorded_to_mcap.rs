@@ -46,8 +46,7 @@ fn a_run_and_an_export_are_read_back_by_the_mcap_ros2_readers() {
     assert!(stderr.contains("200 firings"), "{stderr}");
     let journal = dir.path().join("run.mcap.jsonl");
     let lines = std::fs::read_to_string(&journal).expect("the JSON Lines journal beside it");
-    let header: serde_json::Value =
-        serde_json::from_str(lines.lines().next().unwrap()).unwrap();
+    let header: serde_json::Value = serde_json::from_str(lines.lines().next().unwrap()).unwrap();
     let fired: Vec<String> = lines
         .lines()
         .skip(1)
@@ -129,7 +128,10 @@ fn a_journal_that_is_not_one_is_refused_naming_its_line() {
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stderr.contains(&format!("{}: journal line 1: missing field", journal.display())),
+        stderr.contains(&format!(
+            "{}: journal line 1: missing field",
+            journal.display()
+        )),
         "{stderr}"
     );
     let out = plan_runner()

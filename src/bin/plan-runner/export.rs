@@ -61,8 +61,8 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
 pub(crate) fn write(journal: &Path, output: &Path) -> anyhow::Result<(u64, u64, u64, u64, u64)> {
     let text = std::fs::read_to_string(journal)
         .map_err(|e| BadInput(format!("{}: {e}", journal.display())))?;
-    let file = std::fs::File::create(output)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", output.display()))?;
+    let file =
+        std::fs::File::create(output).map_err(|e| anyhow::anyhow!("{}: {e}", output.display()))?;
     let n = gspn::ros2::bag::export(&text, std::io::BufWriter::new(file)).map_err(|e| match e {
         gspn::ros2::bag::BagError::Journal { .. } => {
             anyhow::Error::from(BadInput(format!("{}: {e}", journal.display())))

@@ -282,10 +282,9 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         (Some(id), _) => id.clone(),
         (None, Some(node)) => node,
         (None, None) => {
-            return Err(BadInput(
-                "robot: give --id ID (or --ros-args -r __node:=ID)".to_string(),
-            )
-            .into());
+            return Err(
+                BadInput("robot: give --id ID (or --ros-args -r __node:=ID)".to_string()).into(),
+            );
         }
     };
     let robots = robots(&plan);

@@ -28,8 +28,8 @@ use anyhow::Context as _;
 use gspn::runtime::{Backends, RuntimeBuilder, Section, StopReason, Summary};
 
 use crate::backends::{self, BackendArgs};
-use crate::export;
 use crate::common::{BadInput, Interrupted, NetArgs, StopSignals};
+use crate::export;
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]

@@ -167,6 +167,13 @@ mod tests {
         assert_eq!(Quaternion::default().w, 1.0);
         let p = PoseStamped::on_map(1.0, 2.0, 0.0);
         assert_eq!(p.header.frame_id, "map");
-        assert_eq!(p.pose.position, Point { x: 1.0, y: 2.0, z: 0.0 });
+        assert_eq!(
+            p.pose.position,
+            Point {
+                x: 1.0,
+                y: 2.0,
+                z: 0.0
+            }
+        );
     }
 }
