@@ -258,8 +258,8 @@ fn ros2_mistakes_are_refused_at_their_position() {
         "place `P2`: target must be [x, y] or [x, y, yaw] (finite numbers)",
     );
     refused(
-        "net = \"n.xml\"\n[places.P2]\nargs = { a = \"b\" }\n",
-        (3, 8),
+        "net = \"n.xml\"\n[places.P2]\naction = \"a\"\nargs = { a = \"b\" }\n",
+        (4, 8),
         "place `P2`: `args` applies to places with action = \"ros2\" only",
     );
     refused(
