@@ -85,6 +85,7 @@ mod edit;
 mod greatspn;
 mod guard;
 pub mod layout;
+mod stays;
 mod live;
 mod replay;
 mod report;
@@ -170,6 +171,11 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/follow.js"),
     },
     Asset {
+        path: "/plot.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/plot.js"),
+    },
+    Asset {
         path: "/share.js",
         mime: "text/javascript; charset=utf-8",
         body: include_str!("web/assets/share.js"),
@@ -183,6 +189,18 @@ pub const ASSETS: &[Asset] = &[
         path: "/edit.js",
         mime: "text/javascript; charset=utf-8",
         body: include_str!("web/assets/edit.js"),
+    },
+    // The tab's icon; browsers ask for `/favicon.ico` whatever the page links, so both
+    // paths serve it.
+    Asset {
+        path: "/favicon.svg",
+        mime: "image/svg+xml",
+        body: include_str!("web/assets/favicon.svg"),
+    },
+    Asset {
+        path: "/favicon.ico",
+        mime: "image/svg+xml",
+        body: include_str!("web/assets/favicon.svg"),
     },
     Asset {
         path: "/style.css",

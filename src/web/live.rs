@@ -20,12 +20,17 @@ use crate::net::Net;
 use crate::runtime::{AgentInfo, EventKind, Events, Outcome, Received, RuntimeHandle};
 use crate::web::WebState;
 use crate::web::api::net_json;
+use crate::web::stays::RobotStays;
 
 /// Shortest time between two snapshots sent to one browser.
 pub const FRAME: Duration = Duration::from_millis(50);
 
 /// Events kept for the log (the oldest are dropped past this).
 const LOG_KEEP: usize = 500;
+
+/// Token counts kept for a late page's history (markings × places; the oldest markings are
+/// dropped past this): 8 MB, 20,000 markings of a 100-place net.
+const HISTORY_CELLS: usize = 2_000_000;
 
 /// A running plan as the viewer shows it. Cheap to clone.
 #[derive(Clone, Debug)]
@@ -56,6 +61,10 @@ struct Snapshot {
     /// Events missed because the fold fell behind the bus.
     lagged: u64,
     log: VecDeque<Value>,
+    /// The marking after each firing so far (`(time, tokens)`, the oldest dropped past
+    /// [`HISTORY_CELLS`]), and each robot's stays: what a page that joins late is sent first.
+    history: VecDeque<(f64, Vec<u32>)>,
+    stays: RobotStays,
 }
 
 impl LiveRun {
@@ -75,6 +84,8 @@ impl LiveRun {
                     stopped: None,
                     lagged: 0,
                     log: VecDeque::new(),
+                    history: VecDeque::new(),
+                    stays: RobotStays::default(),
                 }),
                 version,
                 world: OnceLock::new(),
@@ -161,10 +172,16 @@ impl LiveRun {
                     Received::Lagged(n) => s.lagged += n,
                     Received::Event(e) => {
                         s.time = s.time.max(e.time);
+                        s.stays.push(&e);
                         match &e.kind {
                             EventKind::Fired { marking, .. } => {
                                 s.firings += 1;
                                 s.tokens.copy_from_slice(marking.as_slice());
+                                let kept = (HISTORY_CELLS / marking.len().max(1)).max(1);
+                                if s.history.len() >= kept {
+                                    s.history.pop_front();
+                                }
+                                s.history.push_back((e.time, marking.to_vec()));
                             }
                             EventKind::Stopped { reason } => s.stopped = Some(reason.to_string()),
                             _ => {}
@@ -191,6 +208,24 @@ impl LiveRun {
             s.stopped.get_or_insert_with(|| summary.stopped.to_string());
         }
         self.inner.version.send_modify(|v| *v += 1);
+    }
+
+    /// `{"type": "history", "frames": [{time, tokens}], "robots": [{robot, stays}]}`: the
+    /// initial marking and the marking after each firing kept, each robot's stays so far.
+    fn history_json(&self) -> Value {
+        let net = self.net();
+        let s = self.snapshot();
+        let initial = (s.history.len() as u64 == s.firings)
+            .then(|| json!({ "time": 0.0, "tokens": net.initial_marking().as_slice() }));
+        let frames: Vec<Value> = initial
+            .into_iter()
+            .chain(
+                s.history
+                    .iter()
+                    .map(|(t, m)| json!({ "time": t, "tokens": m })),
+            )
+            .collect();
+        json!({ "type": "history", "frames": frames, "robots": s.stays.json(net) })
     }
 
     /// The snapshot as JSON, with the log entries after `after_seq` (all kept ones if `None`).
@@ -385,6 +420,15 @@ async fn follow(mut socket: WebSocket, live: LiveRun) {
     net["type"] = json!("net");
     if socket
         .send(Message::Text(net.to_string().into()))
+        .await
+        .is_err()
+    {
+        return;
+    }
+    // The run so far, for a page that joins late: its plot and robot timeline start at the
+    // beginning of the run, not at the page's arrival.
+    if socket
+        .send(Message::Text(live.history_json().to_string().into()))
         .await
         .is_err()
     {
