@@ -85,11 +85,11 @@ mod edit;
 mod greatspn;
 mod guard;
 pub mod layout;
-mod stays;
 mod live;
 mod replay;
 mod report;
 mod session;
+mod stays;
 
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};

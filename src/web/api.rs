@@ -25,11 +25,19 @@ pub(crate) async fn net(State(state): State<WebState>) -> Json<Value> {
 }
 
 /// The net as the page draws it (with the look of its nodes in `source`, when it has one):
-/// at the default layout ([`choose`]: the file's positions unless they are useless), with
-/// `layout_note` saying why the file's were set aside, and — when the file has positions —
-/// the other layout in `other_layout`, for the page's `layout` control.
-pub(crate) fn net_json(net: &Net, seed: u64, source: Option<&Source>) -> Value {
-    let (l, note) = choose(net, Choice::Default);
+/// at the default layout ([`choose`]: the file's positions unless they are useless; an
+/// `edited` net's positions always, the page wrote them), with `layout_note` saying why the
+/// file's were set aside, and — when the file has positions — the other layout in
+/// `other_layout`, for the page's `layout` control.
+pub(crate) fn net_json(net: &Net, seed: u64, source: Option<&Source>, edited: bool) -> Value {
+    let (l, note) = choose(
+        net,
+        if edited {
+            Choice::File
+        } else {
+            Choice::Default
+        },
+    );
     let other = has_positions(net).then(|| {
         let other = match l.source {
             LayoutSource::File => Choice::Automatic,

@@ -416,7 +416,7 @@ pub(crate) async fn ws(State(state): State<WebState>, upgrade: WebSocketUpgrade)
 }
 
 async fn follow(mut socket: WebSocket, live: LiveRun) {
-    let mut net = net_json(live.net(), live.handle().seed(), None);
+    let mut net = net_json(live.net(), live.handle().seed(), None, false);
     net["type"] = json!("net");
     if socket
         .send(Message::Text(net.to_string().into()))

@@ -131,11 +131,7 @@ impl RobotStays {
 /// A name split into its text and its number (`r10` → ("r", 10)), for sorting.
 fn natural(name: &str) -> (&str, u64, &str) {
     let digits = name.trim_end_matches(|c: char| c.is_ascii_digit());
-    (
-        digits,
-        name[digits.len()..].parse().unwrap_or(0),
-        name,
-    )
+    (digits, name[digits.len()..].parse().unwrap_or(0), name)
 }
 
 #[cfg(test)]
@@ -154,26 +150,42 @@ mod tests {
         let ev = |seq, time, kind| Event { seq, time, kind };
         let a = AgentId(0);
         let events = vec![
-            ev(0, 0.0, EventKind::AgentSpawned {
-                agent: a,
-                place: p,
-                robot: Some("r1".into()),
-            }),
-            ev(1, 2.5, EventKind::Fired {
-                transition: tr,
-                consumed: vec![a],
-                produced: vec![a],
-                marking: Marking::from(vec![0, 1]),
-                robots: vec!["r1".into()],
-            }),
-            ev(2, 2.5, EventKind::ActionStarted {
-                agent: a,
-                place: q,
-                attempt: 0,
-            }),
-            ev(3, 4.0, EventKind::Warning {
-                message: "later".into(),
-            }),
+            ev(
+                0,
+                0.0,
+                EventKind::AgentSpawned {
+                    agent: a,
+                    place: p,
+                    robot: Some("r1".into()),
+                },
+            ),
+            ev(
+                1,
+                2.5,
+                EventKind::Fired {
+                    transition: tr,
+                    consumed: vec![a],
+                    produced: vec![a],
+                    marking: Marking::from(vec![0, 1]),
+                    robots: vec!["r1".into()],
+                },
+            ),
+            ev(
+                2,
+                2.5,
+                EventKind::ActionStarted {
+                    agent: a,
+                    place: q,
+                    attempt: 0,
+                },
+            ),
+            ev(
+                3,
+                4.0,
+                EventKind::Warning {
+                    message: "later".into(),
+                },
+            ),
         ];
         let rows = RobotStays::of(&events).json(&net);
         assert_eq!(

@@ -106,7 +106,10 @@ pub(crate) async fn cursor_time(b: &Browser) -> f64 {
         .await
         .as_f64()
         .unwrap();
-    assert!((said - t).abs() <= 5e-7 * t.abs().max(1.0), "{cursor} for {t}");
+    assert!(
+        (said - t).abs() <= 5e-7 * t.abs().max(1.0),
+        "{cursor} for {t}"
+    );
     t
 }
 

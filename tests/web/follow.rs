@@ -146,7 +146,7 @@ async fn a_live_run_with_8_robots_can_be_followed_and_stopped() {
     );
     let on_places = b
         .js(
-            "return Object.fromEntries([...document.querySelectorAll('[data-place]')]\
+            "return Object.fromEntries([...document.querySelectorAll('#nodes [data-place]')]\
                .map(g => [g.dataset.place, (g.querySelector('text.agents') || {}).textContent || '']));",
             vec![],
         )

@@ -137,13 +137,15 @@ async fn at_1280x800_nets_open_readable() {
     // The home-cleaning plan's net, with its GreatSPN look.
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("plans/home-cleaning/net.PNPRO");
     let net = read(&path);
-    let (addr, server) =
-        start_server(WebState::new(net.clone(), None, 0).with_source(&path)).await;
+    let (addr, server) = start_server(WebState::new(net.clone(), None, 0).with_source(&path)).await;
     open(&b, addr).await;
     let after = geometry(&b).await;
     b.screenshot(&screenshot_path("home-cleaning-1280.png"))
         .await;
-    assert_eq!(count(&after["nodes"]), (net.place_count() + net.transition_count()) as u64);
+    assert_eq!(
+        count(&after["nodes"]),
+        (net.place_count() + net.transition_count()) as u64
+    );
     // The file's positions, by the `layout` control: what the page drew before.
     b.js(
         "const s = document.getElementById('layout-choice'); s.value = 'file';\
@@ -151,12 +153,8 @@ async fn at_1280x800_nets_open_readable() {
         vec![],
     )
     .await;
-    b.wait_js(
-        "return net.layout === 'file';",
-        WAIT,
-        "the file's layout",
-    )
-    .await;
+    b.wait_js("return net.layout === 'file';", WAIT, "the file's layout")
+        .await;
     let before = geometry(&b).await;
     b.screenshot(&screenshot_path("home-cleaning-1280-file-layout.png"))
         .await;
@@ -195,8 +193,12 @@ async fn at_1280x800_nets_open_readable() {
         vec![],
     )
     .await;
-    b.wait_js("return net.layout === 'layered';", WAIT, "the automatic layout")
-        .await;
+    b.wait_js(
+        "return net.layout === 'layered';",
+        WAIT,
+        "the automatic layout",
+    )
+    .await;
     assert_eq!(geometry(&b).await["crossings"], after["crossings"]);
     server.abort();
 
@@ -212,9 +214,10 @@ async fn at_1280x800_nets_open_readable() {
     for t in net.transitions() {
         let prefix = if t.is_immediate() { "w=" } else { "λ=" };
         assert!(
-            params
-                .iter()
-                .any(|p| p.as_str().unwrap().starts_with(&format!("{}: {prefix}", t.name))),
+            params.iter().any(|p| p
+                .as_str()
+                .unwrap()
+                .starts_with(&format!("{}: {prefix}", t.name))),
             "no rate or weight shown for {}: {params:?}",
             t.name
         );
@@ -224,7 +227,8 @@ async fn at_1280x800_nets_open_readable() {
     // (Names too small to read are not drawn at all: no size.)
     let whole = geometry(&b).await["minNamePx"].as_f64().unwrap_or(0.0);
     assert!(whole < px, "{whole} vs {px}");
-    b.screenshot(&screenshot_path("patrol-1280-whole.png")).await;
+    b.screenshot(&screenshot_path("patrol-1280-whole.png"))
+        .await;
     b.close().await;
     server.abort();
 }

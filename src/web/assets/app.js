@@ -227,26 +227,30 @@ async function chooseLayout() {
 // Files use different units (GreatSPN: about one per grid cell; PIPE: pixels): scale the
 // drawing so that nodes sit at least ~70 px from their nearest neighbour (median).
 function scaleCoordinates() {
-  scale = 1;
-  const nodes = net.places.concat(net.transitions).slice(0, 400);
-  if (nodes.length < 2) return;
+  scale = nearestScale(net.places.concat(net.transitions).map((n) => [n.x, n.y]));
+  if (scale === 1) return;
+  for (const n of net.places.concat(net.transitions)) {
+    n.x *= scale;
+    n.y *= scale;
+  }
+  for (const a of net.arcs) a.points = a.points.map((q) => [q[0] * scale, q[1] * scale]);
+}
+
+// The scale that puts the median nearest neighbour of `points` ([x, y]) 70 px away; 1 when
+// they are that far apart already.
+function nearestScale(points) {
+  const nodes = points.slice(0, 400);
+  if (nodes.length < 2) return 1;
   const nearest = nodes.map((a) => {
     let best = Infinity;
     for (const b of nodes) {
-      const d = Math.hypot(a.x - b.x, a.y - b.y);
+      const d = Math.hypot(a[0] - b[0], a[1] - b[1]);
       if (b !== a && d > 0 && d < best) best = d;
     }
     return best;
   }).filter(Number.isFinite).sort((x, y) => x - y);
-  if (!nearest.length) return;
-  const s = 70 / nearest[Math.floor(nearest.length / 2)];
-  if (s <= 1) return;
-  scale = s;
-  for (const n of net.places.concat(net.transitions)) {
-    n.x *= s;
-    n.y *= s;
-  }
-  for (const a of net.arcs) a.points = a.points.map((q) => [q[0] * s, q[1] * s]);
+  if (!nearest.length) return 1;
+  return Math.max(1, 70 / nearest[Math.floor(nearest.length / 2)]);
 }
 
 function drawNet() {
@@ -661,7 +665,12 @@ function setupInteraction() {
 // Positions back in the file's units, as a GreatSPN project the browser downloads.
 async function saveLayout() {
   try {
-    const at = (n) => [n.x / scale, n.y / scale];
+    // The automatic layout of a file with positions is written in the file's own units
+    // (as the page would scale the file's positions), so it opens at the same size.
+    const o = net.other_layout;
+    const units = net.layout === 'layered' && o && o.layout === 'file'
+      ? scale * nearestScale(o.places.concat(o.transitions)) : scale;
+    const at = (n) => [n.x / units, n.y / units];
     const r = await api('POST', '/api/layout', {
       places: net.places.map(at),
       transitions: net.transitions.map(at),

@@ -283,7 +283,7 @@ function drawGantt() {
   for (const place of [...placeColour.keys()].filter((p) => used.has(p))) {
     const item = document.createElement('span');
     item.className = 'legend-item';
-    item.dataset.place = place;
+    item.dataset.legendPlace = place;
     const swatch = document.createElement('span');
     swatch.className = 'swatch';
     swatch.style.background = colourOf(place);

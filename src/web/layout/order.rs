@@ -99,8 +99,9 @@ pub(super) fn first_seen_order(slots: usize, down: &[Vec<usize>], marked: &[usiz
     order
 }
 
-/// Reorders each layer by the mean position of its neighbours, sweeping down and up, and
-/// keeps the order with the fewest crossings.
+/// Reorders each layer by the position of its neighbours (the median, the mean between two
+/// middles), sweeping down and up, then swaps neighbours in a layer while that removes
+/// crossings (transposes, on nets small enough); keeps the order with the fewest crossings.
 pub(super) fn order_layers(
     layers: &mut [Vec<usize>],
     up: &[Vec<usize>],
@@ -134,7 +135,7 @@ pub(super) fn order_layers(
                     let key = if nb[s].is_empty() {
                         index[s] as f64
                     } else {
-                        nb[s].iter().map(|&o| index[o] as f64).sum::<f64>() / nb[s].len() as f64
+                        median(nb[s].iter().map(|&o| index[o]).collect())
                     };
                     (key, s)
                 })
@@ -145,6 +146,9 @@ pub(super) fn order_layers(
                 index[s] = i;
             }
         }
+        if TRANSPOSE && slots <= TRANSPOSE_MAX {
+            transpose(layers, up, down, &mut index);
+        }
         let c = crossings(layers, down, &index);
         if c < best_crossings {
             best_crossings = c;
@@ -152,6 +156,59 @@ pub(super) fn order_layers(
         }
     }
     layers.clone_from_slice(&best);
+}
+
+/// Most slots for which [`transpose`] runs (it looks at every neighbouring pair of a layer,
+/// repeatedly).
+const TRANSPOSE_MAX: usize = 5_000;
+const TRANSPOSE: bool = false;
+
+/// The median of positions (the mean of the two middle ones for an even count).
+fn median(mut v: Vec<usize>) -> f64 {
+    v.sort_unstable();
+    let m = v.len() / 2;
+    if v.len() % 2 == 1 {
+        v[m] as f64
+    } else {
+        (v[m - 1] + v[m]) as f64 / 2.0
+    }
+}
+
+/// Swaps neighbouring slots of a layer while that lowers the crossings of their edges with
+/// both neighbouring layers (at most a few passes).
+fn transpose(
+    layers: &mut [Vec<usize>],
+    up: &[Vec<usize>],
+    down: &[Vec<usize>],
+    index: &mut [usize],
+) {
+    // Crossings between the edges of `u` and of `v` when `u` is left of `v`.
+    let pair = |u: usize, v: usize, index: &[usize]| -> usize {
+        let mut c = 0;
+        for nb in [up, down] {
+            for &a in &nb[u] {
+                c += nb[v].iter().filter(|&&b| index[a] > index[b]).count();
+            }
+        }
+        c
+    };
+    for _ in 0..4 {
+        let mut improved = false;
+        for nodes in layers.iter_mut() {
+            for i in 1..nodes.len() {
+                let (u, v) = (nodes[i - 1], nodes[i]);
+                if pair(v, u, index) < pair(u, v, index) {
+                    nodes.swap(i - 1, i);
+                    index[u] = i;
+                    index[v] = i - 1;
+                    improved = true;
+                }
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
 }
 
 /// Pairs of edges that cross between neighbouring layers (`index`: position in the layer).

@@ -69,13 +69,17 @@ fn bodies(net: &Net, layout: &Layout, s: f64) -> Vec<Body> {
         hh: PLACE_R,
         circle: true,
     });
-    let transitions = net.transitions().iter().zip(&layout.transitions).map(|(t, p)| Body {
-        x: p.x * s,
-        y: p.y * s,
-        hw: if t.is_immediate() { 3.0 } else { 10.0 },
-        hh: TRANSITION_HH,
-        circle: false,
-    });
+    let transitions = net
+        .transitions()
+        .iter()
+        .zip(&layout.transitions)
+        .map(|(t, p)| Body {
+            x: p.x * s,
+            y: p.y * s,
+            hw: if t.is_immediate() { 3.0 } else { 10.0 },
+            hh: TRANSITION_HH,
+            circle: false,
+        });
     places.chain(transitions).collect()
 }
 

@@ -182,7 +182,10 @@ fn useless_file_positions_give_way_to_a_readable_automatic_layout() {
     let after = quality::measure(&home, &auto);
     eprintln!("home-cleaning: file {before:?}, automatic {after:?}, {why:?}");
     assert_eq!(auto.source, LayoutSource::Layered);
-    assert!(why.unwrap().contains("arc segments pass through other nodes"));
+    assert!(
+        why.unwrap()
+            .contains("arc segments pass through other nodes")
+    );
     assert_eq!((after.overlaps, after.through_nodes), (0, 0), "{after:?}");
     assert!(after.crossings <= 40, "{after:?}");
 
@@ -193,9 +196,12 @@ fn useless_file_positions_give_way_to_a_readable_automatic_layout() {
         // The shared fixtures: `$GSPN_FIXTURES`, else `../shared/fixtures` (as tests/support).
         let root = std::env::var("GSPN_FIXTURES")
             .unwrap_or_else(|_| format!("{}/../shared/fixtures", env!("CARGO_MANIFEST_DIR")));
-        let net = read_net(&std::path::Path::new(&root).join(rel), &ReadOptions::default())
-            .unwrap()
-            .net;
+        let net = read_net(
+            &std::path::Path::new(&root).join(rel),
+            &ReadOptions::default(),
+        )
+        .unwrap()
+        .net;
         let (l, why) = choose(&net, Choice::Default);
         let q = quality::measure(&net, &l);
         eprintln!("{rel}: {q:?}, {why:?}");
