@@ -222,6 +222,84 @@ async fn at_1280x800_nets_open_readable() {
             t.name
         );
     }
+    // Plots: p1 clicked, then p5 shift-clicked: two curves over the same times, as CSV with
+    // the tokens the page shows now on its last line; the pointer reads both curves.
+    b.click("#step-n").await;
+    b.wait_js(
+        "return document.getElementById('clock').textContent.includes(', 10 firings');",
+        WAIT,
+        "10 firings",
+    )
+    .await;
+    let click = "const g = document.querySelector('#nodes [data-place=\"' + arguments[0] + '\"] circle');\
+                 const r = g.getBoundingClientRect();\
+                 const o = {clientX: r.x + r.width / 2, clientY: r.y + r.height / 2, bubbles: true, shiftKey: arguments[1]};\
+                 g.dispatchEvent(new MouseEvent('mousedown', o));\
+                 window.dispatchEvent(new MouseEvent('mouseup', o));";
+    let (p1, p5) = ("p1:Check_Temperature_L1", "p5:Check_Temperature_L2");
+    b.js(click, vec![json!(p1), json!(false)]).await;
+    b.js(click, vec![json!(p5), json!(true)]).await;
+    let plot = b
+        .wait_js(
+            "const ls = [...document.querySelectorAll('#plot polyline')];\
+             return ls.length === 2 && [ls.map(l => l.dataset.series), window.gspnPlot.csv(),\
+               [...document.querySelectorAll('#nodes [data-place]')].map(g => [g.dataset.place, g.dataset.tokens])];",
+            WAIT,
+            "two curves",
+        )
+        .await;
+    assert_eq!(plot[0], json!([p1, p5]));
+    let csv = plot[1].as_str().unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], format!("time,{p1},{p5}"));
+    let tokens: std::collections::HashMap<String, String> =
+        serde_json::from_value::<Vec<(String, String)>>(plot[2].clone())
+            .unwrap()
+            .into_iter()
+            .collect();
+    let last: Vec<&str> = lines.last().unwrap().split(',').collect();
+    assert_eq!(
+        last[1..],
+        [tokens[p1].as_str(), tokens[p5].as_str()],
+        "{csv}"
+    );
+    assert!(lines.len() >= 3, "{csv}");
+    let readout = b
+        .js(
+            "const svg = document.getElementById('plot'); const r = svg.getBoundingClientRect();\
+             svg.dispatchEvent(new MouseEvent('mousemove', {clientX: r.x + r.width / 2, clientY: r.y + r.height / 2, bubbles: true}));\
+             return document.getElementById('plot-readout').textContent;",
+            vec![],
+        )
+        .await;
+    let readout = readout.as_str().unwrap();
+    assert!(
+        readout.starts_with("t = ") && readout.contains(p1) && readout.contains(p5),
+        "{readout}"
+    );
+    b.screenshot(&screenshot_path("plot-two-places.png")).await;
+
+    // The minimap: small, hidden by its button (remembered on reload) and while editing.
+    let mini = b
+        .js(
+            "const m = document.getElementById('minimap-box');\
+             const w = m.getBoundingClientRect().width;\
+             document.querySelector('[data-collapse=\"minimap-box\"]').click();\
+             return [w, getComputedStyle(m).display];",
+            vec![],
+        )
+        .await;
+    assert!(mini[0].as_f64().unwrap() <= 160.0, "{mini}");
+    assert_eq!(mini[1], "none");
+    open(&b, addr).await;
+    let hidden = b
+        .js(
+            "return getComputedStyle(document.getElementById('minimap-box')).display;",
+            vec![],
+        )
+        .await;
+    assert_eq!(hidden, "none", "the hidden minimap stays hidden on reload");
+
     // `fit` (key f) still shows the whole net, smaller.
     b.click("#fit").await;
     // (Names too small to read are not drawn at all: no size.)

@@ -241,6 +241,18 @@ async fn a_page_that_joins_a_live_run_late_gets_its_history() {
     assert!(px.as_f64().unwrap() >= 9.99, "{px}");
     b.screenshot(&screenshot_path("live-8-robots-1280.png"))
         .await;
+    // For docs/viewer.md, the page as it opened before: a 320 px side panel, the map at 28 %,
+    // the whole net fitted.
+    b.js(
+        "document.getElementById('side').style.width = '320px';\
+         document.getElementById('map-panel').style.width = '28%';\
+         fit(true);",
+        vec![],
+    )
+    .await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    b.screenshot(&screenshot_path("live-8-robots-1280-as-before.png"))
+        .await;
     b.close().await;
     drop(child);
 }

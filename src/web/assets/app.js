@@ -587,11 +587,16 @@ function fit(whole) {
   view = { k, x: -x0 * k + (box.clientWidth - w * k) / 2, y: -y0 * k + (box.clientHeight - h * k) / 2 };
   const read = READ_PX / 11;
   if (!fittedWhole && k < read && all.length <= READ_MAX_NODES) {
-    // Too small to read: zoom to where names are READ_PX high, the net's top left corner
-    // (where the layered layout starts, at the marked places) in view; pan for the rest.
+    // Too small to read: zoom to where names are READ_PX high, with the top left marked
+    // place (where the layered layout starts) near the top left corner of the window, and
+    // nothing left of or above the net shown; pan for the rest.
+    const marked = net.places.filter((p) => p.tokens > 0);
+    const anchor = (marked.length ? marked : all).reduce((a, b) => (b.x + b.y < a.x + a.y ? b : a));
     view.k = read;
-    view.x = w * read <= box.clientWidth ? -x0 * read + (box.clientWidth - w * read) / 2 : -x0 * read;
-    view.y = h * read <= box.clientHeight ? -y0 * read + (box.clientHeight - h * read) / 2 : -y0 * read;
+    view.x = w * read <= box.clientWidth ? -x0 * read + (box.clientWidth - w * read) / 2
+      : Math.min(-x0 * read, 120 - anchor.x * read);
+    view.y = h * read <= box.clientHeight ? -y0 * read + (box.clientHeight - h * read) / 2
+      : Math.min(-y0 * read, 100 - anchor.y * read);
   }
   applyView();
 }

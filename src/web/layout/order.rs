@@ -99,9 +99,10 @@ pub(super) fn first_seen_order(slots: usize, down: &[Vec<usize>], marked: &[usiz
     order
 }
 
-/// Reorders each layer by the position of its neighbours (the median, the mean between two
-/// middles), sweeping down and up, then swaps neighbours in a layer while that removes
-/// crossings (transposes, on nets small enough); keeps the order with the fewest crossings.
+/// Reorders each layer by the mean position of its neighbours, sweeping down and up, then
+/// swaps neighbours in a layer while that removes crossings (transposes, on nets small
+/// enough); keeps the order with the fewest crossings. (The median instead of the mean drew
+/// more crossings on Peterson and Dekker: docs/viewer.md.)
 pub(super) fn order_layers(
     layers: &mut [Vec<usize>],
     up: &[Vec<usize>],
@@ -135,7 +136,7 @@ pub(super) fn order_layers(
                     let key = if nb[s].is_empty() {
                         index[s] as f64
                     } else {
-                        median(nb[s].iter().map(|&o| index[o]).collect())
+                        nb[s].iter().map(|&o| index[o] as f64).sum::<f64>() / nb[s].len() as f64
                     };
                     (key, s)
                 })
@@ -146,7 +147,7 @@ pub(super) fn order_layers(
                 index[s] = i;
             }
         }
-        if TRANSPOSE && slots <= TRANSPOSE_MAX {
+        if slots <= TRANSPOSE_MAX {
             transpose(layers, up, down, &mut index);
         }
         let c = crossings(layers, down, &index);
@@ -161,18 +162,6 @@ pub(super) fn order_layers(
 /// Most slots for which [`transpose`] runs (it looks at every neighbouring pair of a layer,
 /// repeatedly).
 const TRANSPOSE_MAX: usize = 5_000;
-const TRANSPOSE: bool = false;
-
-/// The median of positions (the mean of the two middle ones for an even count).
-fn median(mut v: Vec<usize>) -> f64 {
-    v.sort_unstable();
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m] as f64
-    } else {
-        (v[m - 1] + v[m]) as f64 / 2.0
-    }
-}
 
 /// Swaps neighbouring slots of a layer while that lowers the crossings of their edges with
 /// both neighbouring layers (at most a few passes).
