@@ -7,7 +7,7 @@
 //! every column reachable.
 #![cfg(feature = "web")]
 
-use crate::browser::{BROWSER, PATROL, WAIT, open, screenshot_path};
+use crate::browser::{BROWSER, PATROL, WAIT, analyse_on_page, open, screenshot_path};
 use crate::support as common;
 use crate::support::browser::Browser;
 use crate::support::start_server;
@@ -278,6 +278,54 @@ async fn at_1280x800_nets_open_readable() {
         "{readout}"
     );
     b.screenshot(&screenshot_path("plot-two-places.png")).await;
+
+    // A question's answers as curves: the expected tokens of the plotted places at each
+    // asked time, as in the table, and as CSV.
+    analyse_on_page(&b).await;
+    b.js(
+        "document.getElementById('query-times').value = '0.5, 2, 10';\
+         document.getElementById('query').click();",
+        vec![],
+    )
+    .await;
+    let answers = b
+        .wait_js(
+            "const ls = [...document.querySelectorAll('#answer-plot polyline')];\
+             return ls.length > 0 && [ls.map(l => [l.dataset.series, l.dataset.points]), window.gspnAnswers.csv(),\
+               [...document.querySelectorAll('#query-result td[data-tokens]')].map(td => [td.dataset.tokens, td.dataset.t, Number(td.dataset.value)])];",
+            WAIT,
+            "the answers' curves",
+        )
+        .await;
+    let curves: Vec<(String, String)> = serde_json::from_value(answers[0].clone()).unwrap();
+    assert_eq!(
+        curves.iter().map(|c| c.0.as_str()).collect::<Vec<_>>(),
+        [format!("E[{p1}]"), format!("E[{p5}]")]
+    );
+    let cells: Vec<(String, String, f64)> = serde_json::from_value(answers[2].clone()).unwrap();
+    for (series, points) in &curves {
+        let place = &series[2..series.len() - 1];
+        let want: Vec<(f64, f64)> = cells
+            .iter()
+            .filter(|c| c.0 == place)
+            .map(|c| (c.1.parse().unwrap(), c.2))
+            .collect();
+        let drawn: Vec<(f64, f64)> = points
+            .split(' ')
+            .map(|p| {
+                let (t, v) = p.split_once(',').unwrap();
+                (t.parse().unwrap(), v.parse().unwrap())
+            })
+            .collect();
+        assert_eq!(drawn, want, "{series}");
+        assert_eq!(drawn.len(), 3);
+    }
+    let csv = answers[1].as_str().unwrap();
+    assert_eq!(csv.lines().count(), 4, "{csv}");
+    assert!(
+        csv.starts_with(&format!("time,E[{p1}],E[{p5}]\n0.5,")),
+        "{csv}"
+    );
 
     // The minimap: small, hidden by its button (remembered on reload) and while editing.
     let mini = b

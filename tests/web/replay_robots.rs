@@ -219,7 +219,8 @@ async fn a_page_that_joins_a_live_run_late_gets_its_history() {
     open(&b, addr).await;
     let history = b
         .wait_js(
-            "return follow.segments.size === 8 && [follow.times[0],\
+            "return follow.segments.size === 8\
+               && document.querySelectorAll('#gantt [data-robot-row]').length === 8 && [follow.times[0],\
                [...follow.segments.values()].map(s => s[0].t0),\
                document.querySelectorAll('#gantt [data-robot-row]').length];",
             WAIT,
