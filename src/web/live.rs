@@ -20,6 +20,7 @@ use crate::net::Net;
 use crate::runtime::{AgentInfo, EventKind, Events, Outcome, Received, RuntimeHandle};
 use crate::web::WebState;
 use crate::web::api::net_json;
+use crate::web::limits::{WS_BUFFER, WS_MAX_INCOMING, WS_SEND_TIMEOUT};
 use crate::web::stays::RobotStays;
 
 /// Shortest time between two snapshots sent to one browser.
@@ -409,29 +410,43 @@ pub(crate) async fn ws(State(state): State<WebState>, upgrade: WebSocketUpgrade)
     use axum::response::IntoResponse;
     match state.live().cloned() {
         Some(live) => upgrade
+            .read_buffer_size(WS_BUFFER)
+            .write_buffer_size(WS_BUFFER)
+            .max_message_size(WS_MAX_INCOMING)
+            .max_frame_size(WS_MAX_INCOMING)
             .on_upgrade(move |socket| follow(socket, live))
             .into_response(),
         None => no_live(),
     }
 }
 
+/// Sends `text`; false when the browser went away or has not taken it within
+/// [`WS_SEND_TIMEOUT`] — then it is told so in a close frame (`1008`, "too slow") and
+/// dropped, as a slow browser is not buffered for.
+async fn send(socket: &mut WebSocket, text: String) -> bool {
+    match tokio::time::timeout(WS_SEND_TIMEOUT, socket.send(Message::Text(text.into()))).await {
+        Ok(sent) => sent.is_ok(),
+        Err(_) => {
+            let close = Message::Close(Some(axum::extract::ws::CloseFrame {
+                code: axum::extract::ws::close_code::POLICY,
+                reason: "too slow: the viewer drops a browser that does not read its updates"
+                    .into(),
+            }));
+            let _ = tokio::time::timeout(WS_SEND_TIMEOUT, socket.send(close)).await;
+            false
+        }
+    }
+}
+
 async fn follow(mut socket: WebSocket, live: LiveRun) {
     let mut net = net_json(live.net(), live.handle().seed(), None, false);
     net["type"] = json!("net");
-    if socket
-        .send(Message::Text(net.to_string().into()))
-        .await
-        .is_err()
-    {
+    if !send(&mut socket, net.to_string()).await {
         return;
     }
     // The run so far, for a page that joins late: its plot and robot timeline start at the
     // beginning of the run, not at the page's arrival.
-    if socket
-        .send(Message::Text(live.history_json().to_string().into()))
-        .await
-        .is_err()
-    {
+    if !send(&mut socket, live.history_json().to_string()).await {
         return;
     }
     let mut version = live.inner.version.subscribe();
@@ -450,11 +465,7 @@ async fn follow(mut socket: WebSocket, live: LiveRun) {
         {
             last_seq = Some(seq);
         }
-        if socket
-            .send(Message::Text(msg.to_string().into()))
-            .await
-            .is_err()
-        {
+        if !send(&mut socket, msg.to_string()).await {
             return;
         }
         tokio::time::sleep(FRAME).await;
