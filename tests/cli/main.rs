@@ -12,6 +12,7 @@ mod faithful_execution;
 mod journal_survives_signals;
 mod program_actions;
 mod readme;
+mod replay_finds_its_net;
 mod replay_robots;
 mod robots_must_match_agents;
 mod run;

@@ -1,6 +1,9 @@
-//! `plan-runner replay JOURNAL --net FILE [--web [ADDR]]`: play a run's journal back.
+//! `plan-runner replay JOURNAL [--net FILE] [--web [ADDR]]`: play a run's journal back.
 //!
-//! The journal names its net by hash; `--net` gives the net (or plan) file it was run from.
+//! The journal names its net by hash and records the file the run read it from; `--net`
+//! gives that net (or plan) file when the recorded one is not where it was (without `--net`
+//! the recorded path is tried as written, then relative to the journal's directory; either
+//! way the net must hash as the journal says).
 //! A run that started from another marking than the file's (`run --robots N` scales the
 //! robots' tokens) is recognised by the initial marking its journal's header records (older
 //! journals: the marking before the first firing). Without `--web` the firings are printed
@@ -9,12 +12,12 @@
 //! when the journal recorded one.
 
 use std::net::SocketAddr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context as _;
 use gspn::plan::open;
-use gspn::runtime::journal::{JournalError, Recording, read_recording, split_torn};
+use gspn::runtime::journal::{JournalError, JournalHeader, Recording, read_recording, split_torn};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -23,9 +26,9 @@ use crate::common::{BadInput, NetArgs};
 pub(crate) struct Args {
     /// The journal (`plan-runner run --journal FILE`).
     journal: PathBuf,
-    /// The net or plan file the run was made from.
+    /// The net or plan file the run was made from [default: the file the journal records].
     #[arg(long, value_name = "FILE")]
-    net: PathBuf,
+    net: Option<PathBuf>,
     /// Show it in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080].
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
     web: Option<SocketAddr>,
@@ -41,12 +44,16 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(addr) = args.web {
         crate::serve::check_bind(addr, args.allow_remote)?;
     }
-    let net = open(&args.net, &args.net_args.read_options())?
-        .into_plan()
-        .net;
     let text = std::fs::read_to_string(&args.journal)
         .with_context(|| format!("cannot read {}", args.journal.display()))?;
     let (text, torn) = split_torn(&text);
+    let net_file = match &args.net {
+        Some(f) => f.clone(),
+        None => recorded_net(&args.journal, text)?,
+    };
+    let net = open(&net_file, &args.net_args.read_options())?
+        .into_plan()
+        .net;
     let recording = match read_recording(text, &net) {
         // A journal written before headers recorded the initial marking.
         Err(JournalError::OtherNet { .. })
@@ -58,9 +65,14 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     }
     .map_err(|e| match e {
         JournalError::OtherNet { .. } => BadInput(format!(
-            "{}: {e}, read from --net {}",
+            "{}: {e}, read from {}{}",
             args.journal.display(),
-            args.net.display()
+            if args.net.is_some() {
+                "--net "
+            } else {
+                "the recorded "
+            },
+            net_file.display()
         )),
         e => BadInput(format!("{}: {e}", args.journal.display())),
     })?;
@@ -85,6 +97,41 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
     }
+}
+
+/// The net file the journal's header records (`"file"`): as written (relative to the
+/// directory the run was started in), else relative to the journal's own directory.
+fn recorded_net(journal: &Path, text: &str) -> anyhow::Result<PathBuf> {
+    let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
+    let header: JournalHeader<'_> = serde_json::from_str(first).map_err(|e| {
+        BadInput(format!(
+            "{}:1: not a journal header: {e}",
+            journal.display()
+        ))
+    })?;
+    let Some(file) = header.file else {
+        return Err(BadInput(format!(
+            "{}: the journal does not record its net file (a run from a library caller \
+             without `source`): give it with --net FILE",
+            journal.display()
+        ))
+        .into());
+    };
+    let recorded = PathBuf::from(file.as_ref());
+    let beside = journal.parent().map(|d| d.join(&recorded));
+    [Some(recorded.clone()), beside]
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_file())
+        .ok_or_else(|| {
+            BadInput(format!(
+                "{}: the journal's net file `{}` is not there (nor beside the journal): give \
+                 it with --net FILE",
+                journal.display(),
+                recorded.display()
+            ))
+            .into()
+        })
 }
 
 /// Without the viewer compiled in, `--web` is refused (exit code 2).
