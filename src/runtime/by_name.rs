@@ -25,6 +25,11 @@ impl<T> InNetOrder<T> {
         self.0.iter().map(|(n, v)| (n.as_str(), v))
     }
 
+    /// The values, in net order.
+    pub fn values(&self) -> impl Iterator<Item = &T> {
+        self.0.iter().map(|(_, v)| v)
+    }
+
     /// How many there are.
     pub fn len(&self) -> usize {
         self.0.len()

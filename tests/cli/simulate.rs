@@ -244,7 +244,7 @@ fn monte_carlo_estimates_the_plans_rewards() {
         .output()
         .unwrap();
     let exact: Value = serde_json::from_slice(&exact.stdout).unwrap();
-    let exact = exact["steady_state"]["rewards"]["work"]
+    let exact = exact["steady_state"]["rewards"]["work"]["rate"]
         .as_f64()
         .unwrap_or_else(|| panic!("{exact}"));
     assert!(lo <= exact && exact <= hi, "{exact} not in [{lo}, {hi}]");

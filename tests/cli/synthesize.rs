@@ -607,3 +607,51 @@ fn the_storm_snippet_of_the_docs_runs_as_written() {
         "{theirs} vs {ours}"
     );
 }
+
+/// Issue 30, snag 7: `--compact` wrote a catch-all rule as `marking = {  }`; reach-max
+/// printed `1.000000000124984` (the solver's bound past 1): a probability is shown clamped to
+/// [0, 1] with its bounds.
+#[test]
+fn compact_catch_all_and_reach_values_print_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = patrol_with_charger(dir.path(), 1);
+    let out = dir.path().join("compact.toml");
+    let (code, _, err) = synthesize(&[
+        plan.to_str().unwrap(),
+        "--compact",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(!text.contains("{  }"), "{text}");
+    assert!(text.contains("\nmarking = {}\npartial = true\n"), "{text}");
+    assert_eq!(
+        gspn::plan::read_plan(&out, &Default::default())
+            .unwrap()
+            .policy
+            .rules()
+            .len(),
+        2
+    );
+    let (code, stdout, err) = synthesize(&[
+        plan.to_str().unwrap(),
+        "--objective",
+        "reach-max",
+        "--goal",
+        "Charging > 0",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    let (v, lo, hi) = (
+        j["value"].as_f64().unwrap(),
+        j["lower"].as_f64().unwrap(),
+        j["upper"].as_f64().unwrap(),
+    );
+    assert!(
+        (0.0..=1.0).contains(&lo) && lo <= v && v <= hi && hi <= 1.0,
+        "{j}"
+    );
+    assert!((v - 1.0).abs() < 1e-9, "{j}");
+}

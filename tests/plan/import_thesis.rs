@@ -258,7 +258,7 @@ fn choices_of_missing_transitions_are_dropped_with_a_warning_naming_them() {
     let cases: [(&str, &[(&str, u32, u32)], usize); 3] = [
         (
             "caldeira_2020_package/standalone_example/gspn_execution_input.json",
-            &[("t4", 5, 36), ("t5", 5, 57)],
+            &[("t4", 5, 36), ("t5", 5, 55)],
             0,
         ),
         (
@@ -463,5 +463,7 @@ fn every_thesis_json_input_is_imported_or_refused_with_a_position() {
             }
         }
     }
-    assert_eq!((imported, refused), (7, 7));
+    // 10 import (3 of them, the standalone example, caldeira_2020_dev and azevedo_2023,
+    // after dropping choices of transitions their nets lack); 4 are refused at a position.
+    assert_eq!((imported, refused), (10, 4));
 }

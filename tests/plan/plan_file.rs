@@ -393,7 +393,9 @@ fn every_key_the_plan_reader_accepts_is_in_the_docs() {
     for path in &keys {
         let key = path.rsplit('.').next().unwrap();
         let documented = if path.starts_with("map.") {
-            map_section.contains(&format!("{key} =")) || map_section.contains(&format!("`{key}`"))
+            map_section.contains(&format!("{key} ="))
+                || map_section.contains(&format!("`{key}`"))
+                || map_section.contains(&format!(".{key}."))
         } else {
             table.contains(&format!("`{key}`"))
                 || table.contains(&format!("`[{key}]`"))

@@ -117,7 +117,7 @@ fn recorded_net(journal: &Path, text: &str) -> anyhow::Result<PathBuf> {
         ))
         .into());
     };
-    let recorded = PathBuf::from(file.as_ref());
+    let recorded = PathBuf::from(file.into_owned());
     let beside = journal.parent().map(|d| d.join(&recorded));
     [Some(recorded.clone()), beside]
         .into_iter()
