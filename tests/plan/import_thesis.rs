@@ -263,13 +263,13 @@ fn choices_of_missing_transitions_are_dropped_with_a_warning_naming_them() {
         ),
         (
             "caldeira_2020_dev/gspn_execution_input.json",
-            &[("t4", 4, 35)],
+            &[("t4", 4, 35), ("t5", 4, 44)],
             0,
         ),
         (
             "azevedo_2023/execution_input_parameters.json",
             &[("t19:Go_Check_L2", 5, 619)],
-            0,
+            7,
         ),
     ];
     for (rel, dropped, rules) in cases {
