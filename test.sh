@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The README's test command: installs what the test suite needs and is missing, then runs
-# `cargo test --all-features` (extra arguments go to it: `./test.sh --test cli`).
+# `cargo test --all-features` and the Python package's pytest suite. With arguments, only
+# `cargo test --all-features ARGS` (`./test.sh --test cli`).
 #
 # Needs: a Rust toolchain, ../shared beside the repository, and a Debian-like system (apt-get,
 # as root or through sudo) for what is missing:
@@ -12,6 +13,9 @@
 #   (tests/ros2/interop.rs, tests/ros2/python_robot.rs) and stormpy==2.0.0 (Storm, for
 #   tests/analysis/storm_cross_check.rs and the docs' Storm snippet; an x86_64 manylinux
 #   wheel for CPython 3.11).
+# - the Python package (python/, docs/python.md): built by pip (maturin) into a venv at
+#   target/venv-py with pytest and matplotlib, its suite run against the plan-runner that
+#   `cargo test` built.
 # What is present is left alone, so a second run starts the tests at once.
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -59,3 +63,15 @@ fi
 
 echo "== cargo test --all-features $*"
 cargo test --all-features "$@"
+if [ "$#" -gt 0 ]; then
+    exit 0
+fi
+
+echo "== Python package: pip install ./python, pytest"
+target="${CARGO_TARGET_DIR:-$PWD/target}"
+if [ ! -x target/venv-py/bin/python ]; then
+    python3 -m venv target/venv-py
+fi
+CARGO_TARGET_DIR="$target" \
+    target/venv-py/bin/pip install --quiet --disable-pip-version-check ./python pytest matplotlib
+GSPN_PLAN_RUNNER="$target/debug/plan-runner" target/venv-py/bin/python -m pytest -q python/tests

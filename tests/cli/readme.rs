@@ -43,7 +43,9 @@ fn ci_runs_the_readme_test_command_which_sets_up_and_runs_the_suite() {
     );
     let script = read("test.sh");
     let run = commands(&script);
-    assert_eq!(run.last(), Some(&"cargo test --all-features \"$@\""));
+    // The suite (with the arguments, if any), then the Python package's.
+    assert!(run.contains(&"cargo test --all-features \"$@\""), "{script}");
+    assert!(run.last().unwrap().contains("pytest -q python/tests"), "{script}");
     for needed in [
         "chromium",
         "chromium-driver",
@@ -52,6 +54,7 @@ fn ci_runs_the_readme_test_command_which_sets_up_and_runs_the_suite() {
         "target/venv-ros2",
         "cyclonedds==11.0.1",
         "stormpy==2.0.0",
+        "./python pytest matplotlib",
     ] {
         assert!(script.contains(needed), "test.sh must install {needed}");
     }
