@@ -44,8 +44,14 @@ fn ci_runs_the_readme_test_command_which_sets_up_and_runs_the_suite() {
     let script = read("test.sh");
     let run = commands(&script);
     // The suite (with the arguments, if any), then the Python package's.
-    assert!(run.contains(&"cargo test --all-features \"$@\""), "{script}");
-    assert!(run.last().unwrap().contains("pytest -q python/tests"), "{script}");
+    assert!(
+        run.contains(&"cargo test --all-features \"$@\""),
+        "{script}"
+    );
+    assert!(
+        run.last().unwrap().contains("pytest -q python/tests"),
+        "{script}"
+    );
     for needed in [
         "chromium",
         "chromium-driver",
