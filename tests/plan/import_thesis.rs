@@ -255,7 +255,9 @@ fn resource_places_and_exact_rules_are_kept() {
 /// drops them with a warning naming each (entry, line, column) and keeps the rest.
 #[test]
 fn choices_of_missing_transitions_are_dropped_with_a_warning_naming_them() {
-    let cases: [(&str, &[(&str, u32, u32)], usize); 3] = [
+    // The input, the choices dropped (transition, line, column), the rules kept.
+    type Dropped = (&'static str, u32, u32);
+    let cases: [(&str, &[Dropped], usize); 3] = [
         (
             "caldeira_2020_package/standalone_example/gspn_execution_input.json",
             &[("t4", 5, 36), ("t5", 5, 55)],
