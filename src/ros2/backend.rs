@@ -42,8 +42,9 @@ pub struct Ros2Backend {
     publisher: Arc<FiringPublisher>,
     task: Option<JoinHandle<Published>>,
     places: RemotePlaces,
-    /// The robots' heartbeats (kept for [`Ros2Backend::presence`]).
-    _watch: RobotWatch,
+    /// The robots' heartbeats (for [`Ros2Backend::presence`], and to know at the end which
+    /// robots listen for the end of the run).
+    watch: RobotWatch,
     presence: Presence,
     run_state: RunStatePublisher,
     /// The `/rosout` forwarder, when asked.
@@ -192,7 +193,7 @@ impl Ros2Backend {
             publisher: Arc::new(publisher),
             task: None,
             places: RemotePlaces::new(servers, settings.args.iter().cloned().collect(), links),
-            _watch: watch,
+            watch,
             presence,
             rosout,
         })
@@ -239,6 +240,17 @@ impl Ros2Backend {
         if !self.publisher.acknowledged(linger).await {
             tracing::warn!(
                 "not every subscriber acknowledged every firing within {linger:?} (--ros2-linger)"
+            );
+        }
+        // Robots that send heartbeats are gspn robots, which listen for the end of the run.
+        // A run of a few firings can end before discovery has matched their readers with
+        // the run-state writer (the supervisor starts once the robots' servers are
+        // discovered, not their readers): wait for them, so the transient-local end of the
+        // run reaches every one before this process exits.
+        let listeners = self.watch.alive_count();
+        if !self.run_state.matched(&self.node, listeners, linger).await {
+            tracing::warn!(
+                "not every robot's reader of the run state was matched within {linger:?} (--ros2-linger)"
             );
         }
         let over = RunState {

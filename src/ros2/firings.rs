@@ -227,6 +227,21 @@ impl RunStatePublisher {
         self.run.async_publish(state).await.map_err(Ros2Error::dds)
     }
 
+    /// Waits (at most `limit`) until at least `n` subscribers are matched; false if fewer
+    /// were by then.
+    pub async fn matched(&self, node: &Node, n: usize, limit: std::time::Duration) -> bool {
+        let start = tokio::time::Instant::now();
+        loop {
+            if self.run.get_subscription_count(node) >= n {
+                return true;
+            }
+            if start.elapsed() >= limit {
+                return false;
+            }
+            tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+        }
+    }
+
     /// Waits (at most `limit`) until every matched subscriber has acknowledged the states
     /// published; false if some had not by then.
     pub async fn acknowledged(&self, limit: std::time::Duration) -> bool {

@@ -192,6 +192,14 @@ impl RobotWatch {
         self.states.get(robot).cloned()
     }
 
+    /// How many watched robots are [`Liveness::Alive`] now.
+    pub fn alive_count(&self) -> usize {
+        self.states
+            .values()
+            .filter(|rx| *rx.borrow() == Liveness::Alive)
+            .count()
+    }
+
     /// Waits until every watched robot is [`Liveness::Alive`]; the robots still missing at
     /// `deadline` are returned as the error.
     pub async fn all_alive(&self, deadline: Duration) -> Result<(), Vec<String>> {
