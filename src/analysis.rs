@@ -13,6 +13,8 @@
 //!   predicate probabilities ([`Solver`](measures::Solver)).
 //! - [`under_policy`]: a plan's net analysed under its policy, with its reward rates
 //!   (`analyze PLAN`; the bare net when the plan has no policy).
+//! - [`query`]: questions in Storm's and PRISM's property syntax (`P=? [F<=600 done=1]`,
+//!   `T=? [F done=1]`, `S=? [..]`, rewards, `Pmax=?`), read on the full graph.
 //! - [`report`]: the typed report of all this — what `plan-runner analyze --json` prints and
 //!   what the viewer's analysis panel shows.
 //!
@@ -45,6 +47,7 @@ pub mod decision;
 pub mod invariants;
 pub mod measures;
 pub mod properties;
+pub mod query;
 pub mod report;
 pub mod scc;
 pub mod state_space;

@@ -540,6 +540,14 @@ impl StateSpace {
         self.graph().group(g).iter().map(|m| m.prob)
     }
 
+    /// Arcs out of global marking `g` in the full graph, as moves: from a tangible marking an
+    /// exponential transition with its rate (`prob` 1), from a vanishing one an immediate
+    /// transition with its probability (`rate` 0). Queries read paths on this graph
+    /// ([`query`](crate::analysis::query)): a vanishing marking on the way counts.
+    pub fn arcs(&self, g: usize) -> &[Move] {
+        self.graph().group(g)
+    }
+
     /// One shortest firing sequence from the initial marking to global marking `g`.
     pub fn path_to(&self, g: usize) -> Vec<TransitionId> {
         let mut path = Vec::new();

@@ -10,6 +10,7 @@ mod invariants;
 mod mcc_oracles;
 mod memory_is_bounded;
 mod properties;
+mod queries_match_storm;
 mod state_space;
 mod steady_state_from_columns;
 mod steady_state_random_nets;
