@@ -50,7 +50,7 @@ mod parse;
 
 use thiserror::Error;
 
-pub use eval::Evaluator;
+pub use eval::{Evaluator, state_rewards};
 
 use crate::analysis::decision::DecisionError;
 use crate::net::predicate::Predicate;

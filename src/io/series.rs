@@ -14,6 +14,50 @@
 
 use plotters::prelude::*;
 
+/// Most times one `A:B:STEP` range may expand to.
+pub const MAX_POINTS: usize = 100_000;
+
+/// Times written as the CLI takes them (`--transient 0.5,0:600:10`): each item a time `T`
+/// or a range `A:B:STEP` (A, A+STEP, … up to B), every time ≥ 0. The error names the item.
+///
+/// ```
+/// use gspn::io::series::parse_times;
+/// assert_eq!(parse_times(&["0:1:0.25".into(), "5".into()]).unwrap(), vec![0.0, 0.25, 0.5, 0.75, 1.0, 5.0]);
+/// assert!(parse_times(&["2:1:1".into()]).unwrap_err().contains("A ≤ B"));
+/// ```
+pub fn parse_times(items: &[String]) -> Result<Vec<f64>, String> {
+    let mut out = Vec::new();
+    for item in items {
+        let parts: Vec<&str> = item.split(':').collect();
+        let num = |s: &str| -> Result<f64, String> {
+            s.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|t| t.is_finite() && *t >= 0.0)
+                .ok_or_else(|| format!("{} is not a time ≥ 0", s.trim()))
+        };
+        match parts.as_slice() {
+            [t] => out.push(num(t)?),
+            [a, b, step] => {
+                let (a, b) = (num(a)?, num(b)?);
+                let step: f64 = step.trim().parse().unwrap_or(f64::NAN);
+                if !(step.is_finite() && step > 0.0) || b < a {
+                    return Err(format!(
+                        "{item}: a range is A:B:STEP with A ≤ B and STEP > 0"
+                    ));
+                }
+                let count = ((b - a) / step * (1.0 + 1e-12)).floor() + 1.0;
+                if count > MAX_POINTS as f64 {
+                    return Err(format!("{item}: {count} times, at most {MAX_POINTS}"));
+                }
+                out.extend((0..count as usize).map(|k| a + k as f64 * step));
+            }
+            _ => return Err(format!("{item}: expected a time or A:B:STEP")),
+        }
+    }
+    Ok(out)
+}
+
 /// Columns of numbers against time.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Series {
@@ -96,7 +140,11 @@ impl Series {
         };
         let y_max = values().fold(f64::NEG_INFINITY, f64::max);
         let y_min = values().fold(f64::INFINITY, f64::min).min(0.0);
-        let y_max = if y_max.is_finite() && y_max > y_min { y_max } else { y_min + 1.0 };
+        let y_max = if y_max.is_finite() && y_max > y_min {
+            y_max
+        } else {
+            y_min + 1.0
+        };
         let x_max = if t_max > t_min { t_max } else { t_min + 1.0 };
         let mut svg = String::new();
         {

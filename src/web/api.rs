@@ -274,12 +274,15 @@ pub(crate) struct QueryBody {
     /// Predicates (`analyze --prob`).
     #[serde(default)]
     prob: Vec<String>,
+    /// Queries in Storm's syntax (`analyze --query`).
+    #[serde(default)]
+    query: Vec<String>,
 }
 
-/// `POST /api/analysis/query {transient: [t], prob: [expr]}`: on the finished analysis's
-/// state space, `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens,
-/// throughput, probability}]}` as `plan-runner analyze --json --transient … --prob …` gives
-/// them. 409 before an analysis has finished, 422 when it found no steady state to ask about,
+/// `POST /api/analysis/query {transient: [t], prob: [expr], query: [q]}`: on the finished
+/// analysis's state space, `{steady_state: {probability: {expr: p}}, transient: [{t,
+/// mean_tokens, throughput, probability}], queries: [{query, value}]}` as `plan-runner
+/// analyze --json --transient … --prob … --query …` gives them. 409 before an analysis has finished, 422 when it found no steady state to ask about,
 /// 400 for a bad time or predicate (the message names it), 409 `{error, kind: "cancelled",
 /// progress}` when the question was cancelled (`/api/analysis/query/cancel`, a newer
 /// question, an edit of the net). Its progress is at `/api/analysis/query/progress`.
@@ -303,7 +306,7 @@ pub(crate) async fn analysis_query(
         }
         Some(Some(k)) => k,
     };
-    match job.ask(net, kept, b.transient, b.prob).await {
+    match job.ask(net, kept, b.transient, b.prob, b.query).await {
         Answer::Done(v) => Json(v).into_response(),
         Answer::Refused(message) => error(StatusCode::BAD_REQUEST, message),
         Answer::Cancelled(progress) => cancelled("the question", progress),

@@ -94,7 +94,16 @@ fn random_net(rng: &mut ChaCha8Rng, k: usize) -> Net {
     let mut b = NetBuilder::new(format!("random{k}"));
     let n = rng.random_range(3..6usize);
     let places: Vec<_> = (0..n)
-        .map(|i| b.place(format!("q{i}"), if i == 0 { rng.random_range(1..4u32) } else { rng.random_range(0..2u32) }))
+        .map(|i| {
+            b.place(
+                format!("q{i}"),
+                if i == 0 {
+                    rng.random_range(1..4u32)
+                } else {
+                    rng.random_range(0..2u32)
+                },
+            )
+        })
         .collect();
     for i in 0..rng.random_range(3..7usize) {
         let (a, c) = (rng.random_range(0..n), rng.random_range(0..n));
@@ -174,7 +183,8 @@ fn answer(file: &Path, queries: Vec<String>) -> Job {
         .iter()
         .map(|q| {
             let query = Query::parse(net, &[], q).unwrap_or_else(|e| panic!("{q}: {e}"));
-            ev.evaluate(&query).unwrap_or_else(|e| panic!("{}: {q}: {e}", file.display()))
+            ev.evaluate(&query)
+                .unwrap_or_else(|e| panic!("{}: {q}: {e}", file.display()))
         })
         .collect();
     Job {
@@ -224,9 +234,10 @@ fn queries_equal_storm_on_random_and_thesis_nets() {
             .unwrap_or_else(|e| panic!("{name}: {e}"))
             .net;
         let net = renamed(&net);
-        let file = dir
-            .path()
-            .join(format!("{}.PNPRO", name.replace('/', "_").trim_end_matches(".xml")));
+        let file = dir.path().join(format!(
+            "{}.PNPRO",
+            name.replace('/', "_").trim_end_matches(".xml")
+        ));
         std::fs::write(&file, gspn::io::pnpro::write(&net)).unwrap();
         let queries = queries_for(&net, &mut rng);
         jobs.push(answer(&file, queries));

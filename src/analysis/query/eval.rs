@@ -86,16 +86,23 @@ impl<'a> Evaluator<'a> {
                 let l = self.limiting()?;
                 let solver = Solver::new(self.net, self.space);
                 let measures = solver.measures(&l.pi);
-                Ok(reward_rate(self.net, self.space, &l.pi, &measures, &self.rewards[*reward]).rate)
+                Ok(reward_rate(
+                    self.net,
+                    self.space,
+                    &l.pi,
+                    &measures,
+                    &self.rewards[*reward],
+                )
+                .rate)
             }
             Kind::RewardCumulative { reward, bound } => {
-                let rho = self.state_rewards(&self.rewards[*reward]);
+                let rho = state_rewards(self.net, self.space, &self.rewards[*reward]);
                 let solver = Solver::new(self.net, self.space);
                 cumulative(solver.chain(), self.space.initial(), &rho, *bound)
             }
             Kind::RewardReach { reward, goal } => {
                 let abs = self.until(None, goal)?;
-                let mut rho = self.state_rewards(&self.rewards[*reward]);
+                let mut rho = state_rewards(self.net, self.space, &self.rewards[*reward]);
                 rho.extend([0.0, 0.0]);
                 accumulated(&abs, &rho)
             }
@@ -157,52 +164,54 @@ impl<'a> Evaluator<'a> {
             .as_ref()
             .map_err(Clone::clone)
     }
+}
 
-    /// Reward per unit of time in each tangible state: its places' rates (where time
-    /// passes), and the impulses of the exponential transitions and of the immediate ones
-    /// after them, at their rates.
-    fn state_rewards(&self, spec: &RewardSpec) -> Vec<f64> {
-        let space = self.space;
-        let n = space.tangible_count();
-        let mut impulse = vec![0.0; self.net.transition_count()];
-        for &(t, r) in &spec.transitions {
-            impulse[t.index()] += r;
-        }
-        let mut m = vec![0u32; self.net.place_count()];
-        let mut rho: Vec<f64> = (0..n)
-            .map(|s| {
-                let arcs = space.arcs(s);
-                if arcs.is_empty() {
-                    return 0.0;
-                }
-                space.marking_into(s, &mut m);
-                spec.place_rate(&m)
-                    + arcs
-                        .iter()
-                        .map(|mv| mv.rate * impulse[mv.transition.index()])
-                        .sum::<f64>()
-            })
-            .collect();
-        for f in space.immediate_flows() {
-            let s = f.state as usize;
-            let rate: f64 = space
-                .arcs(s)
-                .iter()
-                .filter(|mv| mv.transition == f.transition)
-                .map(|mv| mv.rate)
-                .next()
-                .unwrap_or(0.0);
-            rho[s] += rate * f.expected * impulse[f.immediate.index()];
-        }
-        rho
+/// Reward per unit of time in each tangible state of `space`: its places' rates (where time
+/// passes), and the impulses of the exponential transitions and of the immediate ones after
+/// them, at their rates — the same expectation as impulses per firing, for every `R`
+/// query and PRISM's `.srew` ([`Explicit::with_rewards`](crate::io::prism::Explicit::with_rewards)).
+pub fn state_rewards(net: &Net, space: &StateSpace, spec: &RewardSpec) -> Vec<f64> {
+    let n = space.tangible_count();
+    let mut impulse = vec![0.0; net.transition_count()];
+    for &(t, r) in &spec.transitions {
+        impulse[t.index()] += r;
     }
+    let mut m = vec![0u32; net.place_count()];
+    let mut rho: Vec<f64> = (0..n)
+        .map(|s| {
+            let arcs = space.arcs(s);
+            if arcs.is_empty() {
+                return 0.0;
+            }
+            space.marking_into(s, &mut m);
+            spec.place_rate(&m)
+                + arcs
+                    .iter()
+                    .map(|mv| mv.rate * impulse[mv.transition.index()])
+                    .sum::<f64>()
+        })
+        .collect();
+    for f in space.immediate_flows() {
+        let s = f.state as usize;
+        let rate: f64 = space
+            .arcs(s)
+            .iter()
+            .filter(|mv| mv.transition == f.transition)
+            .map(|mv| mv.rate)
+            .next()
+            .unwrap_or(0.0);
+        rho[s] += rate * f.expected * impulse[f.immediate.index()];
+    }
+    rho
 }
 
 /// States that can reach `target` (target included), backwards over the chain.
 fn reaching(chain: &Ctmc, target: &[bool]) -> Vec<bool> {
     let (ptr, rows, _) = chain.incoming();
     let mut seen = target.to_vec();
-    let mut queue: Vec<u32> = (0..chain.n as u32).filter(|&s| target[s as usize]).collect();
+    let mut queue: Vec<u32> = (0..chain.n as u32)
+        .filter(|&s| target[s as usize])
+        .collect();
     while let Some(j) = queue.pop() {
         for &i in &rows[ptr[j as usize]..ptr[j as usize + 1]] {
             if !seen[i as usize] {
@@ -267,7 +276,13 @@ fn unbounded(abs: &Absorbing) -> Result<f64, QueryError> {
     let p: f64 = abs
         .initial
         .iter()
-        .map(|&(s, p)| p * if s as usize == goal { 1.0 } else { x[s as usize] })
+        .map(|&(s, p)| {
+            p * if s as usize == goal {
+                1.0
+            } else {
+                x[s as usize]
+            }
+        })
         .sum();
     Ok(p.clamp(0.0, 1.0))
 }
@@ -292,7 +307,12 @@ fn accumulated(abs: &Absorbing, rho: &[f64]) -> Result<f64, QueryError> {
 
 /// `E[∫_0^t rho(X_u) du]` on `chain` from `initial`: `(1/Λ)·Σ_k π_k·rho·P(N(Λt) > k)`,
 /// the Poisson tail truncated at [`TRANSIENT_EPS`].
-fn cumulative(chain: &Ctmc, initial: &[(u32, f64)], rho: &[f64], t: f64) -> Result<f64, QueryError> {
+fn cumulative(
+    chain: &Ctmc,
+    initial: &[(u32, f64)],
+    rho: &[f64],
+    t: f64,
+) -> Result<f64, QueryError> {
     let exit = chain.exit_rates();
     let lambda = exit.iter().copied().fold(0.0, f64::max);
     let mut cur = vec![0.0; chain.n];

@@ -78,9 +78,7 @@ pub fn evaluate(
                 goal: model.states_where(|m| goal.eval(m)),
             },
         ),
-        Kind::RewardSteady { reward } => {
-            (model.rewards(&rewards[*reward]), Objective::Lra { max })
-        }
+        Kind::RewardSteady { reward } => (model.rewards(&rewards[*reward]), Objective::Lra { max }),
         _ => unreachable!("refused above"),
     };
     Ok(solve(&model, &rewards, &objective, &SolveOptions::default())?.value)

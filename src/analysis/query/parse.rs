@@ -43,7 +43,9 @@ impl Reader<'_> {
 
     fn eat(&mut self, s: &str) -> bool {
         let n = s.chars().count();
-        if self.chars.len() >= self.pos + n && s.chars().eq(self.chars[self.pos..self.pos + n].iter().copied())
+        if self.chars.len() >= self.pos + n
+            && s.chars()
+                .eq(self.chars[self.pos..self.pos + n].iter().copied())
         {
             self.pos += n;
             true
@@ -126,7 +128,8 @@ impl Reader<'_> {
             }
         }
         let close = close.ok_or_else(|| err(open_col, "`[` is never closed by `]`"))?;
-        if let Some(extra) = (close + 1..self.chars.len()).find(|&i| !self.chars[i].is_whitespace()) {
+        if let Some(extra) = (close + 1..self.chars.len()).find(|&i| !self.chars[i].is_whitespace())
+        {
             return Err(err(extra + 1, "unexpected text after the closing `]`"));
         }
         Ok(close)
@@ -157,7 +160,12 @@ impl Reader<'_> {
 
     /// `F`, `G` or `C` as a word of its own at the cursor (a place named `Fuel` is not `F`).
     fn path_op(&mut self, op: char) -> bool {
-        if self.peek() == Some(op) && !self.chars.get(self.pos + 1).is_some_and(|&c| is_name_char(c)) {
+        if self.peek() == Some(op)
+            && !self
+                .chars
+                .get(self.pos + 1)
+                .is_some_and(|&c| is_name_char(c))
+        {
             self.pos += 1;
             true
         } else {
@@ -180,13 +188,19 @@ pub(super) fn parse(net: &Net, rewards: &[RewardSpec], text: &str) -> Result<Que
     let mut suffix = rest.to_string();
     if letter == "R" {
         if !rest.is_empty() {
-            return Err(err(op_col, format!("unknown operator `{op}`: write `R{{\"name\"}}=?`")));
+            return Err(err(
+                op_col,
+                format!("unknown operator `{op}`: write `R{{\"name\"}}=?`"),
+            ));
         }
         r.expect("{", "`{\"name\"}` after R")?;
         r.skip_space();
         let name_col = r.column();
         if !r.eat("\"") {
-            return Err(err(name_col, "expected the reward structure's name in quotes"));
+            return Err(err(
+                name_col,
+                "expected the reward structure's name in quotes",
+            ));
         }
         let start = r.pos;
         while r.peek().is_some_and(|c| c != '"') {
@@ -206,7 +220,10 @@ pub(super) fn parse(net: &Net, rewards: &[RewardSpec], text: &str) -> Result<Que
                 message: if known.is_empty() {
                     format!("no reward structure `{name}`: the plan has no `[rewards.NAME]`")
                 } else {
-                    format!("no reward structure `{name}` (the plan has {})", known.join(", "))
+                    format!(
+                        "no reward structure `{name}` (the plan has {})",
+                        known.join(", ")
+                    )
                 },
             }
         })?;
@@ -231,7 +248,10 @@ pub(super) fn parse(net: &Net, rewards: &[RewardSpec], text: &str) -> Result<Que
             ),
         ));
     }
-    r.expect("=?", "`=?` (this engine computes values, not bounds like `>=0.9`)")?;
+    r.expect(
+        "=?",
+        "`=?` (this engine computes values, not bounds like `>=0.9`)",
+    )?;
     r.expect("[", "`[`")?;
     let open_col = r.pos;
     let close = r.closing(open_col)?;
@@ -360,20 +380,47 @@ mod tests {
         let n = net();
         let rw = rewards();
         let q = |t: &str| parse(&n, &rw, t).unwrap_or_else(|e| panic!("{t}: {e}"));
-        assert!(matches!(q("P=? [F<=600 P1=0]").kind, Kind::Until { bound: Some(b), safe: None, .. } if b == 600.0));
-        assert!(matches!(q("P=? [F P1==0 & Fuel>0]").kind, Kind::Until { bound: None, .. }));
-        assert!(matches!(q("P=? [Fuel>0 U<=2.5 P1=0]").kind, Kind::Until { bound: Some(b), safe: Some(_), .. } if b == 2.5));
-        assert!(matches!(q("P=?[ `a-b`=0 U P1=0 ]").kind, Kind::Until { bound: None, safe: Some(_), .. }));
-        assert!(matches!(q("P=? [G<=1e2 Fuel=0]").kind, Kind::Globally { bound: Some(b), .. } if b == 100.0));
+        assert!(
+            matches!(q("P=? [F<=600 P1=0]").kind, Kind::Until { bound: Some(b), safe: None, .. } if b == 600.0)
+        );
+        assert!(matches!(
+            q("P=? [F P1==0 & Fuel>0]").kind,
+            Kind::Until { bound: None, .. }
+        ));
+        assert!(
+            matches!(q("P=? [Fuel>0 U<=2.5 P1=0]").kind, Kind::Until { bound: Some(b), safe: Some(_), .. } if b == 2.5)
+        );
+        assert!(matches!(
+            q("P=?[ `a-b`=0 U P1=0 ]").kind,
+            Kind::Until {
+                bound: None,
+                safe: Some(_),
+                ..
+            }
+        ));
+        assert!(
+            matches!(q("P=? [G<=1e2 Fuel=0]").kind, Kind::Globally { bound: Some(b), .. } if b == 100.0)
+        );
         assert!(matches!(q("T=? [F Fuel = 1]").kind, Kind::Time { .. }));
         assert!(matches!(q("S=? [P1=1 | Fuel>0]").kind, Kind::Steady { .. }));
-        assert!(matches!(q("R{\"energy\"}=? [S]").kind, Kind::RewardSteady { reward: 0 }));
-        assert!(matches!(q("R{\"energy\"}=? [C<=10]").kind, Kind::RewardCumulative { reward: 0, bound: b } if b == 10.0));
-        assert!(matches!(q("R{\"energy\"}min=? [F P1=0]").kind, Kind::RewardReach { .. }));
+        assert!(matches!(
+            q("R{\"energy\"}=? [S]").kind,
+            Kind::RewardSteady { reward: 0 }
+        ));
+        assert!(
+            matches!(q("R{\"energy\"}=? [C<=10]").kind, Kind::RewardCumulative { reward: 0, bound: b } if b == 10.0)
+        );
+        assert!(matches!(
+            q("R{\"energy\"}min=? [F P1=0]").kind,
+            Kind::RewardReach { .. }
+        ));
         assert_eq!(q("Pmax=? [F P1=0]").extreme, Some(true));
         assert_eq!(q("Tmin=? [F P1=0]").extreme, Some(false));
         // `Fuel` is a place, not `F` followed by `uel`.
-        assert!(matches!(q("P=? [Fuel>0 U P1=0]").kind, Kind::Until { safe: Some(_), .. }));
+        assert!(matches!(
+            q("P=? [Fuel>0 U P1=0]").kind,
+            Kind::Until { safe: Some(_), .. }
+        ));
     }
 
     #[test]
@@ -392,6 +439,9 @@ mod tests {
         assert_eq!(col("T=? [F<=3 P1=0]"), 7);
         assert_eq!(col("Smax=? [P1=0]"), 1);
         let e = parse(&net(), &rewards(), "P=? [F<=1 Pz=0]").unwrap_err();
-        assert!(matches!(e, QueryError::Syntax { name: Some(ref n), .. } if n == "Pz"), "{e}");
+        assert!(
+            matches!(e, QueryError::Syntax { name: Some(ref n), .. } if n == "Pz"),
+            "{e}"
+        );
     }
 }

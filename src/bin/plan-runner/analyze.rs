@@ -6,7 +6,7 @@
 //! policy, with its reward rates: `gspn::analysis::under_policy`); the output says which.
 
 mod queries;
-mod series;
+pub(crate) mod series;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -161,7 +161,18 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         let markings: Vec<Vec<u32>> = (0..ss.tangible_count()).map(|s| ss.marking(s)).collect();
         let names: Vec<&str> = net.places().iter().map(|p| p.name.as_str()).collect();
         let initial: Vec<u32> = ss.initial().iter().map(|&(s, _)| s).collect();
+        let rewards = plan
+            .rewards
+            .iter()
+            .map(|r| {
+                (
+                    r.name.clone(),
+                    gspn::analysis::query::state_rewards(net, &ss, r),
+                )
+            })
+            .collect();
         Explicit::new(&names, solver.chain(), &markings, &initial)
+            .with_rewards(rewards)
             .write(prefix)
             .with_context(|| format!("writing {}.tra/.sta/.lab", prefix.display()))?;
     }
@@ -243,6 +254,13 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     }
     if let Some(prefix) = &args.export_prism {
         println!("\nwrote {0}.tra, {0}.sta, {0}.lab", prefix.display());
+        for r in &plan.rewards {
+            println!(
+                "wrote {}.{}.srew",
+                prefix.display(),
+                gspn::io::prism::identifier(&r.name)
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

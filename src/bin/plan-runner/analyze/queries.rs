@@ -66,7 +66,9 @@ pub(super) fn answer(
                     query: q.source().to_string(),
                     value,
                 }),
-                Err(e @ QueryError::Unsupported(_)) => Err(BadInput(format!("--query: {e}")).into()),
+                Err(e @ QueryError::Unsupported(_)) => {
+                    Err(BadInput(format!("--query: {e}")).into())
+                }
                 Err(e) => Err(anyhow::Error::new(e).context(format!("--query `{q}`"))),
             }
         })

@@ -12,47 +12,9 @@ use gspn::net::Net;
 
 use crate::common::BadInput;
 
-/// Most times one `A:B:STEP` range may expand to.
-const MAX_POINTS: usize = 100_000;
-
 /// `--transient` items: a time `T`, or a range `A:B:STEP` (A, A+STEP, … up to B).
-pub(super) fn times(items: &[String]) -> Result<Vec<f64>, BadInput> {
-    let mut out = Vec::new();
-    for item in items {
-        let parts: Vec<&str> = item.split(':').collect();
-        let num = |s: &str| -> Result<f64, BadInput> {
-            s.trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|t| t.is_finite() && *t >= 0.0)
-                .ok_or_else(|| BadInput(format!("--transient: {s} is not a time ≥ 0")))
-        };
-        match parts.as_slice() {
-            [t] => out.push(num(t)?),
-            [a, b, step] => {
-                let (a, b) = (num(a)?, num(b)?);
-                let step: f64 = step.trim().parse().unwrap_or(f64::NAN);
-                if !(step.is_finite() && step > 0.0) || b < a {
-                    return Err(BadInput(format!(
-                        "--transient {item}: a range is A:B:STEP with A ≤ B and STEP > 0"
-                    )));
-                }
-                let count = ((b - a) / step + 1e-9).floor() as usize + 1;
-                if count > MAX_POINTS {
-                    return Err(BadInput(format!(
-                        "--transient {item}: {count} times, at most {MAX_POINTS}"
-                    )));
-                }
-                out.extend((0..count).map(|k| a + k as f64 * step));
-            }
-            _ => {
-                return Err(BadInput(format!(
-                    "--transient {item}: expected a time or A:B:STEP"
-                )));
-            }
-        }
-    }
-    Ok(out)
+pub(crate) fn times(items: &[String]) -> Result<Vec<f64>, BadInput> {
+    gspn::io::series::parse_times(items).map_err(|e| BadInput(format!("--transient: {e}")))
 }
 
 /// The columns: `E[place]` for every place, `P(expr)` for every predicate, then every
@@ -66,15 +28,21 @@ pub(super) fn table(
 ) -> anyhow::Result<(Series, Vec<usize>)> {
     let curves: Vec<(&Query, Vec<f64>)> = queries
         .iter()
-        .filter(|q| {
-            q.extreme.is_none() && matches!(q.kind, Kind::Until { bound: Some(_), .. })
-        })
+        .filter(|q| q.extreme.is_none() && matches!(q.kind, Kind::Until { bound: Some(_), .. }))
         .map(|q| {
             let times: Vec<f64> = points.iter().map(|p| p.t).collect();
-            Ok((q, ev.until_over_time(q, &times).with_context(|| format!("{q}"))?))
+            Ok((
+                q,
+                ev.until_over_time(q, &times)
+                    .with_context(|| format!("{q}"))?,
+            ))
         })
         .collect::<anyhow::Result<_>>()?;
-    let mut columns: Vec<String> = net.places().iter().map(|p| format!("E[{}]", p.name)).collect();
+    let mut columns: Vec<String> = net
+        .places()
+        .iter()
+        .map(|p| format!("E[{}]", p.name))
+        .collect();
     columns.extend(prob.iter().map(|e| format!("P({e})")));
     columns.extend(curves.iter().map(|(q, _)| q.source().to_string()));
     let mut s = Series::new(columns);
@@ -95,7 +63,7 @@ pub(super) fn table(
 }
 
 /// Writes the CSV and the SVG asked for.
-pub(super) fn write(
+pub(crate) fn write(
     s: &Series,
     plotted: &[usize],
     title: &str,
