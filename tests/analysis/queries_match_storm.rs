@@ -20,7 +20,8 @@ use rand_chacha::ChaCha8Rng;
 use crate::support::fixtures::fixture;
 
 /// Storm with tight solver precisions: policy iteration for its expected times, 1e-12 for
-/// its equation solvers. A query it cannot answer prints `nan` (and why, on stderr).
+/// its equation solvers. Each answer is a line `= VALUE`; a query it cannot answer prints
+/// `= nan` (and why, on stderr).
 const SCRIPT: &str = r#"
 import sys, json, stormpy, stormpy.gspn as g
 from stormpy.environments import MinMaxMethod
@@ -37,9 +38,9 @@ for job in json.load(open(sys.argv[1])):
     for q, p in zip(job["storm"], props):
         try:
             r = stormpy.model_checking(model, p, environment=env)
-            print(repr(r.get_value(model.initial_states[0])))
+            print("=", repr(r.get_value(model.initial_states[0])))
         except RuntimeError as e:
-            print("nan")
+            print("= nan")
             print(job["file"], q, e, file=sys.stderr)
 "#;
 
@@ -262,7 +263,12 @@ fn queries_equal_storm_on_random_and_thesis_nets() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "stormpy failed: {stderr}");
     let text = String::from_utf8(out.stdout).unwrap();
-    let storm: Vec<f64> = text.lines().map(|l| l.trim().parse().unwrap()).collect();
+    // Storm logs its own errors on stdout too: the answers are the lines `= VALUE`.
+    let storm: Vec<f64> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("= "))
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
     let total: usize = jobs.iter().map(|j| j.queries.len()).sum();
     assert_eq!(storm.len(), total, "{text}\n{stderr}");
     let mut storm = storm.into_iter();

@@ -348,3 +348,60 @@ fn cumulative(
     }
     Ok(total * inv)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::decision::PlaceMode;
+    use crate::analysis::state_space::Options;
+    use crate::net::{NetBuilder, Servers};
+
+    /// A machine up (fails at λ = 0.5) and down (repaired at μ = 2); reward 1 per unit of
+    /// time up, 5 per failure.
+    fn machine() -> (Net, Vec<RewardSpec>) {
+        let mut b = NetBuilder::new("machine");
+        let (up, down) = (b.place("Up", 1), b.place("Down", 0));
+        let fail = b.exponential("fail", 0.5, Servers::Single);
+        let repair = b.exponential("repair", 2.0, Servers::Single);
+        b.input(up, fail, 1);
+        b.output(fail, down, 1);
+        b.input(down, repair, 1);
+        b.output(repair, up, 1);
+        let spec = RewardSpec {
+            name: "r".into(),
+            places: vec![(up, 1.0, PlaceMode::Marked)],
+            transitions: vec![(fail, 5.0)],
+        };
+        (b.build().unwrap(), vec![spec])
+    }
+
+    fn ask(net: &Net, rewards: &[RewardSpec], text: &str) -> f64 {
+        let space = StateSpace::build(net, &Options::default()).unwrap();
+        let ev = Evaluator::new(net, &space, rewards);
+        ev.evaluate(&Query::parse(net, rewards, text).unwrap())
+            .unwrap()
+    }
+
+    #[test]
+    fn rewards_long_run_accumulated_and_until() {
+        let (net, rw) = machine();
+        let (l, m) = (0.5f64, 2.0f64);
+        // Long run: P(up)·1 + throughput(fail)·5 = μ/(λ+μ) + 5·λμ/(λ+μ).
+        let s = ask(&net, &rw, "R{\"r\"}=? [S]");
+        assert!((s - (m / (l + m) + 5.0 * l * m / (l + m))).abs() < 1e-12, "{s}");
+        // ∫_0^t P(up) du + 5·∫_0^t λ·P(up) du, P(up)(u) = μ/(λ+μ) + λ/(λ+μ)·e^{−(λ+μ)u}.
+        let t = 3.0;
+        let up = m * t / (l + m) + l / (l + m).powi(2) * (1.0 - (-(l + m) * t).exp());
+        let c = ask(&net, &rw, "R{\"r\"}=? [C<=3]");
+        assert!((c - (up + 5.0 * l * up)).abs() < 1e-9, "{c} vs {}", up + 5.0 * l * up);
+        // Until the first failure: 1/λ up, then the failure's impulse 5.
+        let f = ask(&net, &rw, "R{\"r\"}=? [F Down=1]");
+        assert!((f - (1.0 / l + 5.0)).abs() < 1e-12, "{f}");
+        // Never reached: infinite.
+        assert_eq!(ask(&net, &rw, "R{\"r\"}=? [F Down=2]"), f64::INFINITY);
+        // P(still up through [0, t]) = e^{−λt}; G for ever is 0.
+        let g = ask(&net, &rw, "P=? [G<=3 Up=1]");
+        assert!((g - (-l * t).exp()).abs() < 1e-10, "{g}");
+        assert!(ask(&net, &rw, "P=? [G Up=1]").abs() < 1e-12);
+    }
+}

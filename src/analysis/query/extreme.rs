@@ -40,46 +40,37 @@ pub fn evaluate(
              time, total-reward and long-run objectives)"
         )))
     };
-    match &query.kind {
+    // What the objective needs: a goal predicate and a reward structure (none: time).
+    let (goal, reward) = match &query.kind {
         Kind::Until {
             safe: None,
             bound: None,
-            ..
-        }
-        | Kind::Time { .. }
-        | Kind::RewardReach { .. }
-        | Kind::RewardSteady { .. } => {}
+            goal,
+        } => (Some(goal), None),
+        Kind::Time { goal } => (Some(goal), None),
+        Kind::RewardReach { reward, goal } => (Some(goal), Some(*reward)),
+        Kind::RewardSteady { reward } => (None, Some(*reward)),
         Kind::Until { bound: Some(_), .. } => return unsupported("a time bound"),
         Kind::Until { .. } => return unsupported("until (`U`)"),
         Kind::Globally { .. } => return unsupported("globally (`G`)"),
         Kind::Steady { .. } => return unsupported("`S`"),
         Kind::RewardCumulative { .. } => return unsupported("cumulative reward (`C<=t`)"),
-    }
+    };
     let model = DecisionModel::build(net, controls, build)?;
-    let (rewards, objective) = match &query.kind {
-        Kind::Until { goal, .. } => (
+    let goal_flags = goal.map(|g| model.states_where(|m| g.eval(m)));
+    let (rewards, objective) = match (goal_flags, reward) {
+        // P[F φ]: reach.
+        (Some(goal), None) if matches!(query.kind, Kind::Until { .. }) => (
             model.rewards(&RewardSpec::default()),
-            Objective::Reach {
-                max,
-                goal: model.states_where(|m| goal.eval(m)),
-            },
+            Objective::Reach { max, goal },
         ),
-        Kind::Time { goal } => (
-            model.time_rewards(),
-            Objective::Total {
-                max,
-                goal: model.states_where(|m| goal.eval(m)),
-            },
+        // T[F φ]: the total of time rewards.
+        (Some(goal), None) => (model.time_rewards(), Objective::Total { max, goal }),
+        (Some(goal), Some(r)) => (model.rewards(&rewards[r]), Objective::Total { max, goal }),
+        (None, r) => (
+            model.rewards(r.map_or(&RewardSpec::default(), |r| &rewards[r])),
+            Objective::Lra { max },
         ),
-        Kind::RewardReach { reward, goal } => (
-            model.rewards(&rewards[*reward]),
-            Objective::Total {
-                max,
-                goal: model.states_where(|m| goal.eval(m)),
-            },
-        ),
-        Kind::RewardSteady { reward } => (model.rewards(&rewards[*reward]), Objective::Lra { max }),
-        _ => unreachable!("refused above"),
     };
     Ok(solve(&model, &rewards, &objective, &SolveOptions::default())?.value)
 }
