@@ -404,4 +404,26 @@ mod tests {
         assert!((g - (-l * t).exp()).abs() < 1e-10, "{g}");
         assert!(ask(&net, &rw, "P=? [G Up=1]").abs() < 1e-12);
     }
+
+    /// Regression against Storm 2.0.0, which keeps one of the two: A → T1 (rate 1) or T2
+    /// (rate 2) → B, vanishing (an immediate transition empties it into D). The time to D is
+    /// 1/3; Storm answers 1.
+    #[test]
+    fn two_exponential_transitions_into_one_vanishing_marking_add_up() {
+        let mut b = NetBuilder::new("twins");
+        let (a, bb, d) = (b.place("A", 1), b.place("B", 0), b.place("D", 0));
+        for (name, rate) in [("T1", 1.0), ("T2", 2.0)] {
+            let t = b.exponential(name, rate, Servers::Single);
+            b.input(a, t, 1);
+            b.output(t, bb, 1);
+        }
+        let i = b.immediate("i", 1.0, 1);
+        b.input(bb, i, 1);
+        b.output(i, d, 1);
+        let net = b.build().unwrap();
+        assert!((ask(&net, &[], "T=? [F D=1]") - 1.0 / 3.0).abs() < 1e-12);
+        // Within t = 0.5: 1 − e^{−3·0.5}.
+        let p = ask(&net, &[], "P=? [F<=0.5 D=1]");
+        assert!((p - (1.0 - (-1.5f64).exp())).abs() < 1e-10, "{p}");
+    }
 }

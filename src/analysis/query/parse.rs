@@ -431,7 +431,7 @@ mod tests {
         assert_eq!(col("P=? [F P1=0"), 5);
         assert_eq!(col("P=? [F<=x P1=0]"), 9);
         assert_eq!(col("P=? [F<=1 Pz=0]"), 11);
-        assert_eq!(col("P=? [F<=1 P1=]"), 15);
+        assert_eq!(col("P=? [F<=1 P1=]"), 14);
         assert_eq!(col("P=? [X P1=0]"), 6);
         assert_eq!(col("P=? [F P1=0] x"), 14);
         assert_eq!(col("R{\"cost\"}=? [S]"), 3);
