@@ -3,6 +3,8 @@
 //! on the thesis nets: the same query on the same PNPRO file, Storm through stormpy 2.0.0
 //! (PyPI, in the venv `.ci/run` makes at target/venv-ros2), which reads a GSPN as a Markov
 //! automaton (hence its `Pmax`, `Tmax`, `LRAmax`: one choice per state, so max is the value).
+//! Where Storm gives no answer (a time-bounded goal met only in vanishing markings; time on
+//! a net of immediate transitions only, an MDP to Storm) the query is listed, not compared.
 //!
 //! Places are renamed `q0, q1, …` in the file both tools read: Storm's GSPN places become
 //! JANI variables, which cannot hold the `:` of the thesis patrol's names.
@@ -36,6 +38,12 @@ for job in json.load(open(sys.argv[1])):
     model = stormpy.build_model(jani, props)
     assert model.nr_choices == model.nr_states, "a GSPN without decisions"
     for q, p in zip(job["storm"], props):
+        if "MDP" in str(model.model_type) and not q.startswith("Pmax"):
+            # No Markovian state (only immediate transitions): Storm makes the GSPN an
+            # MDP, where time and long-run averages count steps, not time.
+            print("= nan")
+            print(job["file"], q, "Storm built an MDP: time counts steps", file=sys.stderr)
+            continue
         try:
             r = stormpy.model_checking(model, p, environment=env)
             print("=", repr(r.get_value(model.initial_states[0])))
@@ -315,12 +323,13 @@ fn queries_equal_storm_on_random_and_thesis_nets() {
         }
     }
     println!(
-        "{compared} answers equal Storm's; Storm did not answer {}:\n{}",
+        "{compared} answers equal Storm's; not compared (Storm did not answer) {}:\n{}",
         unanswered.len(),
         unanswered.join("\n")
     );
     assert!(wrong.is_empty(), "differ from Storm:\n{}", wrong.join("\n"));
     // Storm answers nearly all of them (it fails on a time-bounded goal met only in
-    // vanishing markings: "Cannot build empty submatrix").
-    assert!(compared >= total * 9 / 10, "{compared} of {total} compared");
+    // vanishing markings: "Cannot build empty submatrix"; a net of immediate transitions
+    // only is an MDP to Storm, whose time counts steps).
+    assert!(compared >= total * 85 / 100, "{compared} of {total} compared");
 }

@@ -192,7 +192,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         series::write(
             &table,
             &plotted,
-            &format!("{} ({regime})", net.name()),
+            &format!("{} ({regime})", args.file.display()),
             args.csv.as_deref(),
             args.plot.as_deref(),
         )?;
