@@ -331,5 +331,8 @@ fn queries_equal_storm_on_random_and_thesis_nets() {
     // Storm answers nearly all of them (it fails on a time-bounded goal met only in
     // vanishing markings: "Cannot build empty submatrix"; a net of immediate transitions
     // only is an MDP to Storm, whose time counts steps).
-    assert!(compared >= total * 85 / 100, "{compared} of {total} compared");
+    assert!(
+        compared >= total * 85 / 100,
+        "{compared} of {total} compared"
+    );
 }

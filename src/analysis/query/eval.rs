@@ -388,12 +388,19 @@ mod tests {
         let (l, m) = (0.5f64, 2.0f64);
         // Long run: P(up)·1 + throughput(fail)·5 = μ/(λ+μ) + 5·λμ/(λ+μ).
         let s = ask(&net, &rw, "R{\"r\"}=? [S]");
-        assert!((s - (m / (l + m) + 5.0 * l * m / (l + m))).abs() < 1e-12, "{s}");
+        assert!(
+            (s - (m / (l + m) + 5.0 * l * m / (l + m))).abs() < 1e-12,
+            "{s}"
+        );
         // ∫_0^t P(up) du + 5·∫_0^t λ·P(up) du, P(up)(u) = μ/(λ+μ) + λ/(λ+μ)·e^{−(λ+μ)u}.
         let t = 3.0;
         let up = m * t / (l + m) + l / (l + m).powi(2) * (1.0 - (-(l + m) * t).exp());
         let c = ask(&net, &rw, "R{\"r\"}=? [C<=3]");
-        assert!((c - (up + 5.0 * l * up)).abs() < 1e-9, "{c} vs {}", up + 5.0 * l * up);
+        assert!(
+            (c - (up + 5.0 * l * up)).abs() < 1e-9,
+            "{c} vs {}",
+            up + 5.0 * l * up
+        );
         // Until the first failure: 1/λ up, then the failure's impulse 5.
         let f = ask(&net, &rw, "R{\"r\"}=? [F Down=1]");
         assert!((f - (1.0 / l + 5.0)).abs() < 1e-12, "{f}");
