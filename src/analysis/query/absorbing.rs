@@ -78,10 +78,11 @@ impl Absorbing {
         };
         let mut triplets = Vec::new();
         let mut row = Vec::new();
-        for s in 0..n {
-            if class[s] != Class::Go {
-                continue;
-            }
+        let go = class[..n]
+            .iter()
+            .enumerate()
+            .filter(|&(_, &c)| c == Class::Go);
+        for (s, _) in go {
             for mv in space.arcs(s) {
                 row.clear();
                 land(mv.to as usize, mv.rate, &mut row);
