@@ -25,15 +25,25 @@ pub(super) struct Mecs {
 }
 
 pub(super) fn mecs(model: &DecisionModel) -> Mecs {
+    mecs_within(model, |_| true, |_| true)
+}
+
+/// The maximal end components of the sub-model of the states `state_ok` keeps and the
+/// choices `choice_ok` keeps (a choice with a branch to a dropped state is dropped too).
+pub(super) fn mecs_within(
+    model: &DecisionModel,
+    state_ok: impl Fn(usize) -> bool,
+    choice_ok: impl Fn(usize) -> bool,
+) -> Mecs {
     let n = model.state_count();
-    let mut alive = vec![true; model.choice_count()];
-    let mut live = vec![true; n];
+    let mut alive: Vec<bool> = (0..model.choice_count()).map(&choice_ok).collect();
+    let mut live: Vec<bool> = (0..n).map(&state_ok).collect();
     let mut of = vec![u32::MAX; n];
     let mut count = 0u32;
     // Candidate sets, each closed off from the others: the components of the choices still
     // alive. A set whose components lose nothing is final; a component that loses a choice
     // or a state is searched again alone (only it can split).
-    let mut work: Vec<Vec<u32>> = vec![(0..n as u32).collect()];
+    let mut work: Vec<Vec<u32>> = vec![(0..n as u32).filter(|&s| live[s as usize]).collect()];
     let mut local = vec![u32::MAX; n];
     while let Some(set) = work.pop() {
         for (i, &s) in set.iter().enumerate() {

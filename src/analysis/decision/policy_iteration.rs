@@ -25,11 +25,8 @@
 use super::lra::Mecs;
 use super::solve::SolveOptions;
 use super::{DecisionError, DecisionModel, Kind, Rewards};
+use crate::analysis::linear::solve_block;
 use crate::analysis::scc::{Sccs, tarjan};
-use crate::analysis::vanishing::lu_solve;
-use faer::Mat;
-use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
 
 /// Most rounds before giving up (each round at least improves the bias).
 const MAX_ROUNDS: usize = 1000;
@@ -282,10 +279,6 @@ pub(super) fn steer(
     }
 }
 
-/// Components of the policy's graph up to this size are solved by dense LU; larger ones by
-/// sparse LU.
-const DENSE: usize = 48;
-
 /// The gain and bias of the policy on `states` (closed under it), `h(reference) = 0`: the
 /// local solution vector, whose entry `reference` is the gain. `sccs`: the components of the
 /// policy's graph on `states`.
@@ -330,7 +323,7 @@ fn evaluate(
             pos[v as usize] = i;
         }
     }
-    let fail = |size: usize, e: String| {
+    let fail = |size: usize, e: crate::analysis::linear::SolveError| {
         DecisionError::Unsupported(format!(
             "policy evaluation (LU of a component of {size} states): {e}"
         ))
@@ -421,43 +414,9 @@ fn evaluate(
     if h.iter().all(|v| v.is_finite()) {
         Ok(h)
     } else {
-        Err(fail(k, "singular matrix".into()))
+        Err(fail(
+            k,
+            crate::analysis::linear::SolveError::Failed("singular matrix".into()),
+        ))
     }
-}
-
-/// Solves `A·X = B` in place of `b` (row-major, `w` columns) for the `k × k` matrix given by
-/// `(row, column, value)` entries (repeated entries add up): dense LU up to [`DENSE`]
-/// unknowns, sparse LU above.
-fn solve_block(
-    k: usize,
-    entries: &[(usize, usize, f64)],
-    b: &mut [f64],
-    w: usize,
-) -> Result<(), String> {
-    if k == 0 {
-        return Ok(());
-    }
-    if k <= DENSE {
-        let mut a = vec![0.0f64; k * k];
-        for &(i, j, x) in entries {
-            a[i * k + j] += x;
-        }
-        lu_solve(&mut a, k, b, w);
-        return Ok(());
-    }
-    let triplets: Vec<Triplet<usize, usize, f64>> = entries
-        .iter()
-        .map(|&(i, j, x)| Triplet::new(i, j, x))
-        .collect();
-    let a = SparseColMat::<usize, f64>::try_new_from_triplets(k, k, &triplets)
-        .map_err(|e| format!("{e:?}"))?;
-    let lu = a.sp_lu().map_err(|e| format!("{e:?}"))?;
-    let rhs = Mat::from_fn(k, w, |r, c| b[r * w + c]);
-    let x = lu.solve(&rhs);
-    for r in 0..k {
-        for c in 0..w {
-            b[r * w + c] = x[(r, c)];
-        }
-    }
-    Ok(())
 }
