@@ -291,15 +291,27 @@ pub(super) fn solve(
     let mut policy = vec![u32::MAX; n];
     let mut iterations = 0;
     let mut g: Vec<(f64, f64)> = Vec::with_capacity(mecs.count);
-    let pi = opts.algorithm == Algorithm::PolicyIteration;
+    // Whether every MEC went through policy iteration (the method reported).
+    let mut all_pi = true;
+    let pi = matches!(
+        opts.algorithm,
+        Algorithm::PolicyIteration | Algorithm::Auto
+    );
     for states in &members {
         // Policy iteration finds the MEC's optimal policy and its bias; value iteration then
-        // starts from that bias, so its first step already bounds the gain.
+        // starts from that bias, so its first step already bounds the gain. Under `Auto` a
+        // MEC whose evaluation would be a large LU goes to value iteration alone.
         let start = if pi {
-            let (h, rounds) =
-                mec_policy_iteration(model, rewards, &mecs, states, max, opts, &mut policy)?;
-            iterations += rounds;
-            Some(h)
+            match mec_policy_iteration(model, rewards, &mecs, states, max, opts, &mut policy)? {
+                Some((h, rounds)) => {
+                    iterations += rounds;
+                    Some(h)
+                }
+                None => {
+                    all_pi = false;
+                    None
+                }
+            }
         } else {
             None
         };
@@ -430,7 +442,7 @@ pub(super) fn solve(
         values,
         policy,
         iterations,
-        method: if pi {
+        method: if pi && all_pi {
             Method::PolicyIteration
         } else {
             Method::RelativeValueIteration

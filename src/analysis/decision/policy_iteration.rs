@@ -23,7 +23,7 @@
 //! `min(Tv − v)·Λ ≤ g ≤ max(Tv − v)·Λ` — tight at once when the policy is optimal.
 
 use super::lra::Mecs;
-use super::solve::SolveOptions;
+use super::solve::{Algorithm, SolveOptions};
 use super::{DecisionError, DecisionModel, Kind, Rewards};
 use crate::analysis::linear::solve_block;
 use crate::analysis::scc::{Sccs, tarjan};
@@ -42,12 +42,12 @@ pub(super) fn mec_policy_iteration(
     max: bool,
     opts: &SolveOptions,
     policy: &mut [u32],
-) -> Result<(Vec<f64>, usize), DecisionError> {
+) -> Result<Option<(Vec<f64>, usize)>, DecisionError> {
     let n = model.state_count();
     let mut h = vec![0.0f64; n];
     // A dead state is a MEC alone: gain 0, nothing to choose.
     if states.iter().any(|&s| model.kind(s as usize) == Kind::Dead) {
-        return Ok((h, 0));
+        return Ok(Some((h, 0)));
     }
     let mut local = vec![u32::MAX; n];
     for (i, &s) in states.iter().enumerate() {
@@ -85,6 +85,11 @@ pub(super) fn mec_policy_iteration(
         }
         rounds += 1;
         let (reference, sccs) = make_unichain(model, rewards, mecs, states, &local, max, policy)?;
+        if opts.algorithm == Algorithm::Auto
+            && sccs.members().iter().any(|c| c.len() > Algorithm::AUTO_COMPONENT_LIMIT)
+        {
+            return Ok(None);
+        }
         let x = evaluate(model, rewards, states, &local, policy, reference, &sccs)?;
         for (i, &s) in states.iter().enumerate() {
             h[s as usize] = if i == reference { 0.0 } else { x[i] };
@@ -121,7 +126,7 @@ pub(super) fn mec_policy_iteration(
             }
         }
         if !changed {
-            return Ok((h, rounds));
+            return Ok(Some((h, rounds)));
         }
     }
 }

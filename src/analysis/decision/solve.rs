@@ -49,6 +49,19 @@ pub enum Algorithm {
     /// value iteration from its values ([`Method::PolicyIteration`]). For the long-run
     /// average only; the other objectives refuse it ([`DecisionError::Unsupported`]).
     PolicyIteration,
+    /// Policy iteration per MEC while its evaluations stay cheap, value iteration for a MEC
+    /// whose policy has a strongly connected component above
+    /// [`AUTO_COMPONENT_LIMIT`](Algorithm::AUTO_COMPONENT_LIMIT) states (each round would
+    /// be a large sparse LU); value iteration for the objectives other than the long-run
+    /// average.
+    Auto,
+}
+
+impl Algorithm {
+    /// Under [`Algorithm::Auto`], the largest component of a policy's graph that policy
+    /// iteration evaluates before handing the MEC to value iteration. The home models'
+    /// policies have components of at most 3 states.
+    pub const AUTO_COMPONENT_LIMIT: usize = 2_000;
 }
 
 impl Default for SolveOptions {
