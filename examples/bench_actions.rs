@@ -1,6 +1,6 @@
 //! Actions as programs, measured: a ring of 4 action places with N agents, every action
 //! answered by a program — one `sh` process per action (`--kind command`) or one Python
-//! worker for the whole run (`--kind worker`, python/gspn_worker.py), many requests in flight.
+//! worker for the whole run (`--kind worker`, python/gspn/worker.py), many requests in flight.
 //!
 //! ```text
 //! cargo run --release --example bench_actions -- --kind worker --agents 1000 --firings 100000
@@ -18,7 +18,7 @@ use gspn::net::{NetBuilder, Servers};
 use gspn::runtime::{AgentMode, Runtime};
 
 const WORKER: &str = r#"
-from gspn_worker import action, run
+from gspn.worker import action, run
 
 @action("step")
 def step(ctx):

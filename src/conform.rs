@@ -83,6 +83,67 @@ pub struct TraceStep {
     pub marking: Vec<u32>,
 }
 
+/// A [`Trace`] made one event at a time, as a [`JournalReader`] reads them: a journal of
+/// any size in the memory of its firings, not of its text and every event
+/// ([`Trace::from_events`] for events in memory).
+///
+/// [`JournalReader`]: crate::runtime::journal::JournalReader
+#[derive(Debug)]
+pub struct TraceBuilder<'n> {
+    net: &'n Net,
+    steps: Vec<TraceStep>,
+    end: f64,
+    stays: holding::Stays,
+}
+
+impl<'n> TraceBuilder<'n> {
+    /// An empty trace of a run of `net`.
+    pub fn new(net: &'n Net) -> TraceBuilder<'n> {
+        TraceBuilder {
+            net,
+            steps: Vec::new(),
+            end: 0.0,
+            stays: holding::Stays::default(),
+        }
+    }
+
+    /// Adds the run's next event.
+    pub fn push(&mut self, e: &Event) {
+        self.end = self.end.max(e.time);
+        if let EventKind::Fired {
+            transition,
+            marking,
+            ..
+        } = &e.kind
+        {
+            self.steps.push(TraceStep {
+                seq: e.seq,
+                time: e.time,
+                transition: *transition,
+                marking: marking.as_slice().to_vec(),
+            });
+        }
+        self.stays.see(e);
+    }
+
+    /// The trace. The initial marking is the one before the first firing (a plan may have
+    /// scaled the net's, e.g. with `--robots`), else the net's.
+    pub fn finish(self) -> Trace {
+        let net = self.net;
+        let initial = self
+            .steps
+            .first()
+            .and_then(|s| marking_before(net, s.transition, &s.marking))
+            .unwrap_or_else(|| net.initial_marking().as_slice().to_vec());
+        Trace {
+            initial,
+            steps: self.steps,
+            end: self.end,
+            holdings: self.stays.into_holdings(),
+        }
+    }
+}
+
 /// A recorded run: the marking it started from, its firings and when it ended.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Trace {
@@ -102,34 +163,11 @@ impl Trace {
     /// initial marking is the one before the first firing (a plan may have scaled the net's,
     /// e.g. with `--robots`), else the net's.
     pub fn from_events(net: &Net, events: &[Event]) -> Trace {
-        let mut steps = Vec::new();
-        let mut end = 0.0f64;
+        let mut b = TraceBuilder::new(net);
         for e in events {
-            end = end.max(e.time);
-            if let EventKind::Fired {
-                transition,
-                marking,
-                ..
-            } = &e.kind
-            {
-                steps.push(TraceStep {
-                    seq: e.seq,
-                    time: e.time,
-                    transition: *transition,
-                    marking: marking.as_slice().to_vec(),
-                });
-            }
+            b.push(e);
         }
-        let initial = steps
-            .first()
-            .and_then(|s| marking_before(net, s.transition, &s.marking))
-            .unwrap_or_else(|| net.initial_marking().as_slice().to_vec());
-        Trace {
-            initial,
-            steps,
-            end,
-            holdings: holding::holdings(events),
-        }
+        b.finish()
     }
 
     /// A token-game run of `net` (under `policy`) from its initial marking until `until`,

@@ -336,10 +336,32 @@ fn read_plan_net(
             let key = file.params.keys().find(|k| k.get_ref() == name)?;
             (!from_cli && e.span.is_none()).then(|| key.span())
         });
-        match entry {
-            Some(span) => LoadError::at(path, locate(text, span), e.kind),
-            None => e,
+        if let Some(span) = entry {
+            return LoadError::at(path, locate(text, span), e.kind);
         }
+        // A file that is no net at all (`net = "/etc/passwd"`: unknown kind, empty, a plan or
+        // a DOT file, unreadable) is the plan's mistake too: its `net = …` line, naming it.
+        let not_a_net = e.span.is_none()
+            && match &e.kind {
+                LoadErrorKind::UnknownFormat(_) | LoadErrorKind::Empty | LoadErrorKind::Io(_) => {
+                    true
+                }
+                LoadErrorKind::Invalid(why) => why.ends_with("is not a net file"),
+                _ => false,
+            };
+        if not_a_net {
+            return LoadError::at(
+                path,
+                locate(text, file.net.span()),
+                LoadErrorKind::Invalid(format!(
+                    "net file `{}` ({}): {}",
+                    file.net.get_ref(),
+                    net_path.display(),
+                    e.kind
+                )),
+            );
+        }
+        e
     })
 }
 

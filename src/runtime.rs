@@ -139,6 +139,9 @@ pub enum StopReason {
     Requested,
     /// Ctrl-C.
     Interrupted,
+    /// The journal could not be written (a full disk): the events after it would be lost,
+    /// so the run stops (see the errors).
+    Journal,
 }
 
 impl StopReason {
@@ -149,7 +152,7 @@ impl StopReason {
             | StopReason::Condition
             | StopReason::TimeLimit
             | StopReason::MaxFirings => 0,
-            StopReason::Stuck | StopReason::Failure => 1,
+            StopReason::Stuck | StopReason::Failure | StopReason::Journal => 1,
             StopReason::Requested | StopReason::Interrupted => 130,
         }
     }
@@ -165,6 +168,7 @@ impl StopReason {
             StopReason::Failure => "an action failed",
             StopReason::Requested => "stopped by request",
             StopReason::Interrupted => "interrupted",
+            StopReason::Journal => "the journal could not be written",
         }
     }
 }

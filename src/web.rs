@@ -85,9 +85,11 @@ mod edit;
 mod greatspn;
 mod guard;
 pub mod layout;
+pub mod limits;
 mod live;
 mod replay;
 mod report;
+mod server;
 mod session;
 
 use std::net::SocketAddr;
@@ -220,6 +222,8 @@ struct Inner {
     /// Bumped by every change of the token game: the pages waiting on `/api/sim/wait`
     /// (other tabs) fetch the new state.
     sim_version: tokio::sync::watch::Sender<u64>,
+    /// Held by the `step` running (one at a time; [`limits::STEP_CHUNK`]).
+    stepping: tokio::sync::Semaphore,
 }
 
 impl WebState {
@@ -280,6 +284,7 @@ impl WebState {
                 replay: OnceLock::new(),
                 source: OnceLock::new(),
                 sim_version: tokio::sync::watch::channel(0).0,
+                stepping: tokio::sync::Semaphore::new(1),
             }),
         }
     }
@@ -493,9 +498,11 @@ fn asset_response(asset: &'static Asset) -> Response {
         .into_response()
 }
 
-/// Serves the viewer on `listener` ([`router_on`] its address) until the task is dropped or
-/// the listener fails.
+/// Serves the viewer on `listener` ([`router_on`] its address) until the task is dropped.
+/// Idle connections are closed after [`limits::HEADER_TIMEOUT`], and at most
+/// [`limits::connection_cap`] are held at once (one more is answered 503); see
+/// docs/viewer.md, "Limits".
 pub async fn serve(listener: TcpListener, state: WebState) -> std::io::Result<()> {
     let addr = listener.local_addr()?;
-    axum::serve(listener, router_on(state, addr)).await
+    server::run(listener, router_on(state, addr)).await
 }

@@ -4,10 +4,11 @@ every action of the run (JSON Lines on stdin/stdout, see docs/actions.md)."""
 import os
 import sys
 
-# The helper ships in the repository's python/ directory (standard library only).
+# The helper is the gspn package's worker module (python/gspn/worker.py, standard library
+# only): from the checkout here, or from `pip install ./python`.
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "python"))
 
-from gspn_worker import action, run  # noqa: E402
+from gspn.worker import action, run  # noqa: E402
 
 
 @action("patrol")

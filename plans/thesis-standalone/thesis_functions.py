@@ -10,7 +10,9 @@ send their action, the function's `module.function` name, to this worker:
 
 imports `module` from PROJECT_PATH (the input's `project_path`) and calls
 `function(agent_id)`, each call on its own thread (the functions sleep), its prints recorded
-as the agent's output. Standard library only; needs gspn_worker.py beside it.
+as the agent's output. Needs the gspn Python package's worker helper (`gspn.worker`,
+standard library only): `pip install ./python` from a gspn checkout, or PYTHONPATH set to
+its python/ directory.
 """
 
 import importlib
@@ -18,9 +20,15 @@ import os
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
 
-from gspn_worker import fallback, run  # noqa: E402
+try:
+    from gspn.worker import fallback, run
+except ImportError as e:
+    sys.exit(
+        "thesis_functions.py needs the gspn Python package (gspn.worker): "
+        "pip install ./python from a gspn checkout, or set PYTHONPATH to its python/ "
+        "directory (%s)" % e
+    )
 
 PROJECT = os.path.abspath(sys.argv[1]) if len(sys.argv) > 1 else HERE
 sys.path.insert(0, PROJECT)

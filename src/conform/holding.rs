@@ -51,6 +51,7 @@ pub struct Holding {
 }
 
 /// An agent in a place, not yet out.
+#[derive(Debug)]
 struct Stay {
     place: Option<PlaceId>,
     entry: Option<TransitionId>,
@@ -62,30 +63,45 @@ struct Stay {
 /// without output transitions never leaves and has none); agents spawned at the start
 /// from their `agent_spawned`.
 pub fn holdings(events: &[Event]) -> Vec<Holding> {
-    let mut stays: HashMap<AgentId, Stay> = HashMap::new();
-    let mut out = Vec::new();
-    let enter = |stays: &mut HashMap<AgentId, Stay>, a: AgentId, p: PlaceId| {
-        if let Some(s) = stays.get_mut(&a)
+    let mut stays = Stays::default();
+    for e in events {
+        stays.see(e);
+    }
+    stays.into_holdings()
+}
+
+/// [`holdings`] one event at a time: the agents in a place and the stays that ended.
+#[derive(Debug, Default)]
+pub(crate) struct Stays {
+    open: HashMap<AgentId, Stay>,
+    ended: Vec<Holding>,
+}
+
+impl Stays {
+    fn enter(&mut self, a: AgentId, p: PlaceId) {
+        if let Some(s) = self.open.get_mut(&a)
             && s.place.is_none()
         {
             s.place = Some(p);
         }
-    };
-    for e in events {
+    }
+
+    /// Follows the agents through one event.
+    pub(crate) fn see(&mut self, e: &Event) {
         match &e.kind {
             EventKind::AgentSpawned { agent, place, .. } => {
-                stays.entry(*agent).or_insert(Stay {
+                self.open.entry(*agent).or_insert(Stay {
                     place: None,
                     entry: None,
                     entered: e.time,
                 });
-                enter(&mut stays, *agent, *place);
+                self.enter(*agent, *place);
             }
             EventKind::ActionStarted {
                 agent,
                 place,
                 attempt: 0,
-            } => enter(&mut stays, *agent, *place),
+            } => self.enter(*agent, *place),
             EventKind::Fired {
                 transition,
                 consumed,
@@ -93,9 +109,11 @@ pub fn holdings(events: &[Event]) -> Vec<Holding> {
                 ..
             } => {
                 for a in consumed {
-                    let Some(s) = stays.remove(a) else { continue };
+                    let Some(s) = self.open.remove(a) else {
+                        continue;
+                    };
                     let Some(p) = s.place else { continue };
-                    out.push(Holding {
+                    self.ended.push(Holding {
                         agent: *a,
                         place: p,
                         transition: *transition,
@@ -105,7 +123,7 @@ pub fn holdings(events: &[Event]) -> Vec<Holding> {
                     });
                 }
                 for a in produced {
-                    stays.insert(
+                    self.open.insert(
                         *a,
                         Stay {
                             place: None,
@@ -118,7 +136,11 @@ pub fn holdings(events: &[Event]) -> Vec<Holding> {
             _ => {}
         }
     }
-    out
+
+    /// The stays that ended, in the order they ended.
+    pub(crate) fn into_holdings(self) -> Vec<Holding> {
+        self.ended
+    }
 }
 
 /// What the model predicts for an agent's stay in a place (see the module).

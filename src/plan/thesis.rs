@@ -19,8 +19,8 @@
 //!   order written. `'1'` (a string, which the thesis code never matched against the integer
 //!   1) is read as 1, with a warning.
 //! - `place_to_function_mapping` (`'p1': 'functions.work_p1'`): each place's action goes to
-//!   one Python worker, `thesis_functions.py` (written beside the plan with
-//!   `gspn_worker.py`), which imports `functions` from the input's `project_path` and calls
+//!   one Python worker, `thesis_functions.py` (written beside the plan; it runs on the gspn
+//!   Python package's `gspn.worker`), which imports `functions` from the input's `project_path` and calls
 //!   `work_p1(agent_id)`: a returned transition name fires it, `None` lets the policy decide.
 //!   So the thesis's functions run unchanged, from the command line.
 //! - `place_to_client_mapping` (`'p1': ['ExecGSPN', 'action_server_1']`): the place's action
@@ -183,13 +183,8 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, LoadError> 
     let project = if functions {
         let (dir, warning) = locate_project(&input, opts.project_path.as_deref())?;
         project_warning = warning;
-        for (name, text) in [
-            ("gspn_worker.py", GSPN_WORKER_PY),
-            ("thesis_functions.py", THESIS_FUNCTIONS_PY),
-        ] {
-            let p = opts.out.join(name);
-            std::fs::write(&p, text).map_err(|e| io_err(&p, e))?;
-        }
+        let p = opts.out.join("thesis_functions.py");
+        std::fs::write(&p, THESIS_FUNCTIONS_PY).map_err(|e| io_err(&p, e))?;
         relative_to(&dir, &opts.out)
     } else {
         ".".into()
@@ -218,8 +213,6 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, LoadError> 
     })
 }
 
-/// `python/gspn_worker.py`, written beside an imported plan that calls the thesis's functions.
-const GSPN_WORKER_PY: &str = include_str!("../../python/gspn_worker.py");
 /// `python/thesis_functions.py`: the worker that imports and calls the thesis's functions.
 const THESIS_FUNCTIONS_PY: &str = include_str!("../../python/thesis_functions.py");
 

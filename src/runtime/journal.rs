@@ -16,13 +16,17 @@
 //! (every journal written before them) reads as before.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{Seek, SeekFrom, Write};
 use std::path::Path;
-use std::sync::{Arc, mpsc};
+use std::sync::{Arc, OnceLock, mpsc};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
+
+mod lines;
+
+pub use lines::{Entry, JournalReader};
 
 use super::action::Outcome;
 use super::event::{Event, EventKind};
@@ -112,6 +116,40 @@ pub struct JournalHeader<'a> {
     pub initial: Option<Vec<u32>>,
 }
 
+impl JournalHeader<'_> {
+    /// Checks the header against `net`: `None` when the journal is of `net` as it is,
+    /// `net` with the header's initial marking when the run started from that one (`run
+    /// --robots N`), [`JournalError::OtherNet`] when it is of neither.
+    pub fn net_that_ran(&self, net: &Net) -> Result<Option<Net>, JournalError> {
+        let expected = net_hash(net);
+        if self.hash == expected {
+            return Ok(None);
+        }
+        let mut initial_differs = false;
+        if let Some(m) = &self.initial
+            && m.len() == net.place_count()
+            && m.as_slice() != net.initial_marking().as_slice()
+        {
+            initial_differs = true;
+            if let Some(ran) = net
+                .with_initial_marking(m)
+                .ok()
+                .filter(|n| net_hash(n) == self.hash)
+            {
+                return Ok(Some(ran));
+            }
+        }
+        Err(JournalError::OtherNet {
+            journal: self.net.to_string(),
+            journal_file: self.file.as_ref().map(|f| f.to_string()),
+            hash: self.hash.clone(),
+            net: net.name().to_string(),
+            expected,
+            initial_differs,
+        })
+    }
+}
+
 /// Most events the writer holds before it writes them to the file.
 pub const FLUSH_EVENTS: usize = 100;
 
@@ -122,6 +160,8 @@ pub const FLUSH_AFTER: Duration = Duration::from_millis(100);
 enum Msg {
     /// One serialised line, newline included.
     Line(Vec<u8>),
+    /// The run's `stopped` event: written even after a write failed, when it fits.
+    Last(Vec<u8>),
     /// The run is over: write out, sync and end (taps may still be held).
     End,
 }
@@ -168,6 +208,9 @@ pub(crate) struct Journal {
     tx: Option<mpsc::Sender<Msg>>,
     writer: Option<JoinHandle<Option<String>>>,
     failed: Option<String>,
+    /// The writer thread's first write error, as soon as it happens: the supervisor stops
+    /// the run on it ([`Journal::broken`]).
+    broken: Arc<OnceLock<String>>,
     names: Names,
 }
 
@@ -228,7 +271,7 @@ impl Journal {
     /// Creates the file, writes the header (on disk before the run starts) and starts the
     /// writer thread.
     pub(crate) fn create(path: &Path, net: &Net, run: RunFacts<'_>) -> std::io::Result<Journal> {
-        let mut out = BufWriter::with_capacity(1 << 16, File::create(path)?);
+        let mut out_file = File::create(path)?;
         let RunFacts {
             seed,
             time_scale,
@@ -264,9 +307,13 @@ impl Journal {
             places: quoted(&header.places),
             transitions: quoted(&header.transitions),
         };
-        serde_json::to_writer(&mut out, &header)?;
-        out.write_all(b"\n")?;
-        out.flush()?;
+        let mut first = serde_json::to_vec(&header)?;
+        first.push(b'\n');
+        // On disk before the run starts: a target that cannot be written (a full disk,
+        // `/dev/full`, a read-only file system) refuses the run instead of failing in it.
+        out_file.write_all(&first)?;
+        let broken = Arc::new(OnceLock::new());
+        let out = LineWriter::new(out_file, first.len() as u64, Arc::clone(&broken));
         let (tx, rx) = mpsc::channel();
         let writer = std::thread::Builder::new()
             .name("gspn-journal".into())
@@ -275,6 +322,7 @@ impl Journal {
             tx: Some(tx),
             writer: Some(writer),
             failed: None,
+            broken,
             names,
         })
     }
@@ -296,10 +344,21 @@ impl Journal {
         }
         self.names.append(e, &mut line);
         line.push(b'\n');
-        if tx.send(Msg::Line(line)).is_err() {
+        let msg = if matches!(e.kind, EventKind::Stopped { .. }) {
+            Msg::Last(line)
+        } else {
+            Msg::Line(line)
+        };
+        if tx.send(msg).is_err() {
             // The writer ended early: it failed, and says why when joined.
             self.tx = None;
         }
+    }
+
+    /// The first error writing the file (a full disk), once the writer has met one: the
+    /// events after it are not in the journal, so the run must stop.
+    pub(crate) fn broken(&self) -> Option<&str> {
+        self.broken.get().map(String::as_str)
     }
 
     /// Writes out and syncs everything handed over so far and ends the writer; the first
@@ -340,18 +399,103 @@ pub(crate) struct RunFacts<'a> {
     pub(crate) robots: &'a [Arc<str>],
 }
 
+/// The journal file as the writer thread keeps it: whole lines only. Lines are buffered and
+/// written in one go; when a write fails (the disk is full) the file is cut back to the end
+/// of its last whole line, so a journal that met an error still reads to its end, and every
+/// later line is dropped but the run's `stopped` event ([`Msg::Last`]), tried once more.
+struct LineWriter {
+    file: File,
+    buf: Vec<u8>,
+    /// Bytes on disk, all of them whole lines.
+    whole: u64,
+    broken: Arc<OnceLock<String>>,
+}
+
+impl LineWriter {
+    fn new(file: File, whole: u64, broken: Arc<OnceLock<String>>) -> LineWriter {
+        LineWriter {
+            file,
+            buf: Vec::with_capacity(1 << 16),
+            whole,
+            broken,
+        }
+    }
+
+    fn failed(&self) -> bool {
+        self.broken.get().is_some()
+    }
+
+    fn push(&mut self, line: &[u8]) {
+        if !self.failed() {
+            self.buf.extend_from_slice(line);
+        }
+    }
+
+    /// Writes the buffered lines; on an error, cuts the file back to whole lines and
+    /// records the error (later lines are dropped).
+    fn flush(&mut self) {
+        if self.buf.is_empty() || self.failed() {
+            self.buf.clear();
+            return;
+        }
+        let buf = std::mem::take(&mut self.buf);
+        self.write_or_cut(&buf);
+        self.buf = buf;
+        self.buf.clear();
+    }
+
+    fn write_or_cut(&mut self, bytes: &[u8]) -> bool {
+        match self.file.write_all(bytes) {
+            Ok(()) => {
+                self.whole += bytes.len() as u64;
+                true
+            }
+            Err(e) => {
+                // Freeing the partial line also makes room for the `stopped` event.
+                let _ = self.file.set_len(self.whole);
+                let _ = self.file.seek(SeekFrom::Start(self.whole));
+                let _ = self.broken.set(io_message(&e));
+                false
+            }
+        }
+    }
+
+    /// The run's last event: written after the others, or — when a write failed — on its
+    /// own after the last whole line, if it fits.
+    fn last(&mut self, line: &[u8]) {
+        if self.failed() {
+            self.write_or_cut(line);
+        } else {
+            self.push(line);
+            self.flush();
+        }
+    }
+
+    /// Flushes and syncs; the first error.
+    fn end(mut self) -> Option<String> {
+        self.flush();
+        if let Err(e) = self.file.sync_data() {
+            let _ = self.broken.set(io_message(&e));
+        }
+        self.broken.get().cloned()
+    }
+}
+
+/// An I/O error as the user reads it: `No space left on device` (without the errno).
+fn io_message(e: &std::io::Error) -> String {
+    let text = e.to_string();
+    match text.find(" (os error") {
+        Some(i) => text[..i].to_string(),
+        None => text,
+    }
+}
+
 /// The writer thread: lines in, written to the file at most [`FLUSH_EVENTS`] lines or
 /// [`FLUSH_AFTER`] after they arrived; a final flush and sync at [`Msg::End`] or when every
 /// sender went away.
-fn write_through(mut out: BufWriter<File>, rx: mpsc::Receiver<Msg>) -> Option<String> {
-    let mut failed: Option<String> = None;
+fn write_through(mut out: LineWriter, rx: mpsc::Receiver<Msg>) -> Option<String> {
     let mut pending = 0usize;
     let mut deadline: Option<Instant> = None;
-    let flush = |out: &mut BufWriter<File>, failed: &mut Option<String>| {
-        if let Err(e) = out.flush() {
-            failed.get_or_insert(e.to_string());
-        }
-    };
     loop {
         let msg = match deadline {
             None => rx.recv().map_err(|_| mpsc::RecvTimeoutError::Disconnected),
@@ -359,31 +503,26 @@ fn write_through(mut out: BufWriter<File>, rx: mpsc::Receiver<Msg>) -> Option<St
         };
         match msg {
             Ok(Msg::Line(line)) => {
-                if failed.is_none()
-                    && let Err(e) = out.write_all(&line)
-                {
-                    failed = Some(e.to_string());
-                }
+                out.push(&line);
                 pending += 1;
                 deadline.get_or_insert_with(|| Instant::now() + FLUSH_AFTER);
                 if pending >= FLUSH_EVENTS {
-                    flush(&mut out, &mut failed);
+                    out.flush();
                     pending = 0;
                     deadline = None;
                 }
             }
-            Err(mpsc::RecvTimeoutError::Timeout) => {
-                flush(&mut out, &mut failed);
+            Ok(Msg::Last(line)) => {
+                out.last(&line);
                 pending = 0;
                 deadline = None;
             }
-            Ok(Msg::End) | Err(mpsc::RecvTimeoutError::Disconnected) => {
-                flush(&mut out, &mut failed);
-                if let Err(e) = out.get_ref().sync_data() {
-                    failed.get_or_insert(e.to_string());
-                }
-                return failed;
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                out.flush();
+                pending = 0;
+                deadline = None;
             }
+            Ok(Msg::End) | Err(mpsc::RecvTimeoutError::Disconnected) => return out.end(),
         }
     }
 }
@@ -470,56 +609,15 @@ pub fn read_recording(text: &str, net: &Net) -> Result<Recording, JournalError> 
     };
     let header: JournalHeader<'_> =
         serde_json::from_str(first).map_err(|e| bad(i, e.to_string()))?;
-    let expected = net_hash(net);
-    let mut ran = None;
-    let mut initial_differs = false;
-    if header.hash != expected
-        && let Some(m) = &header.initial
-        && m.len() == net.place_count()
-        && m.as_slice() != net.initial_marking().as_slice()
-    {
-        initial_differs = true;
-        ran = net
-            .with_initial_marking(m)
-            .ok()
-            .filter(|n| net_hash(n) == header.hash);
-    }
+    let ran = header.net_that_ran(net)?;
     let remarked = ran.is_some();
-    if header.hash != expected && !remarked {
-        return Err(JournalError::OtherNet {
-            journal: header.net.into_owned(),
-            journal_file: header.file.map(|f| f.into_owned()),
-            hash: header.hash,
-            net: net.name().to_string(),
-            expected,
-            initial_differs,
-        });
-    }
     let mut events = Vec::new();
     let mut records = Vec::new();
     for (i, l) in lines {
-        if l.starts_with("{\"record\"") {
-            records.push(serde_json::from_str(l).map_err(|e| bad(i, e.to_string()))?);
-            continue;
+        match lines::entry(l, net).map_err(|reason| bad(i, reason))? {
+            Entry::Event(e) => events.push(e),
+            Entry::Record(r) => records.push(r),
         }
-        let e: Event = serde_json::from_str(l).map_err(|e| bad(i, e.to_string()))?;
-        if let EventKind::Fired {
-            transition,
-            marking,
-            ..
-        } = &e.kind
-        {
-            if transition.index() >= net.transition_count() {
-                return Err(bad(
-                    i,
-                    "`transition` is not a transition id of this net".into(),
-                ));
-            }
-            if marking.len() != net.place_count() {
-                return Err(bad(i, "`marking` is not a marking of this net".into()));
-            }
-        }
-        events.push(e);
     }
     Ok(Recording {
         net: ran.unwrap_or_else(|| net.clone()),

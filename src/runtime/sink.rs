@@ -42,6 +42,11 @@ impl EventSink {
         let _ = self.bus.send(e);
     }
 
+    /// The journal's first write error, once its writer met one (the run must stop).
+    pub(crate) fn journal_broken(&self) -> Option<&str> {
+        self.journal.as_ref().and_then(Journal::broken)
+    }
+
     /// Flushes the journal; the first journal error of the run, if any.
     pub(crate) fn flush(&mut self) -> Option<String> {
         self.journal.as_mut().and_then(Journal::flush)

@@ -96,6 +96,8 @@ pub struct Supervisor {
     stop_at_rest: Option<StopReason>,
     finished: bool,
     continue_pending: bool,
+    /// A stop was asked for because the journal could not be written.
+    journal_stop_asked: bool,
     sink: EventSink,
     errors: Vec<String>,
     warnings: Vec<String>,
@@ -168,6 +170,7 @@ impl Supervisor {
             stop_at_rest: None,
             finished: false,
             continue_pending: false,
+            journal_stop_asked: false,
             sink: EventSink::new(args.bus, args.journal),
             errors: Vec::new(),
             warnings: Vec::new(),
@@ -205,6 +208,19 @@ impl Supervisor {
 
     fn emit(&mut self, kind: EventKind) {
         self.sink.emit(self.clock.now(), kind);
+        // A journal that cannot be written (a full disk) stops the run: every later event
+        // would be missing from it. Asked for by message, so the stop begins between two
+        // turns, not inside the one that emitted.
+        if !self.journal_stop_asked
+            && self.stopping.is_none()
+            && self.sink.journal_broken().is_some()
+        {
+            self.journal_stop_asked = self
+                .me()
+                .tell(StopRequest(StopReason::Journal))
+                .try_send()
+                .is_ok();
+        }
     }
 
     fn ap(&self, p: PlaceId) -> usize {

@@ -1,5 +1,8 @@
 //! The JSON API: the net and its layout, the token game, the analysis.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use axum::Json;
 use axum::extract::{Query, State};
 use axum::http::StatusCode;
@@ -12,6 +15,7 @@ use crate::web::WebState;
 use crate::web::analysis_job::{Answer, Outcome};
 use crate::web::greatspn::Source;
 use crate::web::layout::layout;
+use crate::web::limits::{MAX_STEP, STEP_CHUNK};
 use crate::web::session::SessionError;
 
 /// An error as `{"error": "..."}` with a status.
@@ -160,10 +164,10 @@ pub(crate) struct StepBody {
     n: Option<u64>,
 }
 
-/// Most firings one `step` request may ask for.
-const MAX_STEP: u64 = 1_000_000;
-
-/// `POST /api/sim/step {n}`.
+/// `POST /api/sim/step {n}`: on a blocking thread, [`STEP_CHUNK`] firings per hold of the
+/// token game's lock (so the state stays readable and the server's threads free while a
+/// million firings run), one step request at a time (the next waits its turn); a step
+/// whose request goes away stops at the end of its chunk.
 pub(crate) async fn sim_step(
     State(state): State<WebState>,
     body: Option<Json<StepBody>>,
@@ -175,15 +179,47 @@ pub(crate) async fn sim_step(
             format!("n = {n}: at most {MAX_STEP} steps per request"),
         );
     }
-    let result = state.session().step(n);
+    let Ok(_turn) = state.inner.stepping.acquire().await else {
+        return error(StatusCode::SERVICE_UNAVAILABLE, "the server is stopping");
+    };
+    let gone = StopOnDrop::default();
+    let stop = gone.0.clone();
+    let st = state.clone();
+    let result = tokio::task::spawn_blocking(move || {
+        let mut fired = 0;
+        while fired < n && !stop.load(Ordering::Relaxed) {
+            let chunk = (n - fired).min(STEP_CHUNK);
+            let got = st.session().step(chunk)?;
+            fired += got;
+            if got < chunk {
+                break;
+            }
+        }
+        Ok::<u64, SessionError>(fired)
+    })
+    .await;
     state.sim_changed();
     match result {
-        Ok(fired) => {
+        Ok(Ok(fired)) => {
             let mut v = state.sim_json(200);
             v["fired"] = json!(fired);
             Json(v).into_response()
         }
-        Err(e) => session_error(e),
+        Ok(Err(e)) => session_error(e),
+        Err(e) => error(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            format!("the step failed: {e}"),
+        ),
+    }
+}
+
+/// Raised when the request it belongs to is dropped (the client went away).
+#[derive(Debug, Default)]
+struct StopOnDrop(Arc<AtomicBool>);
+
+impl Drop for StopOnDrop {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Relaxed);
     }
 }
 
@@ -279,7 +315,9 @@ pub(crate) struct QueryBody {
 /// `POST /api/analysis/query {transient: [t], prob: [expr]}`: on the finished analysis's
 /// state space, `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens,
 /// throughput, probability}]}` as `plan-runner analyze --json --transient … --prob …` gives
-/// them. 409 before an analysis has finished, 422 when it found no steady state to ask about,
+/// them. 409 before an analysis has finished, 422 when it found no steady state to ask about
+/// or the question asks past a [limit](crate::web::limits) (time points, predicates, their
+/// length), 413 when its answer would be too large,
 /// 400 for a bad time or predicate (the message names it), 409 `{error, kind: "cancelled",
 /// progress}` when the question was cancelled (`/api/analysis/query/cancel`, a newer
 /// question, an edit of the net). Its progress is at `/api/analysis/query/progress`.
@@ -303,6 +341,9 @@ pub(crate) async fn analysis_query(
         }
         Some(Some(k)) => k,
     };
+    if let Err(over) = crate::web::limits::check_question(&net, &b.transient, &b.prob) {
+        return error(over.status, over.message);
+    }
     match job.ask(net, kept, b.transient, b.prob).await {
         Answer::Done(v) => Json(v).into_response(),
         Answer::Refused(message) => error(StatusCode::BAD_REQUEST, message),

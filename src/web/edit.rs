@@ -35,12 +35,15 @@ use crate::net::{
     Arc, ArcKind, Net, NetBuilder, Place, PlaceId, Position, Transition, TransitionId,
 };
 
-/// A name the page typed: not empty, no spaces at its ends.
+/// A name the page typed: not empty, no spaces at its ends, at most
+/// [`MAX_NAME_CHARS`](crate::web::limits::MAX_NAME_CHARS) characters.
 fn check_name(what: &'static str, name: &str) -> Result<(), EditError> {
     let why = if name.trim().is_empty() {
         "a name cannot be empty"
     } else if name.trim() != name {
         "a name cannot start or end with a space"
+    } else if let Some(chars) = crate::web::limits::name_too_long(name) {
+        return Err(EditError::NameTooLong { what, chars });
     } else {
         return Ok(());
     };

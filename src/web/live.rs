@@ -20,6 +20,7 @@ use crate::net::Net;
 use crate::runtime::{AgentInfo, EventKind, Events, Outcome, Received, RuntimeHandle};
 use crate::web::WebState;
 use crate::web::api::net_json;
+use crate::web::limits::{WS_BUFFER, WS_MAX_INCOMING, WS_SEND_TIMEOUT};
 
 /// Shortest time between two snapshots sent to one browser.
 pub const FRAME: Duration = Duration::from_millis(50);
@@ -374,20 +375,38 @@ pub(crate) async fn ws(State(state): State<WebState>, upgrade: WebSocketUpgrade)
     use axum::response::IntoResponse;
     match state.live().cloned() {
         Some(live) => upgrade
+            .read_buffer_size(WS_BUFFER)
+            .write_buffer_size(WS_BUFFER)
+            .max_message_size(WS_MAX_INCOMING)
+            .max_frame_size(WS_MAX_INCOMING)
             .on_upgrade(move |socket| follow(socket, live))
             .into_response(),
         None => no_live(),
     }
 }
 
+/// Sends `text`; false when the browser went away or has not taken it within
+/// [`WS_SEND_TIMEOUT`] — then it is told so in a close frame (`1008`, "too slow") and
+/// dropped, as a slow browser is not buffered for.
+async fn send(socket: &mut WebSocket, text: String) -> bool {
+    match tokio::time::timeout(WS_SEND_TIMEOUT, socket.send(Message::Text(text.into()))).await {
+        Ok(sent) => sent.is_ok(),
+        Err(_) => {
+            let close = Message::Close(Some(axum::extract::ws::CloseFrame {
+                code: axum::extract::ws::close_code::POLICY,
+                reason: "too slow: the viewer drops a browser that does not read its updates"
+                    .into(),
+            }));
+            let _ = tokio::time::timeout(WS_SEND_TIMEOUT, socket.send(close)).await;
+            false
+        }
+    }
+}
+
 async fn follow(mut socket: WebSocket, live: LiveRun) {
     let mut net = net_json(live.net(), live.handle().seed(), None);
     net["type"] = json!("net");
-    if socket
-        .send(Message::Text(net.to_string().into()))
-        .await
-        .is_err()
-    {
+    if !send(&mut socket, net.to_string()).await {
         return;
     }
     let mut version = live.inner.version.subscribe();
@@ -406,11 +425,7 @@ async fn follow(mut socket: WebSocket, live: LiveRun) {
         {
             last_seq = Some(seq);
         }
-        if socket
-            .send(Message::Text(msg.to_string().into()))
-            .await
-            .is_err()
-        {
+        if !send(&mut socket, msg.to_string()).await {
             return;
         }
         tokio::time::sleep(FRAME).await;

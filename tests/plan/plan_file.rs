@@ -146,6 +146,28 @@ fn plan_options_reach_the_net_reader() {
     assert!(n4.net.initial_tokens() > n2.net.initial_tokens());
 }
 
+/// Regression (issue 32, item 9): `net = "/etc/passwd"` was refused as the net file's
+/// mistake, without a line; a file that is no net at all is the plan's `net = …` line.
+#[test]
+fn a_net_of_no_known_kind_is_refused_at_the_plans_net_line() {
+    let (dir, _) = with_plan("net = \"patrol.xml\"\n");
+    let path = dir.path().join("other.toml");
+    std::fs::write(dir.path().join("empty.xml"), "\n").unwrap();
+    for (net, why) in [
+        ("/etc/passwd", "unknown format ``"),
+        ("empty.xml", "empty"),
+        ("plan.toml", "a plan file is not a net file"),
+    ] {
+        std::fs::write(&path, format!("seed = 1\nnet = \"{net}\"\n")).unwrap();
+        let e = read_plan(&path, &ReadOptions::default()).unwrap_err();
+        assert_eq!(e.path, path, "{e}");
+        assert_eq!(e.span.map(|s| (s.line, s.column)), Some((2, 7)), "{e}");
+        let text = e.to_string();
+        assert!(text.contains(&format!("net file `{net}`")), "{text}");
+        assert!(text.contains(why), "{text}");
+    }
+}
+
 #[test]
 fn the_net_path_is_relative_to_the_plan() {
     let (dir, _) = with_plan("net = \"patrol.xml\"\n");

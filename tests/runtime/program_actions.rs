@@ -409,7 +409,7 @@ async fn a_crashing_worker_fails_its_in_flight_actions_and_is_restarted() {
 
 const HELPER_WORKER: &str = r#"
 import sys, time
-from gspn_worker import action, run
+from gspn.worker import action, run
 
 @action("inspect")
 def inspect(ctx):
@@ -474,7 +474,7 @@ async fn the_python_helper_runs_decorated_functions_and_records_their_prints() {
 
 const DURATION_WORKER: &str = r#"
 import time
-from gspn_worker import action, run
+from gspn.worker import action, run
 
 @action("slowly")
 def slowly(ctx):

@@ -6,6 +6,7 @@ mod support;
 
 mod analysis;
 mod api;
+mod bounded_under_abuse;
 mod browser;
 mod conform;
 mod edit;

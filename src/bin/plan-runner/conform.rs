@@ -4,18 +4,19 @@
 //! rates and weights the run shows. Exit status: 2 for bad input; with `--fail-on-drift`, 1
 //! when a row diverges; 0 otherwise.
 
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use gspn::conform::{
-    Fitted, Monitor, Options, Predictions, Report, RowKind, Trace, Verdict, compare, fit,
-    marking_before, observe, steady_predictions,
+    Fitted, Monitor, Options, Predictions, Report, RowKind, Trace, TraceBuilder, Verdict, compare,
+    fit, marking_before, observe, steady_predictions,
 };
 use gspn::io::{Format, write_net};
 use gspn::net::Net;
 use gspn::plan::open;
 use gspn::policy::Policy;
-use gspn::runtime::journal::{JournalError, read_events, split_torn};
+use gspn::runtime::journal::Entry;
 use gspn::runtime::{Event, EventKind, Events, Received};
 
 use crate::common::{BadInput, NetArgs};
@@ -73,47 +74,44 @@ pub(crate) fn model(
     Ok((plan.net, plan.policy))
 }
 
-/// A journal of a run of `net`, read into a trace (a last line cut short by a kill is
-/// skipped with a warning, as `replay` does).
+/// A journal of a run of `net`, read a line at a time into a trace (a last line cut short by
+/// a kill is skipped with a warning, as `replay` does).
 pub(crate) fn journal_trace(path: &Path, net: &Net) -> anyhow::Result<Trace> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| BadInput(format!("cannot read {}: {e}", path.display())))?;
-    let (text, torn) = split_torn(&text);
-    let events = match read_events(text, net) {
-        Err(JournalError::OtherNet { .. }) if let Some(scaled) = scaled_net(text, net) => {
-            read_events(text, &scaled)
+    let mut journal = crate::replay::read_journal(path, net, None)?;
+    let mut trace = TraceBuilder::new(net);
+    for entry in journal.by_ref() {
+        match entry.map_err(|e| BadInput(format!("{}: {e}", path.display())))? {
+            Entry::Event(e) => trace.push(&e),
+            Entry::Record(_) => {}
         }
-        r => r,
     }
-    .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
-    if let Some(torn) = &torn {
-        eprintln!(
-            "warning: {}: {torn}: skipped (the run was killed while writing it)",
-            path.display()
-        );
-    }
-    Ok(Trace::from_events(net, &events))
+    crate::replay::warn_torn(path, journal.torn());
+    Ok(trace.finish())
 }
 
 /// `net` with the initial marking a run started from when it was not the net's (a plan run
 /// with `--robots N` scales it, and the journal's hash is of the scaled net): the marking
-/// before the journal's first firing.
-pub(crate) fn scaled_net(text: &str, net: &Net) -> Option<Net> {
-    let (t, marking) = text.lines().skip(1).find_map(|l| {
-        let e: Event = serde_json::from_str(l).ok()?;
-        match e.kind {
-            EventKind::Fired {
-                transition,
-                marking,
-                ..
-            } if transition.index() < net.transition_count()
-                && marking.len() == net.place_count() =>
-            {
-                Some((transition, marking))
+/// before the journal's first firing (read from `journal` up to it).
+pub(crate) fn scaled_net(journal: impl BufRead, net: &Net) -> Option<Net> {
+    let (t, marking) = journal
+        .lines()
+        .map_while(Result::ok)
+        .skip(1)
+        .find_map(|l| {
+            let e: Event = serde_json::from_str(&l).ok()?;
+            match e.kind {
+                EventKind::Fired {
+                    transition,
+                    marking,
+                    ..
+                } if transition.index() < net.transition_count()
+                    && marking.len() == net.place_count() =>
+                {
+                    Some((transition, marking))
+                }
+                _ => None,
             }
-            _ => None,
-        }
-    })?;
+        })?;
     net.with_initial_marking(&marking_before(net, t, &marking)?)
         .ok()
 }

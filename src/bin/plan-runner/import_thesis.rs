@@ -14,7 +14,7 @@ use gspn::plan::thesis::{ImportOptions, import};
                   DIR/plan.toml next to a copy of its net. The net is the input's `gspn` path, \
                   relative to the JSON file, or a file of that name beside it, or --net. \
                   place_to_function_mapping entries (`module.function`) go to a Python worker \
-                  written beside the plan (thesis_functions.py, with gspn_worker.py) that \
+                  written beside the plan (thesis_functions.py, which needs the gspn Python package's gspn.worker) that \
                   imports the module from the input's project_path (relative to the JSON \
                   file, else the JSON's directory; --project-path overrides) and calls \
                   function(agent_id); place_to_client_mapping entries become `ros2` places. \

@@ -11,6 +11,7 @@ mod conform;
 mod convert;
 mod import_thesis;
 mod progress;
+mod repeats;
 mod replay;
 #[cfg(feature = "ros2")]
 mod ros2;
@@ -103,11 +104,14 @@ const DEFAULT_LOG: &str = "warn,gspn=info,rustdds::rtps::writer=error,\
 
 /// Warnings and errors of the library and of its dependencies (RustDDS and ros2-client log
 /// through `log`, bridged) go to stderr; `RUST_LOG` overrides the default filter
-/// (`DEFAULT_LOG`: the library's notices, everyone's warnings but three noisy ones). With
+/// (`DEFAULT_LOG`: the library's notices, everyone's warnings but three noisy ones), at
+/// most five lines per place in the code per 10 s ([`repeats`]: a flood of the same warning
+/// is counted, not printed). With
 /// feature `ros2`, a second layer with its own filter hands the ROS 2 layer's warnings and
 /// errors to `/rosout` once a node forwards them (`--ros2-rosout`; it does nothing before).
 fn init_logging() {
     use tracing_subscriber::Layer as _;
+    use tracing_subscriber::filter::FilterExt as _;
     use tracing_subscriber::layer::SubscriberExt as _;
     use tracing_subscriber::util::SubscriberInitExt as _;
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
@@ -117,7 +121,7 @@ fn init_logging() {
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .with_target(true)
         .without_time()
-        .with_filter(filter);
+        .with_filter(filter.and(repeats::RateLimit::default()));
     let registry = tracing_subscriber::registry().with(stderr);
     #[cfg(feature = "ros2")]
     let registry = registry.with(gspn::ros2::rosout::RosoutLayer::filtered());

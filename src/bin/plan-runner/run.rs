@@ -247,6 +247,13 @@ async fn execute(
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
+    // A journal that could not be written stopped the run: say so where an operator
+    // looks, not only in the summary on stdout (`journal: No space left on device`).
+    if summary.stopped == StopReason::Journal {
+        for e in summary.errors.iter().filter(|e| e.starts_with("journal: ")) {
+            eprintln!("{e}");
+        }
+    }
     if let Some(m) = monitor {
         let drifts = m.await.unwrap_or(0);
         eprintln!("monitor: {drifts} drift(s)");

@@ -179,6 +179,18 @@ pub(crate) enum EditError {
         /// What is wrong with it.
         why: &'static str,
     },
+    /// A name longer than [`MAX_NAME_CHARS`](crate::web::limits::MAX_NAME_CHARS) (not
+    /// echoed: it may be megabytes).
+    #[error(
+        "{what} name of {chars} characters: at most {} per name",
+        crate::web::limits::MAX_NAME_CHARS
+    )]
+    NameTooLong {
+        /// "place" or "transition".
+        what: &'static str,
+        /// Its length in characters.
+        chars: usize,
+    },
     /// A parameter given for the other kind of transition (a rate for an immediate one).
     #[error("{what} does not apply to {kind} transition `{name}`")]
     NotApplicable {

@@ -1,6 +1,6 @@
 """A gspn worker in a few lines: decorate functions, call run().
 
-    from gspn_worker import action, run
+    from gspn.worker import action, run
 
     @action("inspect")
     def inspect(ctx):
@@ -11,7 +11,8 @@
 
 `plan-runner` starts the file as a worker (plan: `action = { worker = ["python3",
 "robot_actions.py"], name = "inspect" }`) and sends it one JSON line per action; see
-docs/actions.md for the protocol. Standard library only.
+docs/actions.md for the protocol. Standard library only: importing it does not load the
+engine (`gspn._native`), so a worker runs wherever the package's source is on the path.
 
 A function returns a transition name (fire it), None (let the policy or the net's rates
 decide), either with a duration as a pair (`return "t1", 2.5`: the outcome takes effect 2.5

@@ -1,0 +1,124 @@
+//! `analyze`: what `plan-runner analyze FILE --json` prints, from the same library calls.
+
+use std::sync::Arc;
+
+use gspn::analysis::invariants::{p_invariants, t_invariants};
+use gspn::analysis::measures::{Solver, SolverOptions, bad_time};
+use gspn::analysis::properties::Properties;
+use gspn::analysis::report::{MeasuresReport, Report, StateSpaceReport};
+use gspn::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
+use gspn::analysis::under_policy::{PolicyAnalysisError, Regime, analyse};
+use gspn::net::predicate::Predicate;
+use gspn::plan::Plan;
+use pyo3::prelude::*;
+
+use crate::errors::{Failure, Outcome};
+use crate::model::Model;
+use crate::wait::interruptible;
+
+/// State space, properties, invariants, steady state (with the plan's rewards and the
+/// probabilities of `prob`'s predicates) and transient measures at `transient`'s times,
+/// as the JSON report of `plan-runner analyze --json`.
+#[pyfunction]
+#[pyo3(signature = (model, steady = true, transient = Vec::new(), prob = Vec::new(), max_states = 10_000_000, max_memory_mib = 4096))]
+pub(crate) fn analyze(
+    py: Python<'_>,
+    model: &Model,
+    steady: bool,
+    transient: Vec<f64>,
+    prob: Vec<String>,
+    max_states: usize,
+    max_memory_mib: usize,
+) -> PyResult<String> {
+    let plan = Arc::clone(&model.plan);
+    let monitor = Monitor::new();
+    let cancel = monitor.cancel_flag();
+    interruptible(py, cancel, move || {
+        let opts = Options {
+            max_states,
+            progress: false,
+            threads: 0,
+            max_memory: max_memory_mib.saturating_mul(1 << 20),
+        };
+        report(&plan, steady, &transient, &prob, &opts, &monitor)
+    })
+}
+
+fn report(
+    plan: &Plan,
+    steady: bool,
+    transient: &[f64],
+    prob: &[String],
+    opts: &Options,
+    monitor: &Monitor,
+) -> Outcome<String> {
+    let net = &plan.net;
+    let regime = if plan.policy.is_empty() {
+        Regime::BareNet
+    } else {
+        Regime::UnderPolicy
+    };
+    if let Some(t) = bad_time(transient) {
+        return Err(Failure::input(format!("transient: {t} is not a time ≥ 0")));
+    }
+    let predicates = prob
+        .iter()
+        .map(|p| Predicate::parse(net, p).map_err(|e| Failure::input(format!("prob `{p}`: {e}"))))
+        .collect::<Outcome<Vec<_>>>()?;
+    let want_steady = steady || !prob.is_empty() || transient.is_empty();
+    let unbounded = |e: AnalysisError| match e {
+        AnalysisError::Unbounded { places } => Ok(Report {
+            analysed: regime.label().to_string(),
+            state_space: StateSpaceReport::unbounded(&places),
+            steady_state: None,
+            transient: Vec::new(),
+        }),
+        e => Err(Failure::Analysis(e.to_string())),
+    };
+    let (space, analysed) = if want_steady {
+        match analyse(
+            net,
+            &plan.policy,
+            &plan.rewards,
+            opts,
+            &SolverOptions::default(),
+            monitor,
+        ) {
+            Ok(a) => (a.space, Some((a.limiting, a.measures, a.rewards))),
+            Err(PolicyAnalysisError::StateSpace(e)) => return json(&unbounded(e)?),
+            Err(e) => return Err(Failure::Analysis(format!("steady state: {e}"))),
+        }
+    } else {
+        match StateSpace::build_under_policy(net, &plan.policy, opts, monitor) {
+            Ok(s) => (s, None),
+            Err(e) => return json(&unbounded(e)?),
+        }
+    };
+    let props = Properties::compute(net, &space);
+    let pinv = p_invariants(net, 10_000);
+    let tinv = t_invariants(net, 10_000);
+    let solver = Solver::new(net, &space);
+    if let Some(e) = solver.too_far(transient) {
+        return Err(Failure::input(format!("transient: {e}")));
+    }
+    let steady_state = analysed.map(|(l, m, rewards)| {
+        let probs = solver.probabilities(&l.pi, &predicates);
+        MeasuresReport::steady(net, l.ergodic, &m)
+            .with_probabilities(prob, &probs)
+            .with_rewards(&rewards)
+    });
+    let points = solver.transient_points(transient, &predicates);
+    json(&Report {
+        analysed: regime.label().to_string(),
+        state_space: StateSpaceReport::new(net, &props, &pinv, &tinv),
+        steady_state,
+        transient: points
+            .iter()
+            .map(|p| MeasuresReport::point(net, p, prob))
+            .collect(),
+    })
+}
+
+fn json(report: &Report) -> Outcome<String> {
+    serde_json::to_string(report).map_err(|e| Failure::Analysis(e.to_string()))
+}
