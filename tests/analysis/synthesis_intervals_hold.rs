@@ -97,7 +97,10 @@ fn total_min_leaves_a_zero_reward_end_component_solarfarm() {
     let sol = solve(
         &model,
         &rewards,
-        &Objective::Total { max: false, goal: g },
+        &Objective::Total {
+            max: false,
+            goal: g,
+        },
         &SolveOptions::default(),
     )
     .unwrap();
@@ -112,8 +115,14 @@ fn two_routes() -> Net {
     for i in 0..2 {
         let start = b.place(format!("Start{i}"), 1);
         let (ra, rb) = (b.place(format!("A{i}"), 0), b.place(format!("B{i}"), 0));
-        let (retry, failed) = (b.place(format!("Retry{i}"), 0), b.place(format!("Failed{i}"), 0));
-        let (a, bb) = (b.immediate(format!("take_a{i}"), 0.0, 1), b.immediate(format!("take_b{i}"), 0.0, 1));
+        let (retry, failed) = (
+            b.place(format!("Retry{i}"), 0),
+            b.place(format!("Failed{i}"), 0),
+        );
+        let (a, bb) = (
+            b.immediate(format!("take_a{i}"), 0.0, 1),
+            b.immediate(format!("take_b{i}"), 0.0, 1),
+        );
         b.moves(start, a, ra);
         b.moves(start, bb, rb);
         for (from, to, rate, name) in [
@@ -143,11 +152,19 @@ fn reach_both_robots_upper_bound_converges() {
         let sol = solve(
             &model,
             &rewards,
-            &Objective::Reach { max, goal: g.clone() },
+            &Objective::Reach {
+                max,
+                goal: g.clone(),
+            },
             &SolveOptions::default(),
         )
         .unwrap();
-        holds(&sol, exact, 1e-9, if max { "reach-max" } else { "reach-min" });
+        holds(
+            &sol,
+            exact,
+            1e-9,
+            if max { "reach-max" } else { "reach-min" },
+        );
     }
 }
 
@@ -160,7 +177,11 @@ struct Q(i128, i128);
 impl Q {
     fn new(n: i128, d: i128) -> Q {
         fn gcd(a: i128, b: i128) -> i128 {
-            if b == 0 { a.abs().max(1) } else { gcd(b, a % b) }
+            if b == 0 {
+                a.abs().max(1)
+            } else {
+                gcd(b, a % b)
+            }
         }
         let g = gcd(n, d) * d.signum();
         Q(n / g, d / g)
@@ -262,7 +283,9 @@ impl Spec {
     fn net(&self) -> (Net, Vec<Vec<gspn::net::TransitionId>>) {
         let n = self.decisions.len();
         let mut b = NetBuilder::new("random");
-        let places: Vec<_> = (0..n).map(|i| b.place(format!("S{i}"), (i == 0) as u32)).collect();
+        let places: Vec<_> = (0..n)
+            .map(|i| b.place(format!("S{i}"), (i == 0) as u32))
+            .collect();
         let mut choices = vec![Vec::new(); n];
         for i in 0..n {
             match &self.decisions[i] {
@@ -309,7 +332,10 @@ impl Spec {
                 ),
                 None => {
                     let exit: i128 = self.timed[i].iter().map(|&(_, r)| r as i128).sum();
-                    (Some(Q::from(exit)), vec![(Q::from(0), merge(&self.timed[i]))])
+                    (
+                        Some(Q::from(exit)),
+                        vec![(Q::from(0), merge(&self.timed[i]))],
+                    )
                 }
             })
             .collect()
@@ -434,7 +460,13 @@ fn referee(spec: &Spec, kind: Kind, max: bool, goal: usize) -> Option<f64> {
         // solver never picks it for a finite answer; skip it.
         if let Some(v) = value {
             let better = |x: &Option<Q>, y: &Option<Q>| match (x, y) {
-                (Some(x), Some(y)) => if max { x > y } else { x < y },
+                (Some(x), Some(y)) => {
+                    if max {
+                        x > y
+                    } else {
+                        x < y
+                    }
+                }
                 (Some(_), None) => !max,
                 (None, Some(_)) => max,
                 (None, None) => false,
@@ -499,7 +531,8 @@ fn check_random(spec: &Spec, kind: Kind, max: bool) -> Result<(), TestCaseError>
     let n = spec.decisions.len();
     let goal_state = n - 1;
     let (net, choices) = spec.net();
-    let model = match DecisionModel::build(&net, &Controls::zero_weight(&net), &Default::default()) {
+    let model = match DecisionModel::build(&net, &Controls::zero_weight(&net), &Default::default())
+    {
         Ok(m) => m,
         // Timeless traps and the like are refused at build: nothing to compare.
         Err(_) => return Ok(()),
@@ -523,7 +556,10 @@ fn check_random(spec: &Spec, kind: Kind, max: bool) -> Result<(), TestCaseError>
     let g = goal(&net, &model, &target);
     let objective = match kind {
         Kind::Reach => Objective::Reach { max, goal: g },
-        Kind::TotalMin => Objective::Total { max: false, goal: g },
+        Kind::TotalMin => Objective::Total {
+            max: false,
+            goal: g,
+        },
         Kind::Discounted => Objective::Discounted { max, rate: 0.5 },
     };
     let mut exact_spec = spec.clone();

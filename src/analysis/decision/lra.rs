@@ -293,10 +293,7 @@ pub(super) fn solve(
     let mut g: Vec<(f64, f64)> = Vec::with_capacity(mecs.count);
     // Whether every MEC went through policy iteration (the method reported).
     let mut all_pi = true;
-    let pi = matches!(
-        opts.algorithm,
-        Algorithm::PolicyIteration | Algorithm::Auto
-    );
+    let pi = matches!(opts.algorithm, Algorithm::PolicyIteration | Algorithm::Auto);
     for states in &members {
         // Policy iteration finds the MEC's optimal policy and its bias; value iteration then
         // starts from that bias, so its first step already bounds the gain. Under `Auto` a

@@ -86,7 +86,10 @@ pub(super) fn mec_policy_iteration(
         rounds += 1;
         let (reference, sccs) = make_unichain(model, rewards, mecs, states, &local, max, policy)?;
         if opts.algorithm == Algorithm::Auto
-            && sccs.members().iter().any(|c| c.len() > Algorithm::AUTO_COMPONENT_LIMIT)
+            && sccs
+                .members()
+                .iter()
+                .any(|c| c.len() > Algorithm::AUTO_COMPONENT_LIMIT)
         {
             return Ok(None);
         }
