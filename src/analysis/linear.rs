@@ -150,13 +150,13 @@ mod tests {
 
     #[test]
     fn a_singular_system_is_an_error_and_a_huge_one_is_refused() {
-        let mut b = vec![1.0; 60];
+        let mut b: Vec<f64> = std::iter::repeat_n(1.0, 60).collect();
         let entries: Vec<_> = (0..60).map(|i| (i, 0, 1.0)).collect();
         assert!(matches!(
             solve_block(60, &entries, &mut b, 1),
             Err(SolveError::Failed(_))
         ));
-        let mut b = vec![];
+        let mut b: Vec<f64> = Vec::new();
         assert!(matches!(
             solve_block(1 << 20, &[], &mut b, 1 << 10),
             Err(SolveError::TooLarge)

@@ -2,13 +2,16 @@
 //!
 //! Reachability, accumulated reward and the two discounted objectives are Bellman equations
 //! `x(s) = opt_c [r_c + f_c·Σ p·x(s') + w_c·x(s)]` over every state (instant states take no
-//! time: `f_c = 1` except under the per-step discount). They are solved by *optimistic value
-//! iteration* (Hartmanns & Kaminski, CAV 2020): Gauss–Seidel sweeps from 0 give a lower bound
-//! (the value is the least fixed point); a guessed upper bound `U` is accepted only once one
-//! Bellman step does not raise it anywhere (`T(U) ≤ U`, so `U` is above the least fixed
-//! point). Discounted objectives are contractions, so `T(L) ≥ L` is checked for the lower
-//! bound too. The result is an interval `[lower, upper]` at the initial distribution, of
-//! relative width at most [`SolveOptions::precision`].
+//! time: `f_c = 1` except under the per-step discount). Reachability and the discounted
+//! objectives run *interval iteration* ([`interval`](super::interval)): a lower and an upper
+//! bound from sound starts, improved together until they meet. Accumulated reward runs
+//! *optimistic value iteration* (Hartmanns & Kaminski, CAV 2020): Gauss–Seidel sweeps from 0
+//! give a lower bound (the value is the least fixed point); a guessed upper bound `U` is
+//! accepted only once one Bellman step does not raise it anywhere (`T(U) ≤ U`, so `U` is
+//! above the least fixed point). End components that would give the equations a wrong least
+//! fixed point (reach-max, zero-reward ones in total-min) are collapsed first
+//! ([`quotient`](super::quotient)). The result is an interval `[lower, upper]` at the initial
+//! distribution, of relative width at most [`SolveOptions::precision`].
 //!
 //! The long-run average reward is solved in [`lra`](super::lra): maximal end components, the
 //! value of each, then the best one to reach.
