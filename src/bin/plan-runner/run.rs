@@ -38,7 +38,9 @@ pub(crate) struct Args {
     /// Seed of every random choice (default: the plan's, else from the clock).
     #[arg(long)]
     seed: Option<u64>,
-    /// 0 = virtual time, as fast as possible; 1 = real time (default: the plan's, else 0).
+    /// Seconds of real time per second of model time: 0 = virtual time, as fast as
+    /// possible; 1 = real time; 10 = ten times slower than real time, 0.1 = ten times faster
+    /// (default: the plan's, else 0).
     #[arg(long, value_name = "X")]
     time_scale: Option<f64>,
     /// Stop at this model time.
