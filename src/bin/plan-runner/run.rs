@@ -29,6 +29,7 @@ use gspn::runtime::{Backends, RuntimeBuilder, Section, StopReason, Summary};
 
 use crate::backends::{self, BackendArgs};
 use crate::common::{BadInput, Interrupted, NetArgs, StopSignals};
+use crate::export;
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
@@ -38,7 +39,9 @@ pub(crate) struct Args {
     /// Seed of every random choice (default: the plan's, else from the clock).
     #[arg(long)]
     seed: Option<u64>,
-    /// 0 = virtual time, as fast as possible; 1 = real time (default: the plan's, else 0).
+    /// Seconds of real time per second of model time: 0 = virtual time, as fast as
+    /// possible; 1 = real time; 10 = ten times slower than real time, 0.1 = ten times faster
+    /// (default: the plan's, else 0).
     #[arg(long, value_name = "X")]
     time_scale: Option<f64>,
     /// Stop at this model time.
@@ -47,7 +50,9 @@ pub(crate) struct Args {
     /// Stop after this many firings.
     #[arg(long, value_name = "N")]
     max_firings: Option<u64>,
-    /// Write every event to this file (JSON Lines).
+    /// Write every event to this file (JSON Lines). FILE.mcap: the journal goes to
+    /// FILE.mcap.jsonl and is exported to FILE.mcap as ROS 2 messages when the run ends
+    /// (feature `ros2`).
     #[arg(long, value_name = "FILE")]
     journal: Option<PathBuf>,
     /// Print the summary as JSON.
@@ -69,6 +74,15 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    let mcap = args.journal.as_deref().filter(|j| export::is_mcap(j));
+    #[cfg(not(feature = "ros2"))]
+    if let Some(m) = mcap {
+        return Err(BadInput(format!(
+            "--journal {}: MCAP needs the feature `ros2` (cargo build --features ros2)",
+            m.display()
+        ))
+        .into());
+    }
     let mut plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && (0.0..=gspn::limits::MAX_SECONDS).contains(&x)) {
@@ -104,16 +118,6 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         eprintln!("warning: {w}");
     }
     backends::check(&plan, &args.backends)?;
-    // The summary lists places and transitions in net order (as `analyze` does).
-    let order = NetOrder {
-        places: plan.net.places().iter().map(|p| p.name.clone()).collect(),
-        transitions: plan
-            .net
-            .transitions()
-            .iter()
-            .map(|t| t.name.clone())
-            .collect(),
-    };
     // Registered before the backends start: a signal while ROS 2 waits for its robots
     // ends the wait at once with the signal's exit code.
     let signals = StopSignals::new()?;
@@ -138,6 +142,14 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     // blocking thread) must not hold the exit up: `main` kills what actions left behind.
     rt.shutdown_background();
     let (summary, sections, code) = ran?;
+    if let Some(m) = mcap {
+        let (firings, _, _, poses, robots) = export::write(&export::journal_beside(m), m)?;
+        eprintln!(
+            "{}: {firings} firings, {poses} poses of {robots} robot(s) (journal: {})",
+            m.display(),
+            export::journal_beside(m).display()
+        );
+    }
     if args.json {
         if sections.is_empty() {
             println!("{}", serde_json::to_string_pretty(&summary)?);
@@ -149,7 +161,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             println!("{}", serde_json::to_string_pretty(&v)?);
         }
     } else {
-        print_summary(&summary, &order)?;
+        print_summary(&summary)?;
         for (_, s) in &sections {
             if !s.text.is_empty() {
                 println!("{}", s.text);
@@ -172,7 +184,11 @@ async fn execute(
 ) -> anyhow::Result<(Summary, Vec<(&'static str, Section)>, u8)> {
     let mut b = backends.attach(run)?;
     if let Some(j) = &args.journal {
-        b = b.journal(j);
+        b = if export::is_mcap(j) {
+            b.journal(export::journal_beside(j))
+        } else {
+            b.journal(j)
+        };
     }
     if args.monitor {
         let m = gspn::conform::SharedMonitor::new(crate::conform::monitor_for(
@@ -272,13 +288,7 @@ async fn execute(
     Ok((summary, sections, code))
 }
 
-/// The names of the net's places and transitions, in net order.
-struct NetOrder {
-    places: Vec<String>,
-    transitions: Vec<String>,
-}
-
-fn print_summary(s: &Summary, order: &NetOrder) -> anyhow::Result<()> {
+fn print_summary(s: &Summary) -> anyhow::Result<()> {
     println!(
         "stopped: {} after {} firings at time {:.4}",
         s.stopped, s.firings, s.time
@@ -288,16 +298,13 @@ fn print_summary(s: &Summary, order: &NetOrder) -> anyhow::Result<()> {
         s.agents_spawned, s.agents_ended
     );
     println!("place                          final    mean tokens");
-    for p in &order.places {
-        if let (Some(k), Some(m)) = (s.final_marking.get(p), s.mean_tokens.get(p)) {
-            println!("  {p:<28} {k:>6}   {m:>12.6}");
-        }
+    // In net order, as `analyze` lists them.
+    for ((p, k), (_, m)) in s.final_marking.iter().zip(s.mean_tokens.iter()) {
+        println!("  {p:<28} {k:>6}   {m:>12.6}");
     }
     println!("transition                     throughput");
-    for t in &order.transitions {
-        if let Some(x) = s.throughput.get(t) {
-            println!("  {t:<28} {x:>12.6}");
-        }
+    for (t, x) in s.throughput.iter() {
+        println!("  {t:<28} {x:>12.6}");
     }
     for (name, r) in &s.rewards {
         let interval = match r.half_width {

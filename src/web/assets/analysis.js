@@ -240,6 +240,7 @@ async function ask() {
     }
   }
   out.innerHTML = html + '</table>';
+  plotAnswers(out, q, prob);
 }
 
 // Most tokens each place ever holds, in the net's order.
