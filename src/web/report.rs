@@ -70,6 +70,7 @@ pub(crate) fn analyse(
                 AnalysisError::TooManyStates { .. } => "too_many_states",
                 AnalysisError::TimelessTrap { .. } => "timeless_trap",
                 AnalysisError::VanishingLoopTooLarge { .. } => "vanishing_loop_too_large",
+                AnalysisError::VanishingLoopFailed { .. } => "vanishing_loop_failed",
                 AnalysisError::Cancelled { .. } => "cancelled",
                 AnalysisError::TooManyTokens { .. } => "too_many_tokens",
                 AnalysisError::TooMuchMemory { .. } => "too_much_memory",

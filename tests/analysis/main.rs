@@ -15,6 +15,7 @@ mod state_space;
 mod steady_state_from_columns;
 mod steady_state_random_nets;
 mod storm_cross_check;
+mod synthesis_intervals_hold;
 mod synthesised_policy;
 mod thesis_reference;
 mod vanishing_elimination;
