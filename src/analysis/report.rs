@@ -56,6 +56,27 @@ pub struct Report {
     pub steady_state: Option<MeasuresReport>,
     /// Measures at each asked time.
     pub transient: Vec<MeasuresReport>,
+    /// The answers to `--query`, in the order asked; left out when none was asked.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub queries: Vec<QueryAnswer>,
+}
+
+/// One query (`P=? [F<=600 done=1]`) and its value.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct QueryAnswer {
+    /// The query as written.
+    pub query: String,
+    /// Its value; an infinite expected time or reward is written `"inf"` (JSON has no ∞).
+    #[serde(serialize_with = "number_or_inf")]
+    pub value: f64,
+}
+
+fn number_or_inf<S: serde::Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+    if v.is_infinite() {
+        s.serialize_str(if *v > 0.0 { "inf" } else { "-inf" })
+    } else {
+        s.serialize_f64(*v)
+    }
 }
 
 /// What the state space says. Every field but `bounded`, `unbounded_places` and `safe` is

@@ -341,14 +341,18 @@ pub(crate) struct QueryBody {
     /// Predicates (`analyze --prob`).
     #[serde(default)]
     prob: Vec<String>,
+    /// Queries in Storm's syntax (`analyze --query`).
+    #[serde(default)]
+    query: Vec<String>,
 }
 
-/// `POST /api/analysis/query {transient: [t], prob: [expr]}`: on the finished analysis's
-/// state space, `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens,
-/// throughput, probability}]}` as `plan-runner analyze --json --transient … --prob …` gives
-/// them. 409 before an analysis has finished, 422 when it found no steady state to ask about
-/// or the question asks past a [limit](crate::web::limits) (time points, predicates, their
-/// length), 413 when its answer would be too large,
+/// `POST /api/analysis/query {transient: [t], prob: [expr], query: [q]}`: on the finished
+/// analysis's state space, `{steady_state: {probability: {expr: p}}, transient: [{t,
+/// mean_tokens, throughput, probability}], queries: [{query, value}]}` as `plan-runner
+/// analyze --json --transient … --prob … --query …` gives them. 409 before an analysis has
+/// finished, 422 when it found no steady state to ask about or the question asks past a
+/// [limit](crate::web::limits) (time points, predicates and queries, their length), 413
+/// when its answer would be too large,
 /// 400 for a bad time or predicate (the message names it), 409 `{error, kind: "cancelled",
 /// progress}` when the question was cancelled (`/api/analysis/query/cancel`, a newer
 /// question, an edit of the net). Its progress is at `/api/analysis/query/progress`.
@@ -372,10 +376,13 @@ pub(crate) async fn analysis_query(
         }
         Some(Some(k)) => k,
     };
-    if let Err(over) = crate::web::limits::check_question(&net, &b.transient, &b.prob) {
+    // Queries are held to the predicates' limits (count, length).
+    let limits = crate::web::limits::check_question(&net, &b.transient, &b.prob)
+        .and_then(|()| crate::web::limits::check_question(&net, &[], &b.query));
+    if let Err(over) = limits {
         return error(over.status, over.message);
     }
-    match job.ask(net, kept, b.transient, b.prob).await {
+    match job.ask(net, kept, b.transient, b.prob, b.query).await {
         Answer::Done(v) => Json(v).into_response(),
         Answer::Refused(message) => error(StatusCode::BAD_REQUEST, message),
         Answer::Cancelled(progress) => cancelled("the question", progress),

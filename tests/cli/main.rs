@@ -4,6 +4,7 @@
 mod support;
 
 mod analyze;
+mod analyze_answers_queries;
 mod bad_limits;
 mod check;
 mod conform;

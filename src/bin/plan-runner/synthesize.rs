@@ -68,7 +68,8 @@ pub(crate) struct Args {
     precision: f64,
     /// `value` (value iteration with sound bounds), `policy` (policy iteration with exact
     /// evaluation, component by component; long-run average only), then the same bounding
-    /// step; `auto`: policy for lra, value for the others.
+    /// step; `auto`: policy for lra while a policy's components stay small (up to 2,000
+    /// states; value iteration for a MEC above), value for the others.
     #[arg(long, value_name = "METHOD", default_value = "auto")]
     method: String,
     /// Most reachable markings before giving up.

@@ -135,8 +135,7 @@ pub(super) fn read_rewards(
 pub(super) fn algorithm(args: &Args, goal: &Goal) -> anyhow::Result<Algorithm> {
     match args.method.as_str() {
         "value" => Ok(Algorithm::ValueIteration),
-        "auto" if matches!(goal, Goal::Lra) => Ok(Algorithm::PolicyIteration),
-        "auto" => Ok(Algorithm::ValueIteration),
+        "auto" => Ok(Algorithm::Auto),
         "policy" if matches!(goal, Goal::Lra) => Ok(Algorithm::PolicyIteration),
         "policy" => Err(BadInput(format!(
             "--method policy: policy iteration is implemented for lra-max and lra-min only, not --objective {}",
