@@ -68,8 +68,11 @@ pub struct StateSpaceReport {
     pub tangible: Option<usize>,
     /// Vanishing ones.
     pub vanishing: Option<usize>,
-    /// Edges of the reachability graph.
+    /// Labelled edges of the reachability graph: one per marking and fired transition
+    /// ([`Properties::edges`]).
     pub edges: Option<usize>,
+    /// Distinct (marking, successor) pairs ([`Properties::successor_pairs`]).
+    pub successor_pairs: Option<usize>,
     /// Dead markings, written as `Place=k` lists.
     pub dead_markings: Option<Vec<String>>,
     /// Whether the net is bounded.
@@ -130,6 +133,7 @@ impl StateSpaceReport {
             tangible: Some(p.tangible),
             vanishing: Some(p.vanishing),
             edges: Some(p.edges),
+            successor_pairs: Some(p.successor_pairs),
             dead_markings: Some(
                 p.dead_markings
                     .iter()
@@ -158,6 +162,7 @@ impl StateSpaceReport {
             tangible: None,
             vanishing: None,
             edges: None,
+            successor_pairs: None,
             dead_markings: None,
             bounded: false,
             unbounded_places: places.to_vec(),

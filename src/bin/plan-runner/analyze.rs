@@ -87,7 +87,9 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         threads: 0,
         max_memory: args.max_memory.saturating_mul(1 << 20),
     };
-    let want_steady = args.steady || !args.prob.is_empty() || args.transient.is_empty();
+    // `--transient T` asks for the distribution at T only (its --prob values included);
+    // the steady state comes with --steady, or when no time is asked for.
+    let want_steady = args.steady || args.transient.is_empty();
     let monitor = Monitor::new();
     let unbounded = |e: &AnalysisError| match e {
         AnalysisError::Unbounded { places } => Some(places.clone()),
@@ -249,8 +251,8 @@ fn print_state_space(
         ),
     }
     println!(
-        "state space: {} reachable markings ({} tangible, {} vanishing), {} edges",
-        p.reachable, p.tangible, p.vanishing, p.edges
+        "state space: {} reachable markings ({} tangible, {} vanishing), {} labelled edges ({} distinct successor pairs)",
+        p.reachable, p.tangible, p.vanishing, p.edges, p.successor_pairs
     );
     let bounds: Vec<String> = net
         .places()

@@ -1,14 +1,15 @@
 //! `plan-runner simulate FILE [--seed S] [--until T | --steps N] [--runs R] [--json]`.
 //!
 //! One run prints its trace (time, transition, marking); `--runs R` prints Monte-Carlo
-//! estimates (mean tokens per place, throughput per transition) with 95% confidence
-//! intervals instead.
+//! estimates (mean tokens per place, throughput per transition, and the rate of each of a
+//! plan's `[rewards.NAME]`) with 95% confidence intervals instead.
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context;
+use gspn::analysis::decision::RewardSpec;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
 
@@ -36,7 +37,8 @@ pub(crate) struct Args {
     /// (a plan's `stop.when` ends a trace only; Monte-Carlo runs use the time or step limit).
     #[arg(long, value_name = "R")]
     runs: Option<u64>,
-    /// Print JSON: `runs, firings, mean_tokens, throughput, ci95` (a single run adds `trace`).
+    /// Print JSON: `runs, firings, mean_tokens, throughput, ci95`, and `rewards` for a plan
+    /// with `[rewards.NAME]` and --runs (a single run adds `trace`).
     #[arg(long)]
     json: bool,
     /// Start from the marking of a recorded run: after the last firing with sequence number
@@ -55,6 +57,7 @@ struct Input {
     time_limit: Option<f64>,
     max_firings: Option<u64>,
     stop_when: Option<Predicate>,
+    rewards: Vec<RewardSpec>,
 }
 
 fn load(args: &Args) -> anyhow::Result<Input> {
@@ -68,6 +71,7 @@ fn load(args: &Args) -> anyhow::Result<Input> {
         time_limit: plan.stop.time_limit,
         max_firings: plan.stop.max_firings,
         stop_when: plan.stop.when,
+        rewards: plan.rewards,
         net: plan.net,
     })
 }
@@ -235,7 +239,10 @@ fn monte_carlo(
     out: &mut impl Write,
 ) -> anyhow::Result<()> {
     let net = &input.net;
-    let mut mc = MonteCarlo::new(net, horizon).runs(runs).seed(seed);
+    let mut mc = MonteCarlo::new(net, horizon)
+        .runs(runs)
+        .seed(seed)
+        .rewards(&input.rewards);
     if let Some(p) = &input.policy {
         mc = mc.policy(p);
     }
@@ -246,7 +253,7 @@ fn monte_carlo(
     let mean: Vec<f64> = est.mean_tokens.iter().map(|e| e.mean).collect();
     let thr: Vec<f64> = est.throughput.iter().map(|e| e.mean).collect();
     if args.json {
-        let v = summary_json(
+        let mut v = summary_json(
             net,
             est.runs,
             est.firings,
@@ -254,6 +261,26 @@ fn monte_carlo(
             &thr,
             Some((&est.mean_tokens, &est.throughput)),
         );
+        if !input.rewards.is_empty() {
+            let named = |f: &dyn Fn(&Estimate) -> Value| -> Value {
+                Value::Object(
+                    input
+                        .rewards
+                        .iter()
+                        .zip(&est.rewards)
+                        .map(|(r, e)| (r.name.clone(), f(e)))
+                        .collect(),
+                )
+            };
+            v["rewards"] = named(&|e| json!(e.mean));
+            v["ci95"]["rewards"] = named(&|e| {
+                if e.half_width.is_nan() {
+                    json!([null, null])
+                } else {
+                    json!([e.lo(), e.hi()])
+                }
+            });
+        }
         serde_json::to_writer_pretty(&mut *out, &v)?;
         writeln!(out)?;
         return Ok(());
@@ -290,6 +317,10 @@ fn monte_carlo(
         ("transition", "throughput"),
         transitions.zip(&est.throughput),
     )?;
+    if !input.rewards.is_empty() {
+        let names = input.rewards.iter().map(|r| r.name.as_str());
+        section(out, width, ("reward", "rate"), names.zip(&est.rewards))?;
+    }
     Ok(())
 }
 
