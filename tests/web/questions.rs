@@ -48,6 +48,7 @@ async fn the_panel_answers_predicates_and_transient_tokens_with_the_numbers_of_a
     let cli = analyze_json_with(
         &patrol_plan_path(),
         &[
+            "--steady",
             "--transient",
             "0.5,2,10",
             "--prob",

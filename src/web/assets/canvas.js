@@ -97,8 +97,9 @@ function nodeAt(x, y) {
 // like the SVG; read once per theme.
 const inks = new Map();
 let inkTheme = null;
+const darkScheme = window.matchMedia('(prefers-color-scheme: dark)');
 function ink(name) {
-  const theme = (document.documentElement.dataset.theme || '') + matchMedia('(prefers-color-scheme: dark)').matches;
+  const theme = (document.documentElement.dataset.theme || '') + darkScheme.matches;
   if (theme !== inkTheme) {
     inks.clear();
     inkTheme = theme;
