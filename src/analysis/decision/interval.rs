@@ -167,8 +167,8 @@ fn upper_start(
         }
     }
     let mut c_max = 0.0f64;
-    for s in 0..n {
-        if eq.fixed[s].is_some() || local[s] != u32::MAX {
+    for (s, &l) in local.iter().enumerate().take(n) {
+        if eq.fixed[s].is_some() || l != u32::MAX {
             continue;
         }
         for c in model.choices(s) {
