@@ -6,8 +6,7 @@
 //! - the run being stopped → the goal is cancelled on the robot, [`Outcome::Cancelled`];
 //! - the place's timeout (applied by the runtime, which drops the action) → the goal is
 //!   cancelled on the robot too (a drop guard sends the cancel request);
-//! - the robot's heartbeats stop ([`Liveness::Lost`]) or its server leaves DDS discovery
-//!   ([`Liveness::Gone`], [`super::presence`]) → `Failed("robot … lost")`, and the
+//! - the robot's heartbeats stop ([`Liveness::Lost`]) → `Failed("robot … lost")`, and the
 //!   plan's failure policy decides.
 //!
 //! Any number of goals at a time per robot and server: one task per link owns the action
@@ -30,8 +29,7 @@ use ros2_client::{Message, RmwRequestId};
 use tokio::sync::{mpsc, oneshot, watch};
 
 use super::heartbeat::Liveness;
-use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, KeyValue, PoseStamped};
-use super::settings::PlaceArgs;
+use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult};
 use crate::net::PlaceId;
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
@@ -162,7 +160,7 @@ impl std::fmt::Debug for RobotLink {
 
 impl RobotLink {
     /// A link through `client` (its task is spawned on the current tokio runtime), failing
-    /// goals when `liveness` turns [`Liveness::Lost`] or [`Liveness::Gone`].
+    /// goals when `liveness` turns [`Liveness::Lost`].
     pub fn new(
         robot: String,
         client: ExecPlaceClient,
@@ -221,22 +219,15 @@ impl RobotLink {
 pub struct RemotePlaces {
     /// Server name of each `ros2` place.
     servers: Arc<HashMap<PlaceId, String>>,
-    /// Arguments of the places that have some.
-    args: Arc<HashMap<PlaceId, PlaceArgs>>,
     /// Links by (robot, server).
     links: Arc<HashMap<(String, String), Arc<RobotLink>>>,
 }
 
 impl RemotePlaces {
-    /// The action for places `servers` (place → server name) with their `args` over `links`.
-    pub fn new(
-        servers: HashMap<PlaceId, String>,
-        args: HashMap<PlaceId, PlaceArgs>,
-        links: Vec<(String, Arc<RobotLink>)>,
-    ) -> Self {
+    /// The action for places `servers` (place → server name) over `links`.
+    pub fn new(servers: HashMap<PlaceId, String>, links: Vec<(String, Arc<RobotLink>)>) -> Self {
         RemotePlaces {
             servers: Arc::new(servers),
-            args: Arc::new(args),
             links: Arc::new(
                 links
                     .into_iter()
@@ -265,33 +256,8 @@ impl Action for RemotePlaces {
             let m = format!("robot `{robot}` has no link to server `{server}`");
             return Box::pin(async move { Outcome::Failed(m) });
         };
-        let goal = goal(&ctx, self.args.get(&ctx.place));
-        Box::pin(exec(Arc::clone(link), goal, ctx))
+        Box::pin(exec(Arc::clone(link), ctx))
     }
-}
-
-/// The ExecPlace goal of `ctx`'s agent in its place, with the place's arguments.
-pub fn goal(ctx: &ActionContext, args: Option<&PlaceArgs>) -> ExecPlaceGoal {
-    let mut goal = ExecPlaceGoal {
-        place: ctx.place_name().to_string(),
-        agent: ctx.agent.0,
-        ..ExecPlaceGoal::default()
-    };
-    if let Some(a) = args {
-        if let Some([x, y, yaw]) = a.target {
-            goal.has_target = true;
-            goal.target = PoseStamped::on_map(x, y, yaw);
-        }
-        goal.args = a
-            .args
-            .iter()
-            .map(|(key, value)| KeyValue {
-                key: key.clone(),
-                value: value.clone(),
-            })
-            .collect();
-    }
-    goal
 }
 
 /// Cancels the goal on the robot if the action is dropped before the goal ended (the
@@ -327,24 +293,24 @@ impl Drop for GoalGuard {
 
 enum Ended {
     Result(Result<(GoalStatusEnum, ExecPlaceResult), String>),
-    Lost(Liveness),
+    Lost,
     Cancel,
 }
 
-async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> Outcome {
+async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
     let robot = link.robot.clone();
-    let lost_msg = |l: Liveness| match l {
-        Liveness::Gone => format!("robot `{robot}` lost (its ExecPlace server left DDS discovery)"),
-        _ => format!("robot `{robot}` lost (its heartbeats stopped)"),
-    };
+    let lost_msg = || format!("robot `{robot}` lost (its heartbeats stopped)");
     let mut live = link.liveness.clone();
-    let now = *live.borrow();
-    if now.is_lost() {
-        return Outcome::Failed(lost_msg(now));
+    if *live.borrow() == Liveness::Lost {
+        return Outcome::Failed(lost_msg());
     }
     let guard = GoalGuard {
         link: Arc::clone(&link),
         goal: Mutex::new(None),
+    };
+    let goal = ExecPlaceGoal {
+        place: ctx.place_name().to_string(),
+        agent: ctx.agent.0.to_string(),
     };
     let work = async {
         let (id, resp) = link
@@ -361,20 +327,27 @@ async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> 
     };
     let ended = tokio::select! {
         r = work => Ended::Result(r),
-        l = live.wait_for(|s| s.is_lost()) => Ended::Lost(l.map(|l| *l).unwrap_or(Liveness::Gone)),
+        _ = live.wait_for(|s| *s == Liveness::Lost) => Ended::Lost,
         _ = ctx.cancel.cancelled() => Ended::Cancel,
     };
     match ended {
         Ended::Result(r) => {
             guard.set(None);
             match r {
-                Ok((status, res)) => outcome(&robot, status, &res, &ctx),
+                Ok((GoalStatusEnum::Succeeded, res)) if res.transition.is_empty() => {
+                    Outcome::Decide
+                }
+                Ok((GoalStatusEnum::Succeeded, res)) => ctx.fire(&res.transition),
+                Ok((status, res)) => Outcome::Failed(format!(
+                    "robot `{robot}` ended the goal {status:?}: {}",
+                    res.outcome
+                )),
                 Err(e) => Outcome::Failed(e),
             }
         }
-        Ended::Lost(l) => {
+        Ended::Lost => {
             guard.set(None);
-            Outcome::Failed(lost_msg(l))
+            Outcome::Failed(lost_msg())
         }
         Ended::Cancel => {
             if let Some(id) = guard.take() {
@@ -382,31 +355,5 @@ async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> 
             }
             Outcome::Cancelled
         }
-    }
-}
-
-/// What a goal's end means for the place: a succeeded goal fires the robot's transition or
-/// lets the policy decide; a goal the robot says FAILED, aborted or cancelled by itself
-/// fails the action (the place's `on_failure` applies).
-fn outcome(
-    robot: &str,
-    status: GoalStatusEnum,
-    res: &ExecPlaceResult,
-    ctx: &ActionContext,
-) -> Outcome {
-    match (status, res.outcome) {
-        (GoalStatusEnum::Succeeded, ExecPlaceResult::FIRE) => ctx.fire(&res.transition),
-        (GoalStatusEnum::Succeeded, ExecPlaceResult::DECIDE) => Outcome::Decide,
-        (GoalStatusEnum::Succeeded, ExecPlaceResult::FAILED) => {
-            Outcome::Failed(format!("robot `{robot}` failed: {}", res.message))
-        }
-        (GoalStatusEnum::Succeeded, o) => Outcome::Failed(format!(
-            "robot `{robot}` answered outcome {o}, not FIRE (0), DECIDE (1) or FAILED (2): {}",
-            res.message
-        )),
-        (status, _) => Outcome::Failed(format!(
-            "robot `{robot}` ended the goal {status:?}: {}",
-            res.message
-        )),
     }
 }
