@@ -4,7 +4,8 @@
 //! tangible reachability graph is built from a [`Net`](crate::net::Net) and handed to it.
 //!
 //! - [`state_space`]: the tangible reachability graph ([`StateSpace`](state_space::StateSpace)),
-//!   [`vanishing`] markings eliminated; [`coverability`] (Karp–Miller) stops unbounded nets;
+//!   [`vanishing`] markings eliminated (loops of immediate transitions by the one solver in
+//!   `absorbing`, whose LU lives in `linear`: dense when small, sparse above); [`coverability`] (Karp–Miller) stops unbounded nets;
 //!   [`properties`] (bounds, deadlocks, liveness, reversibility) and [`invariants`] (Farkas)
 //!   read it; [`scc`] is the shared Tarjan.
 //! - [`ctmc`]: the chain over tangible states and its solvers (steady state by sparse LU or
@@ -13,6 +14,8 @@
 //!   predicate probabilities ([`Solver`](measures::Solver)).
 //! - [`under_policy`]: a plan's net analysed under its policy, with its reward rates
 //!   (`analyze PLAN`; the bare net when the plan has no policy).
+//! - [`query`]: questions in Storm's and PRISM's property syntax (`P=? [F<=600 done=1]`,
+//!   `T=? [F done=1]`, `S=? [..]`, rewards, `Pmax=?`), read on the full graph.
 //! - [`report`]: the typed report of all this — what `plan-runner analyze --json` prints and
 //!   what the viewer's analysis panel shows.
 //!
@@ -39,12 +42,15 @@
 //!     - (2.0 + 0.1 * (-2.1f64).exp()) / 2.1).abs() < 1e-11);
 //! ```
 
+pub(crate) mod absorbing;
 pub mod coverability;
 pub mod ctmc;
 pub mod decision;
 pub mod invariants;
+pub(crate) mod linear;
 pub mod measures;
 pub mod properties;
+pub mod query;
 pub mod report;
 pub mod scc;
 pub mod state_space;

@@ -1,5 +1,5 @@
 //! Net formats: PIPE XML (the thesis format), PNML (ISO P/T plus the `<timed>` / `<rate>`
-//! extension), GreatSPN PNPRO, and exports (DOT, PRISM). Plan files are read by
+//! extension), GreatSPN PNPRO, and exports (DOT, PRISM); measures over time as CSV and SVG ([`series`]). Plan files are read by
 //! [`crate::plan`].
 //!
 //! Every reader streams the file through quick-xml (no DOM) and reports bad input as a
@@ -12,6 +12,7 @@ pub mod pipe;
 pub mod pnml;
 pub mod pnpro;
 pub mod prism;
+pub mod series;
 pub(crate) mod xml;
 
 pub use xml::MAX_XML_DEPTH;

@@ -93,11 +93,12 @@ impl Rule {
     }
 }
 
-/// Why a set of rules is not a policy for a net. `rule` is the index of the offending rule.
+/// Why a set of rules is not a policy for a net. `rule` is the index of the offending rule;
+/// messages number rules from 1, in file order, as `check` and the plan's comments do.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum PolicyError {
     /// An exact pattern with the wrong number of places.
-    #[error("rule {rule}: the marking has {got} places, the net {expected}")]
+    #[error("rule {}: the marking has {got} places, the net {expected}", .rule + 1)]
     WrongLength {
         /// The rule.
         rule: usize,
@@ -107,7 +108,7 @@ pub enum PolicyError {
         got: usize,
     },
     /// A place id outside the net.
-    #[error("rule {rule}: place #{place} is not in the net")]
+    #[error("rule {}: place #{place} is not in the net", .rule + 1)]
     UnknownPlace {
         /// The rule.
         rule: usize,
@@ -115,7 +116,7 @@ pub enum PolicyError {
         place: u32,
     },
     /// A place listed twice in a partial pattern.
-    #[error("rule {rule}: place `{name}` is listed twice")]
+    #[error("rule {}: place `{name}` is listed twice", .rule + 1)]
     DuplicatePlace {
         /// The rule.
         rule: usize,
@@ -123,7 +124,7 @@ pub enum PolicyError {
         name: String,
     },
     /// A transition id outside the net.
-    #[error("rule {rule}: transition #{transition} is not in the net")]
+    #[error("rule {}: transition #{transition} is not in the net", .rule + 1)]
     UnknownTransition {
         /// The rule.
         rule: usize,
@@ -132,7 +133,8 @@ pub enum PolicyError {
     },
     /// A rule names an exponential transition (a policy only chooses immediate ones).
     #[error(
-        "rule {rule}: transition `{name}` is exponential; a policy chooses among immediate transitions"
+        "rule {}: transition `{name}` is exponential; a policy chooses among immediate transitions",
+        .rule + 1
     )]
     NotImmediate {
         /// The rule.
@@ -141,7 +143,7 @@ pub enum PolicyError {
         name: String,
     },
     /// A transition listed twice in one rule.
-    #[error("rule {rule}: transition `{name}` is listed twice")]
+    #[error("rule {}: transition `{name}` is listed twice", .rule + 1)]
     DuplicateTransition {
         /// The rule.
         rule: usize,
@@ -149,7 +151,7 @@ pub enum PolicyError {
         name: String,
     },
     /// A probability outside [0, 1] or not finite.
-    #[error("rule {rule}: probability of `{name}` is {value}: must be in [0, 1]")]
+    #[error("rule {}: probability of `{name}` is {value}: must be in [0, 1]", .rule + 1)]
     BadProbability {
         /// The rule.
         rule: usize,
@@ -159,7 +161,7 @@ pub enum PolicyError {
         value: f64,
     },
     /// The probabilities of a rule do not sum to 1.
-    #[error("rule {rule}: the probabilities sum to {sum}, not 1")]
+    #[error("rule {}: the probabilities sum to {sum}, not 1", .rule + 1)]
     BadSum {
         /// The rule.
         rule: usize,
@@ -167,13 +169,13 @@ pub enum PolicyError {
         sum: f64,
     },
     /// A rule with no transition.
-    #[error("rule {rule}: chooses no transition")]
+    #[error("rule {}: chooses no transition", .rule + 1)]
     Empty {
         /// The rule.
         rule: usize,
     },
     /// Two exact rules for the same marking.
-    #[error("rule {rule}: the same marking as rule {first}")]
+    #[error("rule {}: the same marking as rule {}", .rule + 1, .first + 1)]
     DuplicateMarking {
         /// The later rule.
         rule: usize,

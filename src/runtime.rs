@@ -68,6 +68,7 @@ pub mod agent;
 mod backend;
 mod builder;
 pub mod builtin;
+mod by_name;
 mod clock;
 mod conservation;
 mod engine;
@@ -97,6 +98,7 @@ pub use backend::{
 };
 pub use builder::RuntimeBuilder;
 pub use builtin::{BUILTIN_WORDS, Builtin};
+pub use by_name::InNetOrder;
 pub use clock::ModelClock;
 pub use event::{Drift, Event, EventKind, Events, Monitored, Received, Watcher};
 pub use handle::{AgentInfo, Progress, RuntimeHandle, Summary};

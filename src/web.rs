@@ -11,7 +11,7 @@
 //!
 //! | route | what |
 //! |---|---|
-//! | `GET /api/net` | places (name, tokens, capacity, x, y), transitions (name, kind, rate or weight and priority, servers, x, y), arcs (kind, place, transition, weight, bend points), `layout`: `file` or `layered` ([`layout`]) |
+//! | `GET /api/net` | places (name, tokens, capacity, x, y), transitions (name, kind, rate or weight and priority, servers, x, y), arcs (kind, place, transition, weight, bend points), `layout`: `file` or `layered` ([`layout::choose`]), `layout_note`: why the file's positions were set aside, `other_layout`: `{layout, places: [[x, y]], transitions, arcs}` the other one when the file has positions |
 //! | `GET /api/sim/state?trace=K` | `seed, time, firings, marking {place: k}, tokens [k], enabled, firable, vanishing, dead, trace` (last K firings) |
 //! | `POST /api/sim/reset {seed}` | back to the initial marking, with that seed |
 //! | `POST /api/sim/step {n}` | fire `n` transitions drawn by the token game: after a reset with seed S, `n` steps are exactly `plan-runner simulate --seed S --steps n` |
@@ -31,11 +31,11 @@
 //! | `POST /api/edit/undo`, `POST /api/edit/redo` | back to the version before the last edit, on to the one after; as `POST /api/edit`; 409 when there is nothing to undo or redo |
 //! | `POST /api/edit/export {format: "pnpro"\|"pipe", places, transitions}` | `{text, file}`: the current net (with the page's positions) as a GreatSPN project or a PIPE net, to download |
 //! | `POST /api/edit/save {places, transitions}` | writes the current net to the file of `serve --save-to PATH` ([`WebState::saving_to`]) in its format; `{saved, format, bytes}`; 409 without one |
-//! | `GET /api/replay` | `{"frames": [{time, transition, tokens}]}` of a journal, and `world: {map, radius, robots, frames: [{time, robots: [{id, agent, x, y}]}]}` when it recorded a simulated world |
+//! | `GET /api/replay` | `{"frames": [{time, transition, tokens}], "robots": [{robot, stays: [{t0, t1, place, agent}]}]}` of a journal, and `world: {map, radius, robots, frames: [{time, robots: [{id, agent, x, y}]}]}` when it recorded a simulated world |
 //! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log`, and `world` with a world feed |
 //! | `GET /api/live/world` | the latest value of the run's simulated world ([`LiveRun::with_world`]: map and robots, metres, y up); 404 without a feed |
 //! | `POST /api/live/stop` | asks the live run to stop |
-//! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "state", ...}` snapshots (log entries since the previous one, `world` with a world feed), at most one per [`FRAME`]; a new event or world value wakes the next one |
+//! | `GET /api/live/ws` | WebSocket: `{"type": "net", ...}` first, then `{"type": "history", "frames": [{time, tokens}], "robots": [{robot, stays}]}` (the run so far), then `{"type": "state", ...}` snapshots (log entries since the previous one, `world` with a world feed), at most one per [`FRAME`]; a new event or world value wakes the next one |
 //!
 //! # Editing
 //!
@@ -91,6 +91,7 @@ mod replay;
 mod report;
 mod server;
 mod session;
+mod stays;
 
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
@@ -172,6 +173,11 @@ pub const ASSETS: &[Asset] = &[
         body: include_str!("web/assets/follow.js"),
     },
     Asset {
+        path: "/plot.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/plot.js"),
+    },
+    Asset {
         path: "/share.js",
         mime: "text/javascript; charset=utf-8",
         body: include_str!("web/assets/share.js"),
@@ -185,6 +191,18 @@ pub const ASSETS: &[Asset] = &[
         path: "/edit.js",
         mime: "text/javascript; charset=utf-8",
         body: include_str!("web/assets/edit.js"),
+    },
+    // The tab's icon; browsers ask for `/favicon.ico` whatever the page links, so both
+    // paths serve it.
+    Asset {
+        path: "/favicon.svg",
+        mime: "image/svg+xml",
+        body: include_str!("web/assets/favicon.svg"),
+    },
+    Asset {
+        path: "/favicon.ico",
+        mime: "image/svg+xml",
+        body: include_str!("web/assets/favicon.svg"),
     },
     Asset {
         path: "/style.css",

@@ -72,6 +72,7 @@ fn report(
             state_space: StateSpaceReport::unbounded(&places),
             steady_state: None,
             transient: Vec::new(),
+            queries: Vec::new(),
         }),
         e => Err(Failure::Analysis(e.to_string())),
     };
@@ -116,6 +117,7 @@ fn report(
             .iter()
             .map(|p| MeasuresReport::point(net, p, prob))
             .collect(),
+        queries: Vec::new(),
     })
 }
 

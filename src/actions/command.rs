@@ -3,8 +3,10 @@
 //! The argv is a template (`{place}`, `{agent}`, `{robot}`, `{transition_choices}`); the
 //! program also gets `GSPN_AGENT`, `GSPN_PLACE`, `GSPN_ROBOT`, `GSPN_SEED`, `GSPN_TIME`,
 //! `GSPN_MARKING` (JSON) and `GSPN_OUTPUTS` (the place's output transitions, space-separated).
-//! Exit 0 and a last stdout line naming a transition fires it; an empty last line or
-//! `decide` lets the net decide; `T after S`, `decide after S` or `after S` states a
+//! Exit 0 and an answer naming a transition fires it; an empty answer or `decide` lets the
+//! net decide. The answer is the last stdout line that starts with `gspn: ` (`gspn: fire T`,
+//! `gspn: decide`, `gspn: fire T after 2`), so a program may log freely after it; without
+//! such a line it is the last stdout line (the rule of the 2020 framework's functions); `T after S`, `decide after S` or `after S` states a
 //! duration: the outcome takes effect S model seconds later (in virtual time, the only way a
 //! program's action takes model time — the time the program itself takes never counts); a
 //! non-zero exit fails the action with the code and the tail of stderr. Every stdout and stderr line becomes an
@@ -139,7 +141,7 @@ async fn run(spec: &CommandSpec, outputs: &[String], ctx: ActionContext) -> Outc
     };
     let work = async {
         let (out, err, status) = tokio::join!(
-            capture(stdout, &ctx, OutputStream::Stdout, 1),
+            answer(stdout, &ctx),
             capture(stderr, &ctx, OutputStream::Stderr, STDERR_TAIL),
             child.wait(),
         );
@@ -152,16 +154,22 @@ async fn run(spec: &CommandSpec, outputs: &[String], ctx: ActionContext) -> Outc
         }
     };
     tokio::select! {
-        (last, tail, status) = work => {
+        (answer, tail, status) = work => {
             group.finish();
             match status {
                 Ok(s) if s.success() => {
-                    let (name, after) = split_after(last.back().map_or("", |l| l.as_str()));
+                    let (name, after) = split_after(&answer.text);
                     let after = match after {
                         Ok(a) => a,
                         Err(why) => return Outcome::Failed(format!("`{program}`: {why}")),
                     };
-                    let outcome = outcome_of_name(&ctx, &format!("`{program}`"), name);
+                    let outcome = match outcome_of_name(&ctx, &format!("`{program}`"), name) {
+                        Outcome::Failed(why) if !answer.tagged => Outcome::Failed(format!(
+                            "{why}; the answer was the last stdout line: print `{ANSWER_PREFIX}fire T` \
+                             (or `{ANSWER_PREFIX}decide`) to answer whatever is printed after it"
+                        )),
+                        o => o,
+                    };
                     if after > 0.0 && !matches!(outcome, Outcome::Failed(_)) {
                         // The program stated a duration: the outcome takes effect that much
                         // model time later.
@@ -206,6 +214,35 @@ fn failure(program: &str, status: std::process::ExitStatus, tail: &VecDeque<Stri
     }
 }
 
+/// The prefix of a stdout line that answers for the program, whatever it prints after it.
+pub const ANSWER_PREFIX: &str = "gspn: ";
+
+/// A program's answer: the last `gspn: ` line (`tagged`), else the last stdout line.
+#[derive(Debug, Default)]
+struct Answer {
+    text: String,
+    tagged: bool,
+}
+
+/// Reads stdout into output events (as [`capture`]) and finds the program's [`Answer`].
+async fn answer(r: impl AsyncRead + Unpin, ctx: &ActionContext) -> Answer {
+    let mut tagged: Option<String> = None;
+    let last = capture_with(r, ctx, OutputStream::Stdout, 1, |line| {
+        if let Some(rest) = line.strip_prefix(ANSWER_PREFIX) {
+            let rest = rest.trim();
+            tagged = Some(rest.strip_prefix("fire ").unwrap_or(rest).to_string());
+        }
+    })
+    .await;
+    match tagged {
+        Some(text) => Answer { text, tagged: true },
+        None => Answer {
+            text: last.back().cloned().unwrap_or_default(),
+            tagged: false,
+        },
+    }
+}
+
 /// Reads `r` line by line into output events (at most [`MAX_OUTPUT_LINES`], then one line
 /// counting the rest); returns the last `keep` lines.
 async fn capture(
@@ -214,12 +251,24 @@ async fn capture(
     stream: OutputStream,
     keep: usize,
 ) -> VecDeque<String> {
+    capture_with(r, ctx, stream, keep, |_| {}).await
+}
+
+/// [`capture`], showing each line to `see` as it is read.
+async fn capture_with(
+    r: impl AsyncRead + Unpin,
+    ctx: &ActionContext,
+    stream: OutputStream,
+    keep: usize,
+    mut see: impl FnMut(&str),
+) -> VecDeque<String> {
     let mut lines = BufReader::new(r).lines();
     let mut tail = VecDeque::with_capacity(keep + 1);
     let mut n = 0usize;
     // Not UTF-8, or the pipe failed: what was read is what there is.
     while let Ok(Some(line)) = lines.next_line().await {
         n += 1;
+        see(&line);
         if n <= MAX_OUTPUT_LINES {
             ctx.output_line(stream, line.clone());
         }

@@ -20,7 +20,7 @@
 
 mod columns;
 mod limiting;
-mod lu;
+pub(crate) mod lu;
 mod steady;
 mod transient;
 

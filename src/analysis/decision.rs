@@ -48,11 +48,12 @@
 //! assert_eq!(model.action(best.policy[0] as usize), gspn::analysis::decision::Action::Fire(clean));
 //! ```
 
-mod absorb;
 mod build;
 mod evaluate;
+mod interval;
 mod lra;
 mod policy_iteration;
+mod quotient;
 mod solve;
 mod tree;
 

@@ -61,9 +61,14 @@ pub struct Properties {
     pub tangible: usize,
     /// Vanishing markings.
     pub vanishing: usize,
-    /// Arcs, one per (marking, fired transition) — the Model Checking Contest convention;
-    /// for nets with immediate transitions, arcs between tangible states after elimination.
+    /// Labelled arcs, one per (marking, fired transition) — the `TRANSITIONS` of the Model
+    /// Checking Contest's state-space oracles in `fixtures/mcc`; for nets with immediate
+    /// transitions, arcs between tangible states after elimination.
     pub edges: usize,
+    /// Distinct (marking, successor) pairs of the reachability graph (vanishing markings
+    /// included): two transitions from one marking to the same marking count once, as tools
+    /// that count the graph's edges rather than its firings do.
+    pub successor_pairs: usize,
     /// Dead markings, in breadth-first order.
     pub dead_markings: Vec<DeadMarking>,
     /// Most tokens each place holds in a reachable marking.
@@ -117,9 +122,16 @@ impl Properties {
         let mut fires = vec![false; nt];
         let mut fires_in_bottom = vec![0usize; nt];
         let mut last_bottom = vec![u32::MAX; nt];
+        let mut successor_pairs = 0;
+        let mut targets = Vec::new();
         for g in 0..n {
             let c = sccs.component[g];
             let in_bottom = bottom[c as usize];
+            targets.clear();
+            targets.extend(ss.successors(g).map(|(_, to)| to));
+            targets.sort_unstable();
+            targets.dedup();
+            successor_pairs += targets.len();
             for (t, _) in ss.successors(g) {
                 fires[t.index()] = true;
                 if in_bottom && last_bottom[t.index()] != c {
@@ -149,6 +161,7 @@ impl Properties {
             tangible: ss.tangible_count(),
             vanishing: ss.vanishing_count(),
             edges,
+            successor_pairs,
             deadlock_free: ss.dead_states().is_empty(),
             dead_markings,
             safe: bounds.iter().all(|&b| b <= 1),

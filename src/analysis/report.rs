@@ -56,6 +56,27 @@ pub struct Report {
     pub steady_state: Option<MeasuresReport>,
     /// Measures at each asked time.
     pub transient: Vec<MeasuresReport>,
+    /// The answers to `--query`, in the order asked; left out when none was asked.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub queries: Vec<QueryAnswer>,
+}
+
+/// One query (`P=? [F<=600 done=1]`) and its value.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct QueryAnswer {
+    /// The query as written.
+    pub query: String,
+    /// Its value; an infinite expected time or reward is written `"inf"` (JSON has no ∞).
+    #[serde(serialize_with = "number_or_inf")]
+    pub value: f64,
+}
+
+fn number_or_inf<S: serde::Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+    if v.is_infinite() {
+        s.serialize_str(if *v > 0.0 { "inf" } else { "-inf" })
+    } else {
+        s.serialize_f64(*v)
+    }
 }
 
 /// What the state space says. Every field but `bounded`, `unbounded_places` and `safe` is
@@ -68,8 +89,11 @@ pub struct StateSpaceReport {
     pub tangible: Option<usize>,
     /// Vanishing ones.
     pub vanishing: Option<usize>,
-    /// Edges of the reachability graph.
+    /// Labelled edges of the reachability graph: one per marking and fired transition
+    /// ([`Properties::edges`]).
     pub edges: Option<usize>,
+    /// Distinct (marking, successor) pairs ([`Properties::successor_pairs`]).
+    pub successor_pairs: Option<usize>,
     /// Dead markings, written as `Place=k` lists.
     pub dead_markings: Option<Vec<String>>,
     /// Whether the net is bounded.
@@ -130,6 +154,7 @@ impl StateSpaceReport {
             tangible: Some(p.tangible),
             vanishing: Some(p.vanishing),
             edges: Some(p.edges),
+            successor_pairs: Some(p.successor_pairs),
             dead_markings: Some(
                 p.dead_markings
                     .iter()
@@ -158,6 +183,7 @@ impl StateSpaceReport {
             tangible: None,
             vanishing: None,
             edges: None,
+            successor_pairs: None,
             dead_markings: None,
             bounded: false,
             unbounded_places: places.to_vec(),

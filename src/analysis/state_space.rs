@@ -97,11 +97,22 @@ pub enum AnalysisError {
         /// One marking of the loop, as `p=k,...`.
         marking: String,
     },
-    /// A loop of vanishing markings too large to solve exactly in memory.
-    #[error("a loop of {markings} vanishing markings is too large to solve exactly")]
+    /// A loop of vanishing markings too large to solve exactly in memory: its exits and
+    /// firing counts, one dense column each over the loop, would pass 512 MB.
+    #[error(
+        "a loop of {markings} vanishing markings is too large to solve exactly (its exits and firing counts would need more than 512 MB)"
+    )]
     VanishingLoopTooLarge {
         /// Markings in the loop.
         markings: usize,
+    },
+    /// The LU factorisation of a loop of vanishing markings failed (numerically singular).
+    #[error("the loop of {markings} vanishing markings could not be solved: {reason}")]
+    VanishingLoopFailed {
+        /// Markings in the loop.
+        markings: usize,
+        /// What the factorisation reported.
+        reason: String,
     },
     /// A place can hold more tokens than a count can ([`MAX_TOKENS`]): refused before the
     /// search when a structural bound says so, or when the search first meets such a count.
@@ -538,6 +549,14 @@ impl StateSpace {
     /// [`successors`](Self::successors).
     pub fn vanishing_probabilities(&self, g: usize) -> impl Iterator<Item = f64> + '_ {
         self.graph().group(g).iter().map(|m| m.prob)
+    }
+
+    /// Arcs out of global marking `g` in the full graph, as moves: from a tangible marking an
+    /// exponential transition with its rate (`prob` 1), from a vanishing one an immediate
+    /// transition with its probability (`rate` 0). Queries read paths on this graph
+    /// ([`query`](crate::analysis::query)): a vanishing marking on the way counts.
+    pub fn arcs(&self, g: usize) -> &[Move] {
+        self.graph().group(g)
     }
 
     /// One shortest firing sequence from the initial marking to global marking `g`.

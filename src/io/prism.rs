@@ -26,6 +26,7 @@ pub struct Explicit<'a> {
     chain: &'a Ctmc,
     markings: &'a [Vec<u32>],
     initial: &'a [u32],
+    rewards: Vec<(String, Vec<f64>)>,
 }
 
 impl<'a> Explicit<'a> {
@@ -43,7 +44,36 @@ impl<'a> Explicit<'a> {
             chain,
             markings,
             initial,
+            rewards: Vec::new(),
         }
+    }
+
+    /// Adds reward structures, each a name and a rate per state
+    /// ([`state_rewards`](crate::analysis::query::state_rewards): impulses folded in at their
+    /// rates), written as `PREFIX.NAME.srew` (`prism … -importstaterewards PREFIX.NAME.srew`).
+    pub fn with_rewards(mut self, rewards: Vec<(String, Vec<f64>)>) -> Self {
+        self.rewards = rewards;
+        self
+    }
+
+    /// A `.srew` file: `states nonzero`, then `state reward` per nonzero state.
+    ///
+    /// ```
+    /// use gspn::analysis::ctmc::Ctmc;
+    /// use gspn::io::prism::Explicit;
+    /// let c = Ctmc::from_triplets(2, vec![(0, 1, 1.5), (1, 0, 2.0)]);
+    /// let m = vec![vec![1, 0], vec![0, 1]];
+    /// assert_eq!(Explicit::new(&["p1", "p2"], &c, &m, &[0]).srew(&[0.0, 2.5]), "2 1\n1 2.5\n");
+    /// ```
+    pub fn srew(&self, rates: &[f64]) -> String {
+        let nonzero = rates.iter().filter(|&&r| r != 0.0).count();
+        let mut s = format!("{} {nonzero}\n", self.chain.n);
+        for (i, &r) in rates.iter().enumerate() {
+            if r != 0.0 {
+                let _ = writeln!(s, "{i} {r}");
+            }
+        }
+        s
     }
 
     /// The `.tra` file: `states transitions`, then `from to rate` per line.
@@ -92,14 +122,19 @@ impl<'a> Explicit<'a> {
         s
     }
 
-    /// Writes `PREFIX.tra`, `PREFIX.sta` and `PREFIX.lab`; returns the paths written.
+    /// Writes `PREFIX.tra`, `PREFIX.sta`, `PREFIX.lab` and a `PREFIX.NAME.srew` per reward
+    /// structure (NAME made an identifier); returns the paths written.
     pub fn write(&self, prefix: &Path) -> std::io::Result<Vec<PathBuf>> {
         let mut out = Vec::new();
-        for (ext, text) in [
-            ("tra", self.tra()),
-            ("sta", self.sta()),
-            ("lab", self.lab()),
-        ] {
+        let mut files = vec![
+            ("tra".to_string(), self.tra()),
+            ("sta".to_string(), self.sta()),
+            ("lab".to_string(), self.lab()),
+        ];
+        for (name, rates) in &self.rewards {
+            files.push((format!("{}.srew", identifier(name)), self.srew(rates)));
+        }
+        for (ext, text) in files {
             let mut p = prefix.as_os_str().to_owned();
             p.push(".");
             p.push(ext);
@@ -112,7 +147,7 @@ impl<'a> Explicit<'a> {
 }
 
 /// A PRISM identifier for a place name: letters, digits and `_`, not starting with a digit.
-fn identifier(name: &str) -> String {
+pub fn identifier(name: &str) -> String {
     let mut s: String = name
         .chars()
         .map(|c| {

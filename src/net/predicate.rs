@@ -170,7 +170,27 @@ impl Predicate {
     pub fn parse(net: &Net, text: &str) -> Result<Predicate, PredicateError> {
         Ok(Predicate {
             text: text.to_string(),
-            root: parse::parse(net, text)?,
+            root: parse::parse(net, text, false)?,
+        })
+    }
+
+    /// Parses `text` as a state formula of a PRISM or Storm property: as [`Predicate::parse`],
+    /// and `=`, `&`, `|` also mean `==`, `&&`, `||` (`P1=0 & P2>0`).
+    ///
+    /// ```
+    /// use gspn::net::{NetBuilder, predicate::Predicate};
+    /// let mut b = NetBuilder::new("n");
+    /// b.place("P1", 0);
+    /// b.place("P2", 1);
+    /// let net = b.build().unwrap();
+    /// let p = Predicate::parse_prism(&net, "P1=0 & (P2>0 | P1>=3)").unwrap();
+    /// assert!(p.eval(&[0, 1]));
+    /// assert!(Predicate::parse(&net, "P1=0").is_err());
+    /// ```
+    pub fn parse_prism(net: &Net, text: &str) -> Result<Predicate, PredicateError> {
+        Ok(Predicate {
+            text: text.to_string(),
+            root: parse::parse(net, text, true)?,
         })
     }
 

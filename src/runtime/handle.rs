@@ -10,6 +10,7 @@ use tokio::sync::{broadcast, watch};
 
 use super::StopReason;
 use super::agent::AgentState;
+use super::by_name::InNetOrder;
 use super::engine::Engine;
 use super::event::{Event, Events};
 use super::id::AgentId;
@@ -70,12 +71,12 @@ pub struct Summary {
     pub agents_spawned: u64,
     /// Agents ended by joins.
     pub agents_ended: u64,
-    /// Tokens per place at the end, by name.
-    pub final_marking: BTreeMap<String, u32>,
-    /// Time-averaged tokens per place, by name.
-    pub mean_tokens: BTreeMap<String, f64>,
-    /// Firings per unit of model time, per transition, by name.
-    pub throughput: BTreeMap<String, f64>,
+    /// Tokens per place at the end, by name, in net order.
+    pub final_marking: InNetOrder<u32>,
+    /// Time-averaged tokens per place, by name, in net order.
+    pub mean_tokens: InNetOrder<f64>,
+    /// Firings per unit of model time, per transition, by name, in net order.
+    pub throughput: InNetOrder<f64>,
     /// Errors seen during the run, in order.
     pub errors: Vec<String>,
     /// What each reward structure earned, by name (with a 95% interval of its rate).
@@ -248,9 +249,9 @@ impl RuntimeHandle {
                     time: self.progress.time(),
                     agents_spawned: 0,
                     agents_ended: 0,
-                    final_marking: BTreeMap::new(),
-                    mean_tokens: BTreeMap::new(),
-                    throughput: BTreeMap::new(),
+                    final_marking: InNetOrder::default(),
+                    mean_tokens: InNetOrder::default(),
+                    throughput: InNetOrder::default(),
                     errors: vec!["the supervisor ended without a summary".into()],
                     rewards: BTreeMap::new(),
                     warnings: Vec::new(),

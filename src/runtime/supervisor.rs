@@ -457,18 +457,33 @@ impl Supervisor {
                 self.emit(EventKind::AgentEnded { agent: id });
             }
         }
-        for &id in &buf.produced {
-            self.start_action(id, 0);
+        // A firing that ends the run starts no action: the agents it moved stay where it
+        // put them, and the run does not wait (in virtual time, until they finish or time
+        // out) for programs whose outcome nothing would use.
+        let ends = self.stop_reached();
+        if ends.is_none() {
+            for &id in &buf.produced {
+                self.start_action(id, 0);
+            }
         }
         self.buf = buf;
+        if let Some(reason) = ends {
+            self.begin_stop(reason);
+        }
+    }
+
+    /// The firing limit or the stop condition, when the current marking reaches it.
+    fn stop_reached(&self) -> Option<StopReason> {
         if let Some(max) = self.stop.max_firings
             && self.eng.firings() >= max
         {
-            self.begin_stop(StopReason::MaxFirings);
+            Some(StopReason::MaxFirings)
         } else if let Some(p) = &self.stop.when
             && p.eval(self.eng.marking())
         {
-            self.begin_stop(StopReason::Condition);
+            Some(StopReason::Condition)
+        } else {
+            None
         }
     }
 

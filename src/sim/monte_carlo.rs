@@ -2,7 +2,9 @@
 //!
 //! Run `i` of seed `s` is a [`Simulator`] drawing from stream `i` of `s` (so run 0 is the
 //! single run `plan-runner simulate --seed s` prints). Each run gives one observation per
-//! place (its time-average tokens) and per transition (its throughput); the estimate is the
+//! place (its time-average tokens), per transition (its throughput) and per reward structure
+//! asked for (its rate: place rewards integrated over the run's time plus the impulses of
+//! the firings, over the run's length — what `run` reports for one run); the estimate is the
 //! mean over runs and the interval `mean ± t₀.₉₇₅(R−1) · s/√R` (Student t).
 //!
 //! Runs are grouped in fixed blocks of consecutive indices; threads take whole blocks and
@@ -12,7 +14,9 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use super::RunEnd;
 use super::{SimError, Simulator};
+use crate::analysis::decision::RewardSpec;
 use crate::net::Net;
 use crate::policy::Policy;
 use crate::stats::{Estimate, t_quantile_975};
@@ -44,6 +48,8 @@ pub struct Estimates {
     pub mean_tokens: Vec<Estimate>,
     /// Throughput per transition, indexed by transition.
     pub throughput: Vec<Estimate>,
+    /// Rate of each reward structure ([`MonteCarlo::rewards`]), in the order given.
+    pub rewards: Vec<Estimate>,
 }
 
 /// A Monte-Carlo experiment: `runs` independent runs of a net under a horizon.
@@ -68,6 +74,7 @@ pub struct Estimates {
 pub struct MonteCarlo<'n> {
     net: &'n Net,
     policy: Option<&'n Policy>,
+    rewards: &'n [RewardSpec],
     horizon: Horizon,
     runs: u64,
     seed: u64,
@@ -81,6 +88,7 @@ impl<'n> MonteCarlo<'n> {
         MonteCarlo {
             net,
             policy: None,
+            rewards: &[],
             horizon,
             runs: 100,
             seed: 0,
@@ -104,6 +112,12 @@ impl<'n> MonteCarlo<'n> {
     /// The policy for immediate transitions.
     pub fn policy(mut self, policy: &'n Policy) -> Self {
         self.policy = Some(policy);
+        self
+    }
+
+    /// Reward structures whose rate each run measures (a plan's `[rewards.NAME]`).
+    pub fn rewards(mut self, rewards: &'n [RewardSpec]) -> Self {
+        self.rewards = rewards;
         self
     }
 
@@ -173,11 +187,74 @@ impl<'n> MonteCarlo<'n> {
                 .collect()
         });
         done.sort_by_key(|(b, _)| *b);
-        let mut total = Acc::new(self.net.place_count() + self.net.transition_count());
+        let mut total = Acc::new(self.observations());
         for (_, r) in done {
             total.merge(&r?);
         }
-        Ok(total.estimates(self.net.place_count()))
+        Ok(total.estimates(self.net.place_count(), self.net.transition_count()))
+    }
+
+    /// Observations per run: places, transitions, reward structures.
+    fn observations(&self) -> usize {
+        self.net.place_count() + self.net.transition_count() + self.rewards.len()
+    }
+
+    /// E[tokens] of every place at each of `times` (any order, each ≥ 0), over the runs:
+    /// `result[k][p]` is the estimate for place `p` at `times[k]`, with its 95% interval.
+    /// The runs are those of [`MonteCarlo::run`] (run `i` draws from stream `i`), each
+    /// observed at the times in increasing order; the horizon is not used.
+    ///
+    /// ```
+    /// use gspn::net::{NetBuilder, Servers};
+    /// use gspn::sim::{Horizon, MonteCarlo};
+    /// let mut b = NetBuilder::new("decay");
+    /// let (a, done) = (b.place("a", 1), b.place("done", 0));
+    /// let t = b.exponential("t", 1.0, Servers::Single);
+    /// b.input(a, t, 1);
+    /// b.output(t, done, 1);
+    /// let net = b.build().unwrap();
+    /// let at = MonteCarlo::new(&net, Horizon::Until(1.0)).runs(400).seed(3).transient(&[0.0, 1.0]).unwrap();
+    /// assert_eq!(at[0][a.index()].mean, 1.0);
+    /// // E[a at t = 1] = e^{−1}; 400 runs put the mean within 0.1 (four standard errors).
+    /// assert!((at[1][a.index()].mean - (-1.0f64).exp()).abs() < 0.1);
+    /// ```
+    pub fn transient(&self, times: &[f64]) -> Result<Vec<Vec<Estimate>>, SimError> {
+        if self.runs == 0 {
+            return Err(SimError::BadArgument("at least one run is needed".into()));
+        }
+        if let Some(t) = times.iter().find(|t| !(t.is_finite() && **t >= 0.0)) {
+            return Err(SimError::BadArgument(format!(
+                "time {t}: must be a finite number ≥ 0"
+            )));
+        }
+        let places = self.net.place_count();
+        let mut order: Vec<usize> = (0..times.len()).collect();
+        order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
+        let net = Arc::new(self.net.clone());
+        let policy = self.policy.map(|p| Arc::new(p.clone()));
+        let mut acc = Acc::new(places * times.len());
+        let mut x = vec![0.0; places * times.len()];
+        for i in 0..self.runs {
+            let mut sim = Simulator::new(Arc::clone(&net), self.seed)
+                .with_stream(i)
+                .with_max_immediate(self.max_immediate);
+            if let Some(p) = &policy {
+                sim = sim.with_policy(Arc::clone(p));
+            }
+            for &k in &order {
+                sim.run_until(times[k])?;
+                for (p, &tokens) in sim.marking().iter().enumerate() {
+                    x[k * places + p] = tokens as f64;
+                }
+            }
+            acc.add(&x, sim.firings(), sim.is_dead(), sim.time());
+        }
+        let est = acc.intervals();
+        Ok(est
+            .chunks(places.max(1))
+            .map(<[Estimate]>::to_vec)
+            .take(times.len())
+            .collect())
     }
 
     /// Runs `from..to` in order.
@@ -188,9 +265,9 @@ impl<'n> MonteCarlo<'n> {
         from: u64,
         to: u64,
     ) -> Result<Acc, SimError> {
-        let places = self.net.place_count();
-        let mut acc = Acc::new(places + self.net.transition_count());
-        let mut x = Vec::with_capacity(places + self.net.transition_count());
+        let mut acc = Acc::new(self.observations());
+        let mut x = Vec::with_capacity(self.observations());
+        let meter = Meter::new(self.net, self.rewards);
         for i in from..to {
             let mut sim = Simulator::new(Arc::clone(net), self.seed)
                 .with_stream(i)
@@ -198,17 +275,91 @@ impl<'n> MonteCarlo<'n> {
             if let Some(p) = policy {
                 sim = sim.with_policy(Arc::clone(p));
             }
-            let end = match self.horizon {
-                Horizon::Until(t) => sim.run_until(t)?,
-                Horizon::Steps(n) => sim.run_steps(n)?,
-            };
+            let (end, rates) = meter.run(&mut sim, self.horizon)?;
             let stats = sim.statistics();
             x.clear();
             x.extend_from_slice(&stats.mean_tokens);
             x.extend_from_slice(&stats.throughput);
-            acc.add(&x, sim.firings(), end == super::RunEnd::Dead, stats.time);
+            x.extend_from_slice(&rates);
+            acc.add(&x, sim.firings(), end == RunEnd::Dead, stats.time);
         }
         Ok(acc)
+    }
+}
+
+/// The reward structures of an experiment, with each one's impulse per transition.
+struct Meter<'n> {
+    specs: &'n [RewardSpec],
+    impulse: Vec<Vec<f64>>,
+}
+
+impl<'n> Meter<'n> {
+    fn new(net: &Net, specs: &'n [RewardSpec]) -> Self {
+        let impulse = specs
+            .iter()
+            .map(|s| {
+                let mut v = vec![0.0; net.transition_count()];
+                for &(t, r) in &s.transitions {
+                    v[t.index()] += r;
+                }
+                v
+            })
+            .collect();
+        Meter { specs, impulse }
+    }
+
+    /// Runs `sim` to the horizon and returns how it ended and each structure's rate over
+    /// the run. Without structures, the simulator's own loop; with some, the same steps
+    /// one at a time, the place rate of each marking integrated over the time it holds.
+    fn run(&self, sim: &mut Simulator, horizon: Horizon) -> Result<(RunEnd, Vec<f64>), SimError> {
+        if self.specs.is_empty() {
+            let end = match horizon {
+                Horizon::Until(t) => sim.run_until(t)?,
+                Horizon::Steps(n) => sim.run_steps(n)?,
+            };
+            return Ok((end, Vec::new()));
+        }
+        let rate_of = |sim: &Simulator| -> Vec<f64> {
+            self.specs
+                .iter()
+                .map(|s| s.place_rate(sim.marking()))
+                .collect()
+        };
+        let mut earned = vec![0.0; self.specs.len()];
+        let mut rate = rate_of(sim);
+        let mut since = sim.time();
+        let mut fired = 0;
+        let mut end = RunEnd::Limit;
+        loop {
+            let step = match horizon {
+                Horizon::Until(t) => sim.step_until(t)?,
+                Horizon::Steps(n) if fired < n => sim.step()?,
+                Horizon::Steps(_) => break,
+            };
+            let Some(step) = step else {
+                if let Horizon::Until(t) = horizon {
+                    end = sim.run_until(t)?;
+                } else {
+                    end = RunEnd::Dead;
+                }
+                break;
+            };
+            fired += 1;
+            for (k, e) in earned.iter_mut().enumerate() {
+                *e += rate[k] * (step.time - since) + self.impulse[k][step.transition.index()];
+            }
+            rate = rate_of(sim);
+            since = step.time;
+        }
+        let time = sim.time();
+        for (k, e) in earned.iter_mut().enumerate() {
+            *e += rate[k] * (time - since);
+        }
+        let rates = earned
+            .iter()
+            .map(|&e| if time > 0.0 { e / time } else { 0.0 })
+            .collect();
+        Ok((end, rates))
     }
 }
 
@@ -276,29 +427,35 @@ impl Acc {
         self.time += o.time;
     }
 
-    fn estimates(&self, places: usize) -> Estimates {
+    /// The mean of each component with its 95% Student-t half width (NaN for one run).
+    fn intervals(&self) -> Vec<Estimate> {
         let n = self.n as f64;
         let t = if self.n >= 2 {
             t_quantile_975(self.n - 1)
         } else {
             f64::NAN
         };
-        let est: Vec<Estimate> = self
-            .mean
+        self.mean
             .iter()
             .zip(&self.m2)
             .map(|(&mean, &m2)| Estimate {
                 mean,
                 half_width: t * (m2.max(0.0) / (n - 1.0)).sqrt() / n.sqrt(),
             })
-            .collect();
+            .collect()
+    }
+
+    fn estimates(&self, places: usize, transitions: usize) -> Estimates {
+        let n = self.n as f64;
+        let est = self.intervals();
         Estimates {
             runs: self.n,
             firings: self.firings,
             dead_runs: self.dead,
             mean_time: self.time / n,
             mean_tokens: est[..places].to_vec(),
-            throughput: est[places..].to_vec(),
+            throughput: est[places..places + transitions].to_vec(),
+            rewards: est[places + transitions..].to_vec(),
         }
     }
 }

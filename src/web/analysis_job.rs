@@ -314,6 +314,7 @@ impl AnalysisJob {
         kept: Arc<Kept>,
         times: Vec<f64>,
         prob: Vec<String>,
+        queries: Vec<String>,
     ) -> Answer {
         let monitor = Arc::new(Monitor::new());
         let mut sorted = times.clone();
@@ -333,7 +334,7 @@ impl AnalysisJob {
         let guard = CancelOnDrop(Some(monitor.clone()));
         let m = monitor.clone();
         let answer = tokio::task::spawn_blocking(move || {
-            crate::web::report::query(&net, &kept, &times, &prob, &m)
+            crate::web::report::query(&net, &kept, &times, &prob, &queries, &m)
         })
         .await;
         guard.finish();

@@ -14,7 +14,7 @@ use crate::net::{ArcKind, Net, Servers, Timing};
 use crate::web::WebState;
 use crate::web::analysis_job::{Answer, Outcome};
 use crate::web::greatspn::Source;
-use crate::web::layout::layout;
+use crate::web::layout::{Choice, Layout, LayoutSource, choose, has_positions};
 use crate::web::limits::{MAX_STEP, STEP_CHUNK};
 use crate::web::session::SessionError;
 
@@ -28,9 +28,27 @@ pub(crate) async fn net(State(state): State<WebState>) -> Json<Value> {
     Json(crate::web::edit::routes::net_value(&state))
 }
 
-/// The net as the page draws it (with the look of its nodes in `source`, when it has one).
-pub(crate) fn net_json(net: &Net, seed: u64, source: Option<&Source>) -> Value {
-    let l = layout(net);
+/// The net as the page draws it (with the look of its nodes in `source`, when it has one):
+/// at the default layout ([`choose`]: the file's positions unless they are useless; an
+/// `edited` net's positions always, the page wrote them), with `layout_note` saying why the
+/// file's were set aside, and — when the file has positions — the other layout in
+/// `other_layout`, for the page's `layout` control.
+pub(crate) fn net_json(net: &Net, seed: u64, source: Option<&Source>, edited: bool) -> Value {
+    let (l, note) = choose(
+        net,
+        if edited {
+            Choice::File
+        } else {
+            Choice::Default
+        },
+    );
+    let other = has_positions(net).then(|| {
+        let other = match l.source {
+            LayoutSource::File => Choice::Automatic,
+            LayoutSource::Layered => Choice::File,
+        };
+        positions_json(&choose(net, other).0)
+    });
     let places: Vec<Value> = net
         .places()
         .iter()
@@ -97,9 +115,22 @@ pub(crate) fn net_json(net: &Net, seed: u64, source: Option<&Source>) -> Value {
         "name": net.name(),
         "seed": seed,
         "layout": l.source,
+        "layout_note": note,
+        "other_layout": other,
         "places": places,
         "transitions": transitions,
         "arcs": arcs,
+    })
+}
+
+/// A layout alone: `{layout, places: [[x, y]], transitions: [[x, y]], arcs: [[[x, y]]]}`.
+fn positions_json(l: &Layout) -> Value {
+    let xy = |p: &crate::net::Position| json!([p.x, p.y]);
+    json!({
+        "layout": l.source,
+        "places": l.places.iter().map(xy).collect::<Vec<_>>(),
+        "transitions": l.transitions.iter().map(xy).collect::<Vec<_>>(),
+        "arcs": l.arcs.iter().map(|a| a.iter().map(xy).collect::<Vec<_>>()).collect::<Vec<_>>(),
     })
 }
 
@@ -310,14 +341,18 @@ pub(crate) struct QueryBody {
     /// Predicates (`analyze --prob`).
     #[serde(default)]
     prob: Vec<String>,
+    /// Queries in Storm's syntax (`analyze --query`).
+    #[serde(default)]
+    query: Vec<String>,
 }
 
-/// `POST /api/analysis/query {transient: [t], prob: [expr]}`: on the finished analysis's
-/// state space, `{steady_state: {probability: {expr: p}}, transient: [{t, mean_tokens,
-/// throughput, probability}]}` as `plan-runner analyze --json --transient … --prob …` gives
-/// them. 409 before an analysis has finished, 422 when it found no steady state to ask about
-/// or the question asks past a [limit](crate::web::limits) (time points, predicates, their
-/// length), 413 when its answer would be too large,
+/// `POST /api/analysis/query {transient: [t], prob: [expr], query: [q]}`: on the finished
+/// analysis's state space, `{steady_state: {probability: {expr: p}}, transient: [{t,
+/// mean_tokens, throughput, probability}], queries: [{query, value}]}` as `plan-runner
+/// analyze --json --transient … --prob … --query …` gives them. 409 before an analysis has
+/// finished, 422 when it found no steady state to ask about or the question asks past a
+/// [limit](crate::web::limits) (time points, predicates and queries, their length), 413
+/// when its answer would be too large,
 /// 400 for a bad time or predicate (the message names it), 409 `{error, kind: "cancelled",
 /// progress}` when the question was cancelled (`/api/analysis/query/cancel`, a newer
 /// question, an edit of the net). Its progress is at `/api/analysis/query/progress`.
@@ -341,10 +376,13 @@ pub(crate) async fn analysis_query(
         }
         Some(Some(k)) => k,
     };
-    if let Err(over) = crate::web::limits::check_question(&net, &b.transient, &b.prob) {
+    // Queries are held to the predicates' limits (count, length).
+    let limits = crate::web::limits::check_question(&net, &b.transient, &b.prob)
+        .and_then(|()| crate::web::limits::check_question(&net, &[], &b.query));
+    if let Err(over) = limits {
         return error(over.status, over.message);
     }
-    match job.ask(net, kept, b.transient, b.prob).await {
+    match job.ask(net, kept, b.transient, b.prob, b.query).await {
         Answer::Done(v) => Json(v).into_response(),
         Answer::Refused(message) => error(StatusCode::BAD_REQUEST, message),
         Answer::Cancelled(progress) => cancelled("the question", progress),

@@ -17,13 +17,14 @@ use serde::Serialize;
 
 use crate::net::{ArcKind, Net, NetBuilder, NetError, Place, Position, Transition};
 
-/// Horizontal distance between layers (at least; more for long names, see [`layer_gap`]).
 mod order;
+pub mod quality;
 
 #[cfg(test)]
 use order::inversions;
 use order::{back_edges, first_seen_order, layers, order_layers};
 
+/// Horizontal distance between layers (at least; more for long names, see [`layer_gap`]).
 const DX: f64 = 90.0;
 /// Width of one character of a label on the page (11 px sans-serif), for [`layer_gap`].
 const CHAR_WIDTH: f64 = 6.2;
@@ -46,6 +47,19 @@ pub enum LayoutSource {
     Layered,
 }
 
+/// Which positions to draw: the viewer's `layout` control.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Choice {
+    /// The file's positions unless they are useless ([`quality::useless`]), else automatic.
+    #[default]
+    Default,
+    /// The file's positions whenever every node has one.
+    File,
+    /// The automatic layout, whatever the file says.
+    Automatic,
+}
+
 /// One position per place and per transition, indexed like the net.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Layout {
@@ -60,7 +74,8 @@ pub struct Layout {
     pub source: LayoutSource,
 }
 
-/// The file's positions if every node has one, otherwise a layered layout.
+/// The file's positions if every node has one and they are worth drawing
+/// ([`quality::useless`]), otherwise a layered layout.
 ///
 /// ```
 /// use gspn::net::{NetBuilder, Servers};
@@ -75,6 +90,30 @@ pub struct Layout {
 /// assert!(l.places[0].x < l.transitions[0].x && l.transitions[0].x < l.places[1].x);
 /// ```
 pub fn layout(net: &Net) -> Layout {
+    choose(net, Choice::Default).0
+}
+
+/// The layout `choice` asks for, with the reason the file's positions were set aside when
+/// they were (the default choice on useless positions).
+pub fn choose(net: &Net, choice: Choice) -> (Layout, Option<String>) {
+    match (file_layout(net), choice) {
+        (Some(f), Choice::File) => (f, None),
+        (Some(f), Choice::Default) => match quality::useless(net, &f) {
+            Some(why) => (layered(net), Some(why)),
+            None => (f, None),
+        },
+        _ => (layered(net), None),
+    }
+}
+
+/// Whether every node of `net` has a position in its file.
+pub fn has_positions(net: &Net) -> bool {
+    net.places().iter().all(|p| p.position.is_some())
+        && net.transitions().iter().all(|t| t.position.is_some())
+}
+
+/// The file's positions, when it gives one for every node.
+fn file_layout(net: &Net) -> Option<Layout> {
     let from_file: Option<(Vec<Position>, Vec<Position>)> = net
         .places()
         .iter()
@@ -86,15 +125,12 @@ pub fn layout(net: &Net) -> Layout {
                 .map(|t| t.position)
                 .collect::<Option<Vec<_>>>(),
         );
-    match from_file {
-        Some((places, transitions)) => Layout {
-            places,
-            transitions,
-            arcs: net.arcs().iter().map(|a| a.points.clone()).collect(),
-            source: LayoutSource::File,
-        },
-        None => layered(net),
-    }
+    from_file.map(|(places, transitions)| Layout {
+        places,
+        transitions,
+        arcs: net.arcs().iter().map(|a| a.points.clone()).collect(),
+        source: LayoutSource::File,
+    })
 }
 
 /// `net` with the given positions (one per place, one per transition, as in [`Layout`]);

@@ -21,12 +21,17 @@ use crate::runtime::{AgentInfo, EventKind, Events, Outcome, Received, RuntimeHan
 use crate::web::WebState;
 use crate::web::api::net_json;
 use crate::web::limits::{WS_BUFFER, WS_MAX_INCOMING, WS_SEND_TIMEOUT};
+use crate::web::stays::RobotStays;
 
 /// Shortest time between two snapshots sent to one browser.
 pub const FRAME: Duration = Duration::from_millis(50);
 
 /// Events kept for the log (the oldest are dropped past this).
 const LOG_KEEP: usize = 500;
+
+/// Token counts kept for a late page's history (markings × places; the oldest markings are
+/// dropped past this): 8 MB, 20,000 markings of a 100-place net.
+const HISTORY_CELLS: usize = 2_000_000;
 
 /// A running plan as the viewer shows it. Cheap to clone.
 #[derive(Clone, Debug)]
@@ -57,6 +62,10 @@ struct Snapshot {
     /// Events missed because the fold fell behind the bus.
     lagged: u64,
     log: VecDeque<Value>,
+    /// The marking after each firing so far (`(time, tokens)`, the oldest dropped past
+    /// [`HISTORY_CELLS`]), and each robot's stays: what a page that joins late is sent first.
+    history: VecDeque<(f64, Vec<u32>)>,
+    stays: RobotStays,
 }
 
 impl LiveRun {
@@ -76,6 +85,8 @@ impl LiveRun {
                     stopped: None,
                     lagged: 0,
                     log: VecDeque::new(),
+                    history: VecDeque::new(),
+                    stays: RobotStays::default(),
                 }),
                 version,
                 world: OnceLock::new(),
@@ -162,10 +173,16 @@ impl LiveRun {
                     Received::Lagged(n) => s.lagged += n,
                     Received::Event(e) => {
                         s.time = s.time.max(e.time);
+                        s.stays.push(&e);
                         match &e.kind {
                             EventKind::Fired { marking, .. } => {
                                 s.firings += 1;
                                 s.tokens.copy_from_slice(marking.as_slice());
+                                let kept = (HISTORY_CELLS / marking.len().max(1)).max(1);
+                                if s.history.len() >= kept {
+                                    s.history.pop_front();
+                                }
+                                s.history.push_back((e.time, marking.to_vec()));
                             }
                             EventKind::Stopped { reason } => s.stopped = Some(reason.to_string()),
                             _ => {}
@@ -192,6 +209,24 @@ impl LiveRun {
             s.stopped.get_or_insert_with(|| summary.stopped.to_string());
         }
         self.inner.version.send_modify(|v| *v += 1);
+    }
+
+    /// `{"type": "history", "frames": [{time, tokens}], "robots": [{robot, stays}]}`: the
+    /// initial marking and the marking after each firing kept, each robot's stays so far.
+    fn history_json(&self) -> Value {
+        let net = self.net();
+        let s = self.snapshot();
+        let initial = (s.history.len() as u64 == s.firings)
+            .then(|| json!({ "time": 0.0, "tokens": net.initial_marking().as_slice() }));
+        let frames: Vec<Value> = initial
+            .into_iter()
+            .chain(
+                s.history
+                    .iter()
+                    .map(|(t, m)| json!({ "time": t, "tokens": m })),
+            )
+            .collect();
+        json!({ "type": "history", "frames": frames, "robots": s.stays.json(net) })
     }
 
     /// The snapshot as JSON, with the log entries after `after_seq` (all kept ones if `None`).
@@ -404,9 +439,14 @@ async fn send(socket: &mut WebSocket, text: String) -> bool {
 }
 
 async fn follow(mut socket: WebSocket, live: LiveRun) {
-    let mut net = net_json(live.net(), live.handle().seed(), None);
+    let mut net = net_json(live.net(), live.handle().seed(), None, false);
     net["type"] = json!("net");
     if !send(&mut socket, net.to_string()).await {
+        return;
+    }
+    // The run so far, for a page that joins late: its plot and robot timeline start at the
+    // beginning of the run, not at the page's arrival.
+    if !send(&mut socket, live.history_json().to_string()).await {
         return;
     }
     let mut version = live.inner.version.subscribe();

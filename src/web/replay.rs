@@ -7,6 +7,7 @@ use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use serde_json::{Value, json};
 
+use super::stays::RobotStays;
 use super::{WebState, api};
 use crate::net::Net;
 use crate::runtime::journal::{Frame, Recording};
@@ -20,6 +21,9 @@ pub(crate) struct Replay {
     pub(crate) world: Option<Value>,
     /// The conformance table along the run (`[{time, rows}]`, see `conform::replay_rows`).
     pub(crate) conform: Option<Value>,
+    /// Each robot's stays in places (`[{robot, stays}]`, see [`RobotStays`]), empty when
+    /// no robot was bound.
+    pub(crate) robots: Value,
 }
 
 impl Replay {
@@ -29,6 +33,7 @@ impl Replay {
             conform: super::conform::replay_rows(net, &frames),
             frames,
             world: None,
+            robots: Value::Array(Vec::new()),
         }
     }
 
@@ -52,17 +57,19 @@ impl Replay {
             conform: super::conform::replay_rows(&recording.net, &frames),
             frames,
             world,
+            robots: RobotStays::of(&recording.events).json(&recording.net),
         }
     }
 }
 
-/// `GET /api/replay`: `{"frames": [{time, transition, tokens}], "world"?: {map, radius,
+/// `GET /api/replay`: `{"frames": [{time, transition, tokens}], "robots": [{robot, stays:
+/// [{t0, t1, place, agent}]}], "world"?: {map, radius,
 /// robots, frames: [{time, robots: [{id, agent, x, y}]}]}, "conform"?: [{time, rows}]}` (404
 /// without a recording; `conform`: the monitor's table of transitions' rates along the run).
 pub(crate) async fn frames(State(state): State<WebState>) -> Response {
     match state.inner.replay.get() {
         Some(r) => {
-            let mut v = json!({ "frames": r.frames });
+            let mut v = json!({ "frames": r.frames, "robots": r.robots });
             if let Some(w) = &r.world {
                 v["world"] = w.clone();
             }

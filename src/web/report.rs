@@ -1,16 +1,18 @@
 //! The analysis panel's data: properties of the state space, steady-state measures, dead
 //! markings with the firing sequence that reaches each — or why they cannot be computed —
-//! and, on the state space kept from it ([`Kept`]), transient points and `--prob`
-//! predicates computed by the same library calls as `plan-runner analyze` ([`query`]).
+//! and, on the state space kept from it ([`Kept`]), transient points, `--prob` predicates
+//! and `--query` queries computed by the same library calls as `plan-runner analyze`
+//! ([`query`]).
 
 use serde_json::{Value, json};
 
-use crate::analysis::ctmc::SolveError;
+use crate::analysis::ctmc::{Limiting, SolveError};
 use crate::analysis::decision::RewardSpec;
 use crate::analysis::invariants::{p_invariants, t_invariants};
 use crate::analysis::measures::{Solver, SolverOptions, bad_time};
 use crate::analysis::properties::Properties;
-use crate::analysis::report::{MeasuresReport, Panel};
+use crate::analysis::query::{Evaluator, Query};
+use crate::analysis::report::{MeasuresReport, Panel, QueryAnswer};
 use crate::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
 use crate::analysis::under_policy::{self, Regime};
 use crate::net::Net;
@@ -28,7 +30,9 @@ pub(crate) struct Kept {
     /// The state space (under the plan's policy, if any).
     pub(crate) space: StateSpace,
     /// The limiting distribution over its tangible markings.
-    pub(crate) steady: Vec<f64>,
+    pub(crate) limiting: Limiting,
+    /// The plan's reward structures, for `R{"name"}` queries.
+    pub(crate) rewards: Vec<RewardSpec>,
 }
 
 /// Everything the panel shows for `net` under `policy` (the bare net when it is empty: the
@@ -66,6 +70,7 @@ pub(crate) fn analyse(
                 AnalysisError::TooManyStates { .. } => "too_many_states",
                 AnalysisError::TimelessTrap { .. } => "timeless_trap",
                 AnalysisError::VanishingLoopTooLarge { .. } => "vanishing_loop_too_large",
+                AnalysisError::VanishingLoopFailed { .. } => "vanishing_loop_failed",
                 AnalysisError::Cancelled { .. } => "cancelled",
                 AnalysisError::TooManyTokens { .. } => "too_many_tokens",
                 AnalysisError::TooMuchMemory { .. } => "too_much_memory",
@@ -111,7 +116,8 @@ pub(crate) fn analyse(
             );
             let kept = Kept {
                 space: a.space,
-                steady: a.limiting.pi,
+                limiting: a.limiting,
+                rewards: rewards.to_vec(),
             };
             (to_json(&panel), Some(kept))
         }
@@ -143,6 +149,7 @@ pub(crate) fn query(
     kept: &Kept,
     times: &[f64],
     exprs: &[String],
+    queries: &[String],
     monitor: &Monitor,
 ) -> Result<Value, QueryError> {
     if let Some(t) = bad_time(times) {
@@ -168,7 +175,8 @@ pub(crate) fn query(
         .iter()
         .map(|p| MeasuresReport::point(net, p, exprs))
         .collect();
-    let steady = solver.probabilities(&kept.steady, &predicates);
+    let steady = solver.probabilities(&kept.limiting.pi, &predicates);
+    let queries = answers(net, kept, queries)?;
     let probability: serde_json::Map<String, Value> = exprs
         .iter()
         .zip(steady)
@@ -177,5 +185,32 @@ pub(crate) fn query(
     Ok(json!({
         "steady_state": { "probability": probability },
         "transient": transient,
+        "queries": queries,
     }))
+}
+
+/// The panel's Storm/PRISM queries (`plan-runner analyze --query`), each `{query, value}`
+/// (an infinite value as `"inf"`), on the kept state space; `max`/`min` ones are refused
+/// (the panel has no synthesis: `plan-runner analyze PLAN --query`).
+fn answers(net: &Net, kept: &Kept, texts: &[String]) -> Result<Vec<QueryAnswer>, QueryError> {
+    let ev = Evaluator::new(net, &kept.space, &kept.rewards).with_limiting(kept.limiting.clone());
+    texts
+        .iter()
+        .map(|text| {
+            let bad = |e: &dyn std::fmt::Display| {
+                QueryError::Bad(format!("query `{}`: {e}", crate::io::excerpt(text, 200)))
+            };
+            let q = Query::parse(net, &kept.rewards, text).map_err(|e| bad(&e))?;
+            if q.extreme.is_some() {
+                return Err(bad(
+                    &"max and min are answered by `plan-runner analyze PLAN --query`",
+                ));
+            }
+            let value = ev.evaluate(&q).map_err(|e| bad(&e))?;
+            Ok(QueryAnswer {
+                query: text.clone(),
+                value,
+            })
+        })
+        .collect()
 }

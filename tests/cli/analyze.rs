@@ -164,3 +164,61 @@ fn prism_export_writes_the_chain() {
     let lab = std::fs::read_to_string(dir.path().join("cyc3.lab")).unwrap();
     assert!(lab.contains("0: 0"));
 }
+
+/// Issue 30, snag 8: two edge counts, each named for what it is. On Eratosthenes-PT-010
+/// the labelled count (one per marking and fired transition) is the fixture oracle's
+/// `TRANSITIONS 120`; `t6.2` and `t6.3` both remove `p6`, so the distinct successor
+/// pairs are fewer: 80 (by enumeration of the 32 markings; on PT-020 the same two counts
+/// are 23,040 and 11,264).
+#[test]
+fn analyze_reports_labelled_edges_and_distinct_successor_pairs() {
+    let f = fixture("mcc/Eratosthenes-PT-010/model.pnml");
+    let oracle = std::fs::read_to_string(fixture(
+        "mcc/Eratosthenes-PT-010/StateSpace-oracle-2021.out",
+    ))
+    .unwrap();
+    assert!(oracle.contains("STATE_SPACE TRANSITIONS 120 "), "{oracle}");
+    let (code, j, err) = analyze(&[f.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let ss = &j["state_space"];
+    assert_eq!(ss["reachable"], 32);
+    assert_eq!(ss["edges"], 120);
+    assert_eq!(ss["successor_pairs"], 80);
+}
+
+/// Issue 30, snag 7: `--transient 5` also printed the steady state (with --prob); a time
+/// asks for that time only, the steady state comes with --steady.
+#[test]
+fn transient_alone_prints_no_steady_state() {
+    let f = fixture("greatspn/cyc3/cyc3_ss.PNPRO");
+    let (code, j, err) = analyze(&[
+        f.to_str().unwrap(),
+        "--transient",
+        "5",
+        "--prob",
+        "P3>0",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(j["steady_state"], Value::Null, "{j}");
+    let tr = j["transient"].as_array().unwrap();
+    assert_eq!(tr.len(), 1);
+    assert!(close(&tr[0]["t"], 5.0));
+    let p = tr[0]["probability"]["P3>0"].as_f64().unwrap();
+    assert!(p > 0.0 && p < 1.0, "{p}");
+    let out = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .args(["analyze", f.to_str().unwrap(), "--transient", "5"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("steady state"), "{text}");
+    let (_, j, _) = analyze(&[
+        f.to_str().unwrap(),
+        "--transient",
+        "5",
+        "--steady",
+        "--json",
+    ]);
+    assert!(close(&j["steady_state"]["mean_tokens"]["P1"], 10.0 / 7.0));
+}

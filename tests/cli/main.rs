@@ -4,6 +4,7 @@
 mod support;
 
 mod analyze;
+mod analyze_answers_queries;
 mod bad_limits;
 mod check;
 mod conform;
@@ -13,6 +14,7 @@ mod full_disk_stops_the_run;
 mod journal_survives_signals;
 mod program_actions;
 mod readme;
+mod replay_finds_its_net;
 mod replay_robots;
 mod replay_streams_the_journal;
 mod robots_must_match_agents;

@@ -261,3 +261,112 @@ fn the_text_summary_lists_places_and_transitions_in_net_order() {
     sorted.sort();
     assert_ne!(sorted, places);
 }
+
+/// Issue 30, snag 6: a program that logs after answering (print, then exit 0) used to fail
+/// the run (`answered "…", which is not a transition`). A `gspn: fire T` line answers
+/// whatever follows it; without one, the last line still answers, and the error says how
+/// to answer on the separate channel.
+#[test]
+fn a_gspn_fire_line_answers_even_when_the_program_logs_after_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = patrol_plan(
+        dir.path(),
+        "echo \"gspn: fire $GSPN_OUTPUTS\"; echo \"agent $GSPN_AGENT driving on\"",
+        "",
+    );
+    let j = dir.path().join("run.jsonl");
+    let out = bin()
+        .args(["run", plan.to_str().unwrap(), "--json", "--journal"])
+        .arg(&j)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["stopped"], "max_firings");
+    let lines = journal(&j);
+    let ended: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["event"] == "action_ended")
+        .collect();
+    // Every patrol (the programs) ended by firing; Decide and Charging are `wait`.
+    let patrols: Vec<&&Value> = ended
+        .iter()
+        .filter(|l| l["place_name"] == "Patrol_A" || l["place_name"] == "Patrol_B")
+        .collect();
+    assert!(patrols.len() >= 4, "{ended:?}");
+    assert!(
+        patrols.iter().all(|l| l["outcome"]["kind"] == "fire"),
+        "{patrols:?}"
+    );
+
+    // The same program without the prefix: the log line is the answer, and the run fails
+    // with a message that names the other channel.
+    let plan = patrol_plan(
+        dir.path(),
+        "echo \"$GSPN_OUTPUTS\"; echo \"agent $GSPN_AGENT driving on\"",
+        "",
+    );
+    let out = bin()
+        .args(["run", plan.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    let all = format!("{err}{}", String::from_utf8_lossy(&out.stdout));
+    assert_eq!(out.status.code(), Some(1), "{all}");
+    assert!(
+        all.contains("answered `agent 0 driving on`, which is not a transition of the net")
+            || all.contains("answered `agent 1 driving on`, which is not a transition of the net"),
+        "{all}"
+    );
+    assert!(all.contains("print `gspn: fire T`"), "{all}");
+}
+
+/// Issue 30, snag 7: a run that reached `max_firings` while the last firing's agent was
+/// starting a program waited for that program (or its timeout) before stopping. The firing
+/// that ends the run starts no action: the program never runs.
+#[test]
+fn the_firing_that_ends_the_run_starts_no_program() {
+    let dir = tempfile::tempdir().unwrap();
+    let marker = dir.path().join("started");
+    let net = repo("plans/nets/two_robot_patrol.xml");
+    let plan = dir.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "net = {net:?}\nseed = 4\ntime_scale = 0.0\n\n[places.Patrol_A]\naction = \"wait\"\n\
+             [places.Patrol_B]\naction = \"wait\"\n\
+             [places.Decide]\naction = {{ command = [\"sh\", \"-c\", \"touch {marker}; sleep 20\"] }}\ntimeout = 30.0\n\
+             [places.Charging]\naction = \"wait\"\n[places.Charger]\nrole = \"resource\"\n\n[stop]\nmax_firings = 1\n",
+            net = net.display().to_string(),
+            marker = marker.display()
+        ),
+    )
+    .unwrap();
+    let j = dir.path().join("run.jsonl");
+    let out = bin()
+        .args(["run", plan.to_str().unwrap(), "--json", "--journal"])
+        .arg(&j)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(summary["stopped"], "max_firings");
+    assert_eq!(summary["firings"], 1);
+    assert_eq!(summary["final_marking"]["Decide"], 1);
+    assert!(!marker.exists(), "the program ran");
+    let lines = journal(&j);
+    let fired = lines.iter().position(|l| l["event"] == "fired").unwrap();
+    assert!(
+        lines[fired..]
+            .iter()
+            .all(|l| l["event"] != "action_started"),
+        "{:?}",
+        &lines[fired..]
+    );
+}

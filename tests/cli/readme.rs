@@ -1,4 +1,7 @@
-//! The README's two set-up commands stay in sync with CI and with the repository.
+//! The README's two set-up commands stay in sync with CI and with the repository: the test
+//! command is `./test.sh`, which sets up what the suite needs and ends by running the suite;
+//! `.ci/run` runs both commands exactly as written; the tour's journals stay out of the
+//! checkout and its live viewer example runs in real time.
 
 use std::path::Path;
 
@@ -14,22 +17,72 @@ fn command_after(readme: &str, marker: &str) -> String {
     block.lines().next().expect("a command").trim().to_string()
 }
 
+/// The lines of a shell script that are commands (not comments, not blank).
+fn commands(script: &str) -> Vec<&str> {
+    script
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .collect()
+}
+
 #[test]
-fn ci_runs_the_readme_test_command() {
+fn ci_runs_the_readme_test_command_which_sets_up_and_runs_the_suite() {
     let readme = read("README.md");
     let test_cmd = command_after(&readme, "Run the tests:");
-    assert_eq!(test_cmd, "cargo test --all-features");
+    assert_eq!(test_cmd, "./test.sh");
     let ci = read(".ci/run");
     assert!(
-        ci.lines().any(|l| l.trim() == test_cmd),
+        commands(&ci).contains(&test_cmd.as_str()),
         ".ci/run must run `{test_cmd}`"
+    );
+    // CI installs nothing itself: the test command does, for a user as for CI.
+    assert!(
+        !ci.contains("apt-get") && !ci.contains("pip install"),
+        "{ci}"
+    );
+    let script = read("test.sh");
+    let run = commands(&script);
+    // The suite (with the arguments, if any), then the Python package's.
+    assert!(
+        run.contains(&"cargo test --all-features \"$@\""),
+        "{script}"
+    );
+    assert!(
+        run.last().unwrap().contains("pytest -q python/tests"),
+        "{script}"
+    );
+    for needed in [
+        "chromium",
+        "chromium-driver",
+        "iproute2",
+        "python3-venv",
+        "target/venv-ros2",
+        "cyclonedds==11.0.1",
+        "stormpy==2.0.0",
+        "eclipse-zenoh==1.10.2",
+        "./python pytest matplotlib",
+    ] {
+        assert!(script.contains(needed), "test.sh must install {needed}");
+    }
+    let mode = std::fs::metadata(Path::new(env!("CARGO_MANIFEST_DIR")).join("test.sh"))
+        .unwrap()
+        .permissions();
+    assert!(
+        std::os::unix::fs::PermissionsExt::mode(&mode) & 0o111 != 0,
+        "test.sh is executable"
     );
 }
 
 #[test]
-fn the_main_command_names_an_existing_plan() {
+fn ci_runs_the_main_command_as_written_on_an_existing_plan() {
     let readme = read("README.md");
     let main_cmd = command_after(&readme, "Run the example plan");
+    // The build the README tells a user to make (`--all-features`) is the one it runs.
+    assert!(
+        main_cmd.starts_with("cargo run --release --all-features -- "),
+        "{main_cmd}"
+    );
     let plan = main_cmd
         .split_whitespace()
         .find(|w| w.ends_with(".toml"))
@@ -41,7 +94,59 @@ fn the_main_command_names_an_existing_plan() {
     );
     let ci = read(".ci/run");
     assert!(
-        ci.contains(plan),
-        ".ci/run must run the main command's plan {plan}"
+        commands(&ci).contains(&main_cmd.as_str()),
+        ".ci/run must run `{main_cmd}`"
     );
+    // Exactly two set-up commands.
+    let setup = &readme[readme.find("## Set up").unwrap()..readme.find("## CLI tour").unwrap()];
+    assert_eq!(setup.matches("```sh\n").count(), 2, "{setup}");
+}
+
+#[test]
+fn the_tour_writes_journals_outside_the_checkout_and_watches_live_runs_in_real_time() {
+    let readme = read("README.md");
+    let tour = &readme[readme.find("## CLI tour").unwrap()..];
+    let tour = &tour[..tour[3..].find("\n## ").map_or(tour.len(), |i| i + 3)];
+    for line in commands(tour) {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if let Some(i) = words.iter().position(|w| *w == "--journal") {
+            let path = words[i + 1];
+            assert!(
+                path.starts_with("target/") || path.starts_with("/tmp/"),
+                "{line}: a journal inside the checkout"
+            );
+        }
+        if words.get(1) == Some(&"run") && words.contains(&"--web") {
+            let plan = read(words[2]);
+            let virtual_time = plan.contains("time_scale = 0.0");
+            assert!(
+                !virtual_time || words.contains(&"--time-scale"),
+                "{line}: a live viewer of a virtual-time run is over before the page opens"
+            );
+        }
+    }
+}
+
+/// Issue 30, snag 9: docs/benchmarks.md was an 800-line log; it starts with one table of
+/// current figures, each with its command, machine and date.
+#[test]
+fn benchmarks_start_with_one_table_of_current_figures() {
+    let doc = read("docs/benchmarks.md");
+    let first = doc.find("\n## ").expect("a section");
+    assert_eq!(&doc[first..first + 20], "\n## Current figures\n");
+    let section = &doc[first + 1..];
+    let section = &section[..section[3..].find("\n## ").unwrap() + 3];
+    let rows: Vec<&str> = section.lines().filter(|l| l.starts_with('|')).collect();
+    assert_eq!(rows[0], "| what | figure | command | machine | date |");
+    assert!(rows.len() > 10, "{rows:?}");
+    for row in &rows[2..] {
+        let cells: Vec<&str> = row.trim_matches('|').split(" | ").map(str::trim).collect();
+        assert_eq!(cells.len(), 5, "{row}");
+        assert!(cells[2].starts_with('`'), "no command: {row}");
+        let date = cells[4].as_bytes();
+        assert!(
+            date.len() == 10 && date[4] == b'-' && date[7] == b'-',
+            "no date: {row}"
+        );
+    }
 }

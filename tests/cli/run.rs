@@ -124,3 +124,56 @@ fn ctrl_c_leaves_a_complete_journal_and_exits_130() {
     assert_eq!(fired, summary["firings"].as_u64().unwrap());
     assert!(fired > 0);
 }
+
+/// The keys of the JSON object `key` of `text`, in the order they are written (a parsed
+/// `Value` would sort them).
+fn written_keys(text: &str, key: &str) -> Vec<String> {
+    let start = text.find(&format!("\"{key}\": {{")).expect("the object") + key.len() + 5;
+    let body = &text[start..start + text[start..].find('}').expect("its end")];
+    body.split(',')
+        .map(|entry| {
+            entry
+                .split(':')
+                .next()
+                .unwrap()
+                .trim()
+                .trim_matches('"')
+                .to_string()
+        })
+        .collect()
+}
+
+/// Issue 30, snag 7: `run --json` wrote `p10` before `p2` (name order); the summary keeps
+/// the net's order, like the text summary and the net file.
+#[test]
+fn the_json_summary_keeps_places_and_transitions_in_net_order() {
+    let net = common::fixture("mcc/Eratosthenes-PT-010/model.pnml");
+    let out = bin()
+        .args([
+            "run",
+            net.to_str().unwrap(),
+            "--seed",
+            "1",
+            "--max-firings",
+            "3",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let places = ["p2", "p3", "p6", "p7", "p4", "p5", "p8", "p9", "p10"];
+    assert_eq!(written_keys(&text, "final_marking"), places);
+    assert_eq!(written_keys(&text, "mean_tokens"), places);
+    assert_eq!(
+        written_keys(&text, "throughput"),
+        [
+            "t10.2", "t6.2", "t6.3", "t8.2", "t10.5", "t9.3", "t8.4", "t4.2"
+        ]
+    );
+}

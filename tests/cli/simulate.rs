@@ -204,3 +204,48 @@ fn bad_input_exits_with_code_2() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("timeless trap at time 0"), "{err}");
 }
+
+/// Issue 30, snag 7: `simulate --runs` on a plan with `[rewards]` did not estimate them.
+/// Each run's rate is its place rewards over time plus its impulses, so with `per_token`
+/// rewards the estimate is the same combination of the mean-token and throughput
+/// estimates, and its interval holds the exact rate `analyze` gives.
+#[test]
+fn monte_carlo_estimates_the_plans_rewards() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("patrol.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "net = {:?}\n\n[places.Charger]\nrole = \"resource\"\n\n[rewards.work]\nper_token = {{ Patrol_A = 1.0, Patrol_B = 2.0 }}\ntransitions = {{ T_charged = 3.0 }}\n",
+            format!("{}/plans/nets/two_robot_patrol.xml", env!("CARGO_MANIFEST_DIR"))
+        ),
+    )
+    .unwrap();
+    let v = json_of(&simulate(&[
+        plan.to_str().unwrap(),
+        "--runs",
+        "40",
+        "--until",
+        "200",
+        "--seed",
+        "3",
+        "--json",
+    ]));
+    let x = |kind: &str, name: &str| v[kind][name].as_f64().unwrap();
+    let rate = x("rewards", "work");
+    let combined = x("mean_tokens", "Patrol_A")
+        + 2.0 * x("mean_tokens", "Patrol_B")
+        + 3.0 * x("throughput", "T_charged");
+    assert!((rate - combined).abs() < 1e-9, "{rate} vs {combined}");
+    let (lo, hi) = interval(&v, "rewards", "work");
+    let exact = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .args(["analyze", plan.to_str().unwrap(), "--json"])
+        .output()
+        .unwrap();
+    let exact: Value = serde_json::from_slice(&exact.stdout).unwrap();
+    let exact = exact["steady_state"]["rewards"]["work"]["rate"]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{exact}"));
+    assert!(lo <= exact && exact <= hi, "{exact} not in [{lo}, {hi}]");
+}

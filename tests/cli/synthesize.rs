@@ -424,3 +424,234 @@ fn a_marking_outside_the_policy_table_falls_back_to_the_weights_with_one_warning
     assert_eq!(warning_events.len(), 1, "{events}");
     assert!(warning_events[0].contains("no [[policy]] rule applies"));
 }
+
+/// The quickstart's patrol (two robots, one charger: `role = "resource"`) as a plan with a
+/// reward and its three decisions controllable, written beside a copy of its net whose
+/// `Patrol_A` starts with `patrol_a` robots.
+fn patrol_with_charger(dir: &std::path::Path, patrol_a: u32) -> std::path::PathBuf {
+    let xml = std::fs::read_to_string(format!(
+        "{}/plans/nets/two_robot_patrol.xml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    // Patrol_A's initial marking is the first `Default,1` of the file.
+    let xml = xml.replacen("Default,1", &format!("Default,{patrol_a}"), 1);
+    std::fs::write(dir.join("net.xml"), xml).unwrap();
+    let plan = dir.join(format!("patrol{patrol_a}.toml"));
+    std::fs::write(
+        &plan,
+        r#"net = "net.xml"
+controllable = ["t_go_A", "t_go_B", "t_charge"]
+
+[places.Charger]
+role = "resource"
+
+[rewards.patrolling]
+per_token = { Patrol_A = 1.0, Patrol_B = 1.0 }
+"#,
+    )
+    .unwrap();
+    plan
+}
+
+fn lra_value(plan: &std::path::Path) -> f64 {
+    let (code, stdout, err) = synthesize(&[plan.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    j["value"].as_f64().unwrap()
+}
+
+/// Issue 30, snag 1: the sweep counted the charger's token as a robot ("robots 3" was the
+/// 2-robot model). Each row must be the model with that many robots and the one charger.
+#[test]
+fn a_sweep_scales_the_robots_and_keeps_the_resources() {
+    let dir = tempfile::tempdir().unwrap();
+    let two = patrol_with_charger(dir.path(), 1);
+    let (code, stdout, err) =
+        synthesize(&[two.to_str().unwrap(), "--sweep", "robots=2..3", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let rows: Vec<Value> = serde_json::from_str(&stdout).unwrap();
+    let swept: Vec<f64> = rows.iter().map(|r| r["value"].as_f64().unwrap()).collect();
+    // Two robots: the plan as written. Three: Patrol_A gets the extra robot (largest
+    // remainder, net order breaks the tie), the charger keeps its one token.
+    let direct_two = lra_value(&two);
+    let three_dir = tempfile::tempdir().unwrap();
+    let direct_three = lra_value(&patrol_with_charger(three_dir.path(), 2));
+    assert!(
+        (swept[0] - direct_two).abs() < 1e-9,
+        "{swept:?} vs {direct_two}"
+    );
+    assert!(
+        (swept[1] - direct_three).abs() < 1e-9,
+        "{swept:?} vs {direct_three}"
+    );
+    assert!(
+        direct_three > direct_two + 0.1,
+        "{direct_two} {direct_three}"
+    );
+}
+
+/// Issue 30, snag 4: no rewards, or no decision, used to print `lra-max: 0` and exit 0.
+#[test]
+fn nothing_to_optimise_is_refused_with_the_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = patrol_with_charger(dir.path(), 1);
+    let text = std::fs::read_to_string(&plan).unwrap();
+    let no_rewards = dir.path().join("no_rewards.toml");
+    std::fs::write(&no_rewards, text.split("[rewards.").next().unwrap()).unwrap();
+    let (code, stdout, err) = synthesize(&[no_rewards.to_str().unwrap()]);
+    assert_eq!(code, 2, "{stdout}{err}");
+    assert!(
+        err.contains("nothing to optimise: --objective lra-max needs rewards"),
+        "{err}"
+    );
+    // A probability needs no rewards.
+    let (code, _, err) = synthesize(&[
+        no_rewards.to_str().unwrap(),
+        "--objective",
+        "reach-max",
+        "--goal",
+        "Charging > 0",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let no_decision = dir.path().join("no_decision.toml");
+    std::fs::write(
+        &no_decision,
+        text.replace(
+            "controllable = [\"t_go_A\", \"t_go_B\", \"t_charge\"]\n",
+            "",
+        ),
+    )
+    .unwrap();
+    let (code, stdout, err) = synthesize(&[no_decision.to_str().unwrap()]);
+    assert_eq!(code, 2, "{stdout}{err}");
+    assert!(
+        err.contains("nothing to optimise: the net has no decision"),
+        "{err}"
+    );
+}
+
+/// The fenced block of `lang` that follows `marker` in `text`.
+fn block_after(text: &str, marker: &str, lang: &str) -> String {
+    let rest = &text[text.find(marker).expect("marker") + marker.len()..];
+    let open = format!("```{lang}\n");
+    let body = &rest[rest.find(&open).expect("block") + open.len()..];
+    body[..body.find("```").expect("block end")].to_string()
+}
+
+/// Issue 30, snag 5: docs/synthesis.md's Storm snippet named the reward model `reward`,
+/// but a plan's DRN names it after the plan's reward, so it failed as written. Both of its
+/// blocks run here as written, and Storm's value is ours.
+#[test]
+fn the_storm_snippet_of_the_docs_runs_as_written() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let python = root.join("target/venv-ros2/bin/python");
+    assert!(
+        python.exists(),
+        "{} missing: run ./test.sh (it makes the venv and installs stormpy)",
+        python.display()
+    );
+    let doc = std::fs::read_to_string(root.join("docs/synthesis.md")).unwrap();
+    let marker = "## Checking us with Storm";
+    let command = block_after(&doc, marker, "sh");
+    let script = block_after(&doc, marker, "python");
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        root.join("plans/home-cleaning/plan.toml"),
+        dir.path().join("plan.toml"),
+    )
+    .unwrap();
+    std::fs::copy(
+        root.join("plans/home-cleaning/net.PNPRO"),
+        dir.path().join("net.PNPRO"),
+    )
+    .unwrap();
+    let args: Vec<String> = command
+        .split_whitespace()
+        .skip(1)
+        .map(|a| a.replace("plans/home-cleaning/", ""))
+        .collect();
+    let out = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .current_dir(dir.path())
+        .args(&args)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let ours: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let ours = ours["value"].as_f64().unwrap();
+    let storm = std::process::Command::new(&python)
+        .current_dir(dir.path())
+        .arg("-c")
+        .arg(&script)
+        .output()
+        .unwrap();
+    let printed = String::from_utf8_lossy(&storm.stdout);
+    assert!(
+        storm.status.success(),
+        "{printed}{}",
+        String::from_utf8_lossy(&storm.stderr)
+    );
+    let theirs: f64 = printed
+        .trim()
+        .parse()
+        .unwrap_or_else(|_| panic!("{printed}"));
+    assert!(
+        (theirs - ours).abs() <= 1e-6 * ours.abs().max(1.0),
+        "{theirs} vs {ours}"
+    );
+}
+
+/// Issue 30, snag 7: `--compact` wrote a catch-all rule as `marking = {  }`; reach-max
+/// printed `1.000000000124984` (the solver's bound past 1): a probability is shown clamped to
+/// [0, 1] with its bounds.
+#[test]
+fn compact_catch_all_and_reach_values_print_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = patrol_with_charger(dir.path(), 1);
+    let out = dir.path().join("compact.toml");
+    let (code, _, err) = synthesize(&[
+        plan.to_str().unwrap(),
+        "--compact",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(!text.contains("{  }"), "{text}");
+    assert!(text.contains("\nmarking = {}\npartial = true\n"), "{text}");
+    assert_eq!(
+        gspn::plan::read_plan(&out, &Default::default())
+            .unwrap()
+            .policy
+            .rules()
+            .len(),
+        2
+    );
+    let (code, stdout, err) = synthesize(&[
+        plan.to_str().unwrap(),
+        "--objective",
+        "reach-max",
+        "--goal",
+        "Charging > 0",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let j: Value = serde_json::from_str(&stdout).unwrap();
+    let (v, lo, hi) = (
+        j["value"].as_f64().unwrap(),
+        j["lower"].as_f64().unwrap(),
+        j["upper"].as_f64().unwrap(),
+    );
+    assert!(
+        (0.0..=1.0).contains(&lo) && lo <= v && v <= hi && hi <= 1.0,
+        "{j}"
+    );
+    assert!((v - 1.0).abs() < 1e-9, "{j}");
+}

@@ -172,3 +172,26 @@ fn default_k_weights_inhibitors_immediates_and_servers_are_honoured() {
     assert_eq!(net.enabling_degree(&m, work), 2);
     assert_eq!(net.exp_rate(&m, work), 5.0);
 }
+
+/// Issue 30, snag 8: PIPE writes `<initialMarking><value></value>` for a place never given
+/// tokens; it was refused (`'' is not a number`). Empty is 0: the same net, hash for hash.
+#[test]
+fn an_empty_initial_marking_value_is_zero() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("plans/nets/two_robot_patrol.xml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert_eq!(text.matches("<value>Default,0</value>").count(), 2);
+    let dir = tempfile::tempdir().unwrap();
+    let empty = dir.path().join("empty_marking.xml");
+    std::fs::write(
+        &empty,
+        text.replace("<value>Default,0</value>", "<value></value>"),
+    )
+    .unwrap();
+    let (a, b) = (load(&path), load(&empty));
+    assert_eq!(b.initial_tokens(), 3);
+    assert_eq!(
+        gspn::runtime::journal::net_hash(&a),
+        gspn::runtime::journal::net_hash(&b)
+    );
+}

@@ -589,3 +589,29 @@ fn nan_infinite_and_zero_rates_are_refused() {
         }
     }
 }
+
+/// Issue 30, snag 8: a GreatSPN editor file of format v100 spells the arc attributes
+/// `type=` and `multiplicity=`; it was refused (`attribute 'kind' of <arc> is missing`).
+/// Read with either spelling, the cleaning net (weights 2 and 4, an inhibitor) is the same.
+#[test]
+fn v100_arcs_with_type_and_multiplicity_read_as_kind_and_mult() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("plans/cleaning/net.PNPRO");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let v100 = text
+        .replace(" kind=\"", " type=\"")
+        .replace(" mult=\"", " multiplicity=\"");
+    assert!(v100.contains("multiplicity=\"4\"") && v100.contains("type=\"INHIBITOR\""));
+    assert!(!v100.contains(" kind=\""));
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join("v100.PNPRO");
+    std::fs::write(&copy, v100).unwrap();
+    let (a, b) = (load(&path, None, &[]), load(&copy, None, &[]));
+    assert_eq!(b.arcs().len(), a.arcs().len());
+    assert_eq!(
+        gspn::runtime::journal::net_hash(&a),
+        gspn::runtime::journal::net_hash(&b)
+    );
+    let w2 = b.arcs().iter().filter(|arc| arc.weight == 2).count();
+    let w4 = b.arcs().iter().filter(|arc| arc.weight == 4).count();
+    assert_eq!((w2 > 0, w4 > 0), (true, true));
+}

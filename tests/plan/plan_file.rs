@@ -327,3 +327,119 @@ fn a_map_key_under_a_location_header_is_refused_saying_where_it_belongs() {
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(gspn::plan::PlanFile::parse(&path, &text).is_ok());
 }
+
+/// Issue 30, snag 7: policy rules were numbered from 0 in these messages and from 1 in
+/// `check`'s; both count from 1 in file order now.
+#[test]
+fn policy_errors_number_rules_from_1_like_check() {
+    let (l, _, k) = err_at(
+        "net = \"patrol.xml\"\n[[policy]]\nmarking = { Decide = 1 }\npartial = true\nchoose = { t_go_A = 1.0 }\n\n[[policy]]\nmarking = { Decide = 1 }\npartial = true\nchoose = { t_go_A = 0.5, t_go_B = 0.4 }\n",
+    );
+    assert_eq!(l, 7);
+    assert!(
+        k.to_string()
+            .contains("rule 2: the probabilities sum to 0.9"),
+        "{k}"
+    );
+}
+
+/// Every key of the plan file's schema (the reader's own type, with unknown keys refused),
+/// as `section.key` paths: `places.action.command`, `map.robot.radius`, …
+fn schema_keys() -> Vec<String> {
+    fn walk(
+        node: &serde_json::Value,
+        defs: &serde_json::Value,
+        path: &str,
+        out: &mut Vec<String>,
+        depth: usize,
+    ) {
+        if depth > 8 {
+            return;
+        }
+        if let Some(r) = node.get("$ref").and_then(|r| r.as_str()) {
+            let name = r.rsplit('/').next().unwrap();
+            walk(&defs[name], defs, path, out, depth + 1);
+        }
+        if let Some(props) = node.get("properties").and_then(|p| p.as_object()) {
+            for (k, v) in props {
+                let p = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                out.push(p.clone());
+                walk(v, defs, &p, out, depth + 1);
+            }
+        }
+        for key in ["items", "additionalProperties"] {
+            if let Some(v) = node.get(key) {
+                walk(v, defs, path, out, depth + 1);
+            }
+        }
+        for key in ["anyOf", "oneOf", "allOf"] {
+            for v in node
+                .get(key)
+                .and_then(|v| v.as_array())
+                .into_iter()
+                .flatten()
+            {
+                walk(v, defs, path, out, depth + 1);
+            }
+        }
+    }
+    let schema: serde_json::Value = serde_json::from_str(&json_schema()).unwrap();
+    let mut out = Vec::new();
+    walk(&schema, &schema["$defs"], "", &mut out, 0);
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// Issue 30, snag 5: `[rewards.NAME]` (`marked`, `per_token`, `transitions`),
+/// `controllable` and `wait` were missing from docs/plans.md's key table. Every key the
+/// reader accepts is named in that table (the `[map]` keys in its own section's example).
+#[test]
+fn every_key_the_plan_reader_accepts_is_in_the_docs() {
+    let docs = std::fs::read_to_string(repo("docs/plans.md")).unwrap();
+    let keys_section = &docs[docs.find("\n## Keys").unwrap()..];
+    let table: String = keys_section[..keys_section[1..].find("\n#").unwrap()]
+        .lines()
+        .filter(|l| l.starts_with('|'))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let map_section = &docs[docs.find("\n## Simulated robots").unwrap()..];
+    let map_section = &map_section[..map_section[1..].find("\n## ").unwrap()];
+    let keys = schema_keys();
+    assert!(keys.len() > 60, "{keys:?}");
+    let mut missing = Vec::new();
+    for path in &keys {
+        let key = path.rsplit('.').next().unwrap();
+        let documented = if path.starts_with("map.") {
+            map_section.contains(&format!("{key} ="))
+                || map_section.contains(&format!("`{key}`"))
+                || map_section.contains(&format!(".{key}."))
+        } else {
+            table.contains(&format!("`{key}`"))
+                || table.contains(&format!("`[{key}]`"))
+                || table.contains(&format!("`[{key}.NAME]`"))
+                || table.contains(&format!("`[[{key}]]`"))
+        };
+        if !documented {
+            missing.push(path.clone());
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "keys missing from docs/plans.md: {missing:?}"
+    );
+    for key in [
+        "rewards",
+        "rewards.marked",
+        "rewards.per_token",
+        "rewards.transitions",
+        "controllable",
+        "wait",
+    ] {
+        assert!(keys.contains(&key.to_string()), "{key} in {keys:?}");
+    }
+}

@@ -22,7 +22,7 @@ use serde_json::{Value, json};
 /// `plan-runner run plans/temperature-patrol/plan.toml --robots N --time-scale 1 --web
 /// 127.0.0.1:0` (real time, as a user watches it): the child and the viewer's address (from
 /// its "watch the run at" line).
-fn run_with_viewer(robots: usize) -> (RunningPlan, SocketAddr) {
+pub(crate) fn run_with_viewer(robots: usize) -> (RunningPlan, SocketAddr) {
     let plan = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("plans/temperature-patrol/plan.toml");
     let mut child = Command::new(assert_cmd::cargo::cargo_bin("plan-runner"))
         .args([
@@ -54,7 +54,7 @@ fn run_with_viewer(robots: usize) -> (RunningPlan, SocketAddr) {
 
 /// The `plan-runner` child, killed when the test ends (it serves until Ctrl-C), even on a
 /// failed assertion.
-struct RunningPlan(Child);
+pub(crate) struct RunningPlan(Child);
 
 impl Drop for RunningPlan {
     fn drop(&mut self) {
@@ -63,7 +63,7 @@ impl Drop for RunningPlan {
     }
 }
 
-fn patrol_net() -> Net {
+pub(crate) fn patrol_net() -> Net {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("plans/temperature-patrol/plan.toml");
     gspn::plan::open(&path, &ReadOptions::default())
         .unwrap()
@@ -146,7 +146,7 @@ async fn a_live_run_with_8_robots_can_be_followed_and_stopped() {
     );
     let on_places = b
         .js(
-            "return Object.fromEntries([...document.querySelectorAll('[data-place]')]\
+            "return Object.fromEntries([...document.querySelectorAll('#nodes [data-place]')]\
                .map(g => [g.dataset.place, (g.querySelector('text.agents') || {}).textContent || '']));",
             vec![],
         )

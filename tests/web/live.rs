@@ -1,5 +1,6 @@
 //! The viewer follows a running plan: a browser that joins late gets the net first, then the
-//! current marking, clock and event log; the HTTP snapshot agrees with the run's summary.
+//! run so far (the marking after every firing), then the current marking, clock and event
+//! log; the HTTP snapshot agrees with the run's summary.
 #![cfg(feature = "web")]
 
 use crate::support as common;
@@ -10,7 +11,7 @@ use futures_util::StreamExt;
 use gspn::net::{Net, NetBuilder, Servers};
 use gspn::runtime::Runtime;
 use gspn::web::{LiveRun, WebState, serve};
-use serde_json::Value;
+use serde_json::{Value, json};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio_tungstenite::tungstenite::Message;
 
@@ -79,6 +80,19 @@ async fn a_late_joiner_gets_the_net_then_the_final_state_of_the_run() {
     let first = text(ws.next().await.unwrap().unwrap());
     assert_eq!(first["type"], "net");
     assert_eq!(first["places"].as_array().unwrap().len(), 3);
+    // The run so far: the initial marking at 0, then the marking after each firing.
+    let history = text(ws.next().await.unwrap().unwrap());
+    assert_eq!(history["type"], "history");
+    let frames = history["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 31);
+    assert_eq!(frames[0]["time"].as_f64(), Some(0.0));
+    assert_eq!(
+        frames[0]["tokens"],
+        json!(cyc3().initial_marking().as_slice())
+    );
+    assert_eq!(frames[30]["tokens"], snap["tokens"]);
+    assert_eq!(frames[30]["time"].as_f64().unwrap(), summary.time);
+    assert_eq!(history["robots"], json!([]));
     let second = text(ws.next().await.unwrap().unwrap());
     assert_eq!(second["type"], "state");
     assert_eq!(second["firings"], 30);
@@ -171,6 +185,7 @@ async fn a_world_feed_is_served_and_sent_in_the_state_frames() {
         }
     };
     assert_eq!(next().await["type"], "net");
+    assert_eq!(next().await["type"], "history");
     // The run may still be folding its last events: skip to a frame with the first world.
     let first = next().await;
     assert_eq!(first["world"]["robots"][0]["x"], 0.5, "{first}");

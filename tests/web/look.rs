@@ -108,18 +108,27 @@ async fn lists_keys_theme_and_resize() {
     assert_eq!(trace.len(), 200);
     let last = &state["trace"][199];
     assert_eq!(last["step"], 250);
-    // Step number, then the time with every digit the server sent.
+    // Step number, then the time to the microsecond (not `2.6790000000000003`); every
+    // digit the server sent in the line's tooltip.
     let time = last["time"].as_f64().unwrap();
-    let want = format!("250{time}  {}", last["transition"].as_str().unwrap());
+    let short: f64 = format!("{time:.6}").parse().unwrap();
+    let want = format!("250{short}  {}", last["transition"].as_str().unwrap());
     assert!(
         trace[199].starts_with(&want),
         "{:?} vs {want:?}",
         trace[199]
     );
     assert!(
-        format!("{time}").len() > 6,
-        "a time with many digits: {time}"
+        format!("{time}").len() > format!("{short}").len(),
+        "a time with more digits than shown: {time}"
     );
+    let title = b
+        .js(
+            "return document.querySelector('#trace li:last-child').title;",
+            vec![],
+        )
+        .await;
+    assert_eq!(title, json!(format!("time {time}")));
     let seq = b
         .js(
             "const s = document.querySelector('#trace li:last-child .seq');\

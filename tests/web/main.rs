@@ -16,6 +16,8 @@ mod live;
 mod look;
 mod navigate;
 mod questions;
+mod readable;
+mod replay_robots;
 mod replay_world;
 mod security;
 mod share;

@@ -48,6 +48,7 @@ async fn the_panel_answers_predicates_and_transient_tokens_with_the_numbers_of_a
     let cli = analyze_json_with(
         &patrol_plan_path(),
         &[
+            "--steady",
             "--transient",
             "0.5,2,10",
             "--prob",
@@ -183,6 +184,70 @@ async fn questions_need_a_finished_analysis_and_valid_times_and_predicates() {
         v["transient"][0]["mean_tokens"]["p1:Check_Temperature_L1"],
         1.0
     );
+}
+
+/// The panel takes `analyze --query` queries too: the same values as the CLI's JSON to 1e-9,
+/// a bad one refused with its column, `max`/`min` sent to the CLI.
+#[tokio::test]
+async fn the_panel_answers_storm_queries_with_the_numbers_of_analyze() {
+    let queries = [
+        "P=? [F<=5 `p4:Wait_L1`=1]",
+        "P=? [F p4:Wait_L1>0]",
+        "T=? [F p4:Wait_L1 > 0]",
+        "S=? [p4:Wait_L1>0 | p2:Alarm_L1>0]",
+    ];
+    let mut args = Vec::new();
+    for q in queries {
+        args.extend(["--query", q]);
+    }
+    let cli = analyze_json_with(&patrol_plan_path(), &args);
+    let state = plan_state(patrol_plan());
+    let (status, _) = call(&state, "GET", "/api/analysis", None).await;
+    assert_eq!(status, StatusCode::OK);
+    let (status, v) = call(
+        &state,
+        "POST",
+        "/api/analysis/query",
+        Some(json!({ "query": queries })),
+    )
+    .await;
+    assert_eq!(status, StatusCode::OK, "{v}");
+    for (i, q) in queries.iter().enumerate() {
+        assert_eq!(v["queries"][i]["query"], *q);
+        assert_eq!(cli["queries"][i]["query"], *q);
+        let (page, ours) = (
+            v["queries"][i]["value"].as_f64().unwrap(),
+            cli["queries"][i]["value"].as_f64().unwrap(),
+        );
+        assert!((page - ours).abs() < 1e-9, "{q}: page {page}, cli {ours}");
+    }
+    // Reached surely, within 5 with some probability, and a steady fraction in (0, 1).
+    assert!(
+        (cli["queries"][1]["value"].as_f64().unwrap() - 1.0).abs() < 1e-9,
+        "{cli}"
+    );
+    let within = cli["queries"][0]["value"].as_f64().unwrap();
+    assert!(within > 0.0 && within < 1.0, "{cli}");
+    let (status, v) = call(
+        &state,
+        "POST",
+        "/api/analysis/query",
+        Some(json!({ "query": ["P=? [F<=5 p4:Wait_L9=1]"] })),
+    )
+    .await;
+    assert_eq!(status, StatusCode::BAD_REQUEST);
+    assert_eq!(
+        v["error"],
+        "query `P=? [F<=5 p4:Wait_L9=1]`: column 11: place `p4:Wait_L9` does not exist"
+    );
+    let (status, v) = call(
+        &state,
+        "POST",
+        "/api/analysis/query",
+        Some(json!({ "query": ["Pmax=? [F p4:Wait_L1>0]"] })),
+    )
+    .await;
+    assert_eq!(status, StatusCode::BAD_REQUEST, "{v}");
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

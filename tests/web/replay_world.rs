@@ -89,10 +89,19 @@ async fn a_journal_of_8_robots_replays_with_the_map_on_a_slider_in_model_seconds
         )
         .await;
     assert_eq!(max.as_f64().unwrap(), end);
-    assert_eq!(b.text("#timeline-end").await, format!("{end} s"));
+    let said = b.text("#timeline-end").await;
+    let said: f64 = said.strip_suffix(" s").unwrap().parse().unwrap();
+    assert!((said - end).abs() < 5e-7, "{said} for {end}");
+    let full = b
+        .js(
+            "return Number(document.getElementById('timeline-end').dataset.t);",
+            vec![],
+        )
+        .await;
+    assert_eq!(full.as_f64().unwrap(), end);
 
-    // A time between two firings: the marking of the earlier one, the robots where the last
-    // world record before it put them.
+    // A time between two firings: the marking of the earlier one, the robots on their way
+    // between the world records before and after it.
     let t = (frames[30].time + frames[31].time) / 2.0;
     b.js(
         "const s = document.getElementById('slider'); s.value = String(arguments[0]);\
@@ -103,7 +112,9 @@ async fn a_journal_of_8_robots_replays_with_the_map_on_a_slider_in_model_seconds
     assert_eq!(b.text("#frame").await, "30/60");
     let shown = cursor_time(&b).await;
     assert!((shown - t).abs() < 1e-12, "cursor at {shown} for {t}");
-    let want = poses.iter().rev().find(|w| w.time <= t).unwrap();
+    let k = poses.iter().rposition(|w| w.time <= t).unwrap();
+    let (before, after) = (&poses[k], &poses[k + 1]);
+    let u = (t - before.time) / (after.time - before.time);
     let on_page = b
         .js(
             "return [...document.querySelectorAll('#map [data-robot]')]\
@@ -113,9 +124,22 @@ async fn a_journal_of_8_robots_replays_with_the_map_on_a_slider_in_model_seconds
         .await;
     let mut on_page: Vec<(String, f64, f64)> = serde_json::from_value(on_page).unwrap();
     on_page.sort_by(|a, b| a.0.cmp(&b.0));
-    let mut expected = crate::follow::poses(&want.data);
+    let mut expected = crate::follow::poses(&before.data);
+    let next = crate::follow::poses(&after.data);
+    for r in &mut expected {
+        let q = next.iter().find(|q| q.0 == r.0).unwrap();
+        r.1 += (q.1 - r.1) * u;
+        r.2 += (q.2 - r.2) * u;
+    }
     expected.sort_by(|a, b| a.0.cmp(&b.0));
-    assert_eq!(on_page, expected);
+    assert_eq!(on_page.len(), expected.len());
+    for (p, e) in on_page.iter().zip(&expected) {
+        assert_eq!(p.0, e.0);
+        assert!(
+            (p.1 - e.1).abs() < 1e-9 && (p.2 - e.2).abs() < 1e-9,
+            "{p:?} vs {e:?}"
+        );
+    }
     // The robots drove meanwhile: r1 is not where it started.
     let start = &poses[0].data[0];
     assert_eq!(start["id"], "r1");

@@ -4,7 +4,7 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 
 /// Solves `A x = b` where `A` is given as `(row, col, value)` triplets (duplicates summed).
-pub(super) fn solve(
+pub(crate) fn solve(
     n: usize,
     triplets: &[(usize, usize, f64)],
     b: &[f64],

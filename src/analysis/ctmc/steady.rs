@@ -32,7 +32,10 @@ pub struct SteadyOptions {
     pub tolerance: f64,
     /// Most sweeps of an iterative solver.
     pub max_iterations: usize,
-    /// Largest chain solved by sparse LU under [`Method::Auto`].
+    /// Largest chain solved by sparse LU under [`Method::Auto`]. Small: the LU's fill
+    /// grows with the chain's dimensions, not its size — Kanban N=2 (4,600 states) took
+    /// 1.0 s and 105 MB by LU where Gauss–Seidel takes milliseconds (docs/benchmarks.md,
+    /// "Kanban N=2"); a chain where Gauss–Seidel fails still falls back to LU.
     pub direct_limit: usize,
     /// Set to `true` (from another thread) to stop an iterative solver at its next sweep
     /// with [`SolveError::Cancelled`]; the viewer's cancel button uses it.
@@ -45,7 +48,7 @@ impl Default for SteadyOptions {
             method: Method::Auto,
             tolerance: 1e-12,
             max_iterations: 50_000,
-            direct_limit: 5_000,
+            direct_limit: 1_000,
             cancel: None,
         }
     }

@@ -163,22 +163,28 @@ impl Ctmc {
             if monitor.is_cancelled() {
                 return Err(SolveError::Cancelled { iterations: *done });
             }
-            for ((x, &c), &q) in next.iter_mut().zip(&cur).zip(exit) {
-                *x = c * (1.0 - q * inv);
-            }
-            for (i, &c) in cur.iter().enumerate() {
-                let p = c * inv;
-                if p == 0.0 {
-                    continue;
-                }
-                for (j, q) in self.row(i) {
-                    next[j as usize] += p * q;
-                }
-            }
+            self.uniform_step(&cur, &mut next, exit, inv);
             std::mem::swap(&mut cur, &mut next);
             *done += 1;
             monitor.set_transient_iterations(*done);
         }
         Ok(acc)
+    }
+
+    /// One step of the uniformised chain: `next = cur·(I + Q/Λ)`, `inv` = 1/Λ, `exit` the
+    /// exit rates.
+    pub(crate) fn uniform_step(&self, cur: &[f64], next: &mut [f64], exit: &[f64], inv: f64) {
+        for ((x, &c), &q) in next.iter_mut().zip(cur).zip(exit) {
+            *x = c * (1.0 - q * inv);
+        }
+        for (i, &c) in cur.iter().enumerate() {
+            let p = c * inv;
+            if p == 0.0 {
+                continue;
+            }
+            for (j, q) in self.row(i) {
+                next[j as usize] += p * q;
+            }
+        }
     }
 }

@@ -1,9 +1,9 @@
 //! Building a [`DecisionModel`] from the reachable markings.
 
-use super::absorb::{Target, absorb};
 use super::{Action, BuildOptions, Controls, DecisionError, DecisionModel, Kind};
+use crate::analysis::absorbing::{Target, absorb};
 use crate::analysis::state_space::explore::Raw;
-use crate::analysis::state_space::{AnalysisError, Monitor, Move, Options, search};
+use crate::analysis::state_space::{Monitor, Move, Options, search};
 use crate::net::{Net, Timing};
 
 /// What a reachable marking becomes.
@@ -123,12 +123,12 @@ pub(super) fn build(
             }
         },
     )
-    .map_err(|v| {
-        let mut mk = vec![0u32; net.place_count()];
-        raw.store.get(elim[v as usize] as usize, &mut mk);
-        AnalysisError::TimelessTrap {
-            marking: net.format_marking(&mk),
-        }
+    .map_err(|e| {
+        e.into_analysis(|v| {
+            let mut mk = vec![0u32; net.place_count()];
+            raw.store.get(elim[v as usize] as usize, &mut mk);
+            net.format_marking(&mk)
+        })
     })?;
 
     let total = kept.len() + copy_of.len();

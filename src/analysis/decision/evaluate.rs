@@ -6,8 +6,8 @@
 //! distribution from the initial distribution ([`Ctmc::limiting`]) gives the long-run average
 //! reward `Σ π(s)·(rate(s) + exit(s)·impulse(s))`.
 
-use super::absorb::{Target, absorb};
 use super::{DecisionError, DecisionModel, Kind, Rewards};
+use crate::analysis::absorbing::{AbsorbError, Target, absorb};
 use crate::analysis::ctmc::{Ctmc, SteadyOptions};
 
 /// The long-run average reward of one policy.
@@ -65,8 +65,11 @@ pub fn evaluate_lra(
             out.push((0, imp));
         },
     )
-    .map_err(|v| DecisionError::TimelessPolicy {
-        marking: format!("{:?}", model.marking(instant[v as usize])),
+    .map_err(|e| match e {
+        AbsorbError::Trap(v) => DecisionError::TimelessPolicy {
+            marking: format!("{:?}", model.marking(instant[v as usize])),
+        },
+        e => DecisionError::Analysis(e.into_analysis(|_| String::new())),
     })?;
     let mut triplets = Vec::new();
     let mut reward = vec![0.0; markov.len()];

@@ -25,15 +25,25 @@ pub(super) struct Mecs {
 }
 
 pub(super) fn mecs(model: &DecisionModel) -> Mecs {
+    mecs_within(model, |_| true, |_| true)
+}
+
+/// The maximal end components of the sub-model of the states `state_ok` keeps and the
+/// choices `choice_ok` keeps (a choice with a branch to a dropped state is dropped too).
+pub(super) fn mecs_within(
+    model: &DecisionModel,
+    state_ok: impl Fn(usize) -> bool,
+    choice_ok: impl Fn(usize) -> bool,
+) -> Mecs {
     let n = model.state_count();
-    let mut alive = vec![true; model.choice_count()];
-    let mut live = vec![true; n];
+    let mut alive: Vec<bool> = (0..model.choice_count()).map(&choice_ok).collect();
+    let mut live: Vec<bool> = (0..n).map(&state_ok).collect();
     let mut of = vec![u32::MAX; n];
     let mut count = 0u32;
     // Candidate sets, each closed off from the others: the components of the choices still
     // alive. A set whose components lose nothing is final; a component that loses a choice
     // or a state is searched again alone (only it can split).
-    let mut work: Vec<Vec<u32>> = vec![(0..n as u32).collect()];
+    let mut work: Vec<Vec<u32>> = vec![(0..n as u32).filter(|&s| live[s as usize]).collect()];
     let mut local = vec![u32::MAX; n];
     while let Some(set) = work.pop() {
         for (i, &s) in set.iter().enumerate() {
@@ -281,15 +291,24 @@ pub(super) fn solve(
     let mut policy = vec![u32::MAX; n];
     let mut iterations = 0;
     let mut g: Vec<(f64, f64)> = Vec::with_capacity(mecs.count);
-    let pi = opts.algorithm == Algorithm::PolicyIteration;
+    // Whether every MEC went through policy iteration (the method reported).
+    let mut all_pi = true;
+    let pi = matches!(opts.algorithm, Algorithm::PolicyIteration | Algorithm::Auto);
     for states in &members {
         // Policy iteration finds the MEC's optimal policy and its bias; value iteration then
-        // starts from that bias, so its first step already bounds the gain.
+        // starts from that bias, so its first step already bounds the gain. Under `Auto` a
+        // MEC whose evaluation would be a large LU goes to value iteration alone.
         let start = if pi {
-            let (h, rounds) =
-                mec_policy_iteration(model, rewards, &mecs, states, max, opts, &mut policy)?;
-            iterations += rounds;
-            Some(h)
+            match mec_policy_iteration(model, rewards, &mecs, states, max, opts, &mut policy)? {
+                Some((h, rounds)) => {
+                    iterations += rounds;
+                    Some(h)
+                }
+                None => {
+                    all_pi = false;
+                    None
+                }
+            }
         } else {
             None
         };
@@ -420,7 +439,7 @@ pub(super) fn solve(
         values,
         policy,
         iterations,
-        method: if pi {
+        method: if pi && all_pi {
             Method::PolicyIteration
         } else {
             Method::RelativeValueIteration

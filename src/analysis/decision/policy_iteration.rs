@@ -23,13 +23,10 @@
 //! `min(Tv − v)·Λ ≤ g ≤ max(Tv − v)·Λ` — tight at once when the policy is optimal.
 
 use super::lra::Mecs;
-use super::solve::SolveOptions;
+use super::solve::{Algorithm, SolveOptions};
 use super::{DecisionError, DecisionModel, Kind, Rewards};
+use crate::analysis::linear::solve_block;
 use crate::analysis::scc::{Sccs, tarjan};
-use crate::analysis::vanishing::lu_solve;
-use faer::Mat;
-use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
 
 /// Most rounds before giving up (each round at least improves the bias).
 const MAX_ROUNDS: usize = 1000;
@@ -45,12 +42,12 @@ pub(super) fn mec_policy_iteration(
     max: bool,
     opts: &SolveOptions,
     policy: &mut [u32],
-) -> Result<(Vec<f64>, usize), DecisionError> {
+) -> Result<Option<(Vec<f64>, usize)>, DecisionError> {
     let n = model.state_count();
     let mut h = vec![0.0f64; n];
     // A dead state is a MEC alone: gain 0, nothing to choose.
     if states.iter().any(|&s| model.kind(s as usize) == Kind::Dead) {
-        return Ok((h, 0));
+        return Ok(Some((h, 0)));
     }
     let mut local = vec![u32::MAX; n];
     for (i, &s) in states.iter().enumerate() {
@@ -88,6 +85,14 @@ pub(super) fn mec_policy_iteration(
         }
         rounds += 1;
         let (reference, sccs) = make_unichain(model, rewards, mecs, states, &local, max, policy)?;
+        if opts.algorithm == Algorithm::Auto
+            && sccs
+                .members()
+                .iter()
+                .any(|c| c.len() > Algorithm::AUTO_COMPONENT_LIMIT)
+        {
+            return Ok(None);
+        }
         let x = evaluate(model, rewards, states, &local, policy, reference, &sccs)?;
         for (i, &s) in states.iter().enumerate() {
             h[s as usize] = if i == reference { 0.0 } else { x[i] };
@@ -124,7 +129,7 @@ pub(super) fn mec_policy_iteration(
             }
         }
         if !changed {
-            return Ok((h, rounds));
+            return Ok(Some((h, rounds)));
         }
     }
 }
@@ -282,10 +287,6 @@ pub(super) fn steer(
     }
 }
 
-/// Components of the policy's graph up to this size are solved by dense LU; larger ones by
-/// sparse LU.
-const DENSE: usize = 48;
-
 /// The gain and bias of the policy on `states` (closed under it), `h(reference) = 0`: the
 /// local solution vector, whose entry `reference` is the gain. `sccs`: the components of the
 /// policy's graph on `states`.
@@ -330,7 +331,7 @@ fn evaluate(
             pos[v as usize] = i;
         }
     }
-    let fail = |size: usize, e: String| {
+    let fail = |size: usize, e: crate::analysis::linear::SolveError| {
         DecisionError::Unsupported(format!(
             "policy evaluation (LU of a component of {size} states): {e}"
         ))
@@ -421,43 +422,9 @@ fn evaluate(
     if h.iter().all(|v| v.is_finite()) {
         Ok(h)
     } else {
-        Err(fail(k, "singular matrix".into()))
+        Err(fail(
+            k,
+            crate::analysis::linear::SolveError::Failed("singular matrix".into()),
+        ))
     }
-}
-
-/// Solves `A·X = B` in place of `b` (row-major, `w` columns) for the `k × k` matrix given by
-/// `(row, column, value)` entries (repeated entries add up): dense LU up to [`DENSE`]
-/// unknowns, sparse LU above.
-fn solve_block(
-    k: usize,
-    entries: &[(usize, usize, f64)],
-    b: &mut [f64],
-    w: usize,
-) -> Result<(), String> {
-    if k == 0 {
-        return Ok(());
-    }
-    if k <= DENSE {
-        let mut a = vec![0.0f64; k * k];
-        for &(i, j, x) in entries {
-            a[i * k + j] += x;
-        }
-        lu_solve(&mut a, k, b, w);
-        return Ok(());
-    }
-    let triplets: Vec<Triplet<usize, usize, f64>> = entries
-        .iter()
-        .map(|&(i, j, x)| Triplet::new(i, j, x))
-        .collect();
-    let a = SparseColMat::<usize, f64>::try_new_from_triplets(k, k, &triplets)
-        .map_err(|e| format!("{e:?}"))?;
-    let lu = a.sp_lu().map_err(|e| format!("{e:?}"))?;
-    let rhs = Mat::from_fn(k, w, |r, c| b[r * w + c]);
-    let x = lu.solve(&rhs);
-    for r in 0..k {
-        for c in 0..w {
-            b[r * w + c] = x[(r, c)];
-        }
-    }
-    Ok(())
 }

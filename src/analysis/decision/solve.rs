@@ -2,13 +2,16 @@
 //!
 //! Reachability, accumulated reward and the two discounted objectives are Bellman equations
 //! `x(s) = opt_c [r_c + f_c·Σ p·x(s') + w_c·x(s)]` over every state (instant states take no
-//! time: `f_c = 1` except under the per-step discount). They are solved by *optimistic value
-//! iteration* (Hartmanns & Kaminski, CAV 2020): Gauss–Seidel sweeps from 0 give a lower bound
-//! (the value is the least fixed point); a guessed upper bound `U` is accepted only once one
-//! Bellman step does not raise it anywhere (`T(U) ≤ U`, so `U` is above the least fixed
-//! point). Discounted objectives are contractions, so `T(L) ≥ L` is checked for the lower
-//! bound too. The result is an interval `[lower, upper]` at the initial distribution, of
-//! relative width at most [`SolveOptions::precision`].
+//! time: `f_c = 1` except under the per-step discount). Reachability and the discounted
+//! objectives run *interval iteration* ([`interval`](super::interval)): a lower and an upper
+//! bound from sound starts, improved together until they meet. Accumulated reward runs
+//! *optimistic value iteration* (Hartmanns & Kaminski, CAV 2020): Gauss–Seidel sweeps from 0
+//! give a lower bound (the value is the least fixed point); a guessed upper bound `U` is
+//! accepted only once one Bellman step does not raise it anywhere (`T(U) ≤ U`, so `U` is
+//! above the least fixed point). End components that would give the equations a wrong least
+//! fixed point (reach-max, zero-reward ones in total-min) are collapsed first
+//! ([`quotient`](super::quotient)). The result is an interval `[lower, upper]` at the initial
+//! distribution, of relative width at most [`SolveOptions::precision`].
 //!
 //! The long-run average reward is solved in [`lra`](super::lra): maximal end components, the
 //! value of each, then the best one to reach.
@@ -16,7 +19,9 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use super::interval::discount_start;
 use super::lra;
+use super::quotient::Quotient;
 use super::{DecisionError, DecisionModel, Kind, Objective, Rewards};
 
 /// Relative slack of the bound checks: floating-point sums of probabilities are off by a
@@ -47,6 +52,19 @@ pub enum Algorithm {
     /// value iteration from its values ([`Method::PolicyIteration`]). For the long-run
     /// average only; the other objectives refuse it ([`DecisionError::Unsupported`]).
     PolicyIteration,
+    /// Policy iteration per MEC while its evaluations stay cheap, value iteration for a MEC
+    /// whose policy has a strongly connected component above
+    /// [`AUTO_COMPONENT_LIMIT`](Algorithm::AUTO_COMPONENT_LIMIT) states (each round would
+    /// be a large sparse LU); value iteration for the objectives other than the long-run
+    /// average.
+    Auto,
+}
+
+impl Algorithm {
+    /// Under [`Algorithm::Auto`], the largest component of a policy's graph that policy
+    /// iteration evaluates before handing the MEC to value iteration. The home models'
+    /// policies have components of at most 3 states.
+    pub const AUTO_COMPONENT_LIMIT: usize = 2_000;
 }
 
 impl Default for SolveOptions {
@@ -78,6 +96,10 @@ pub enum Method {
     /// span bounds `min(Tv − v) ≤ g ≤ max(Tv − v)`, then optimistic value iteration to reach
     /// the best component.
     RelativeValueIteration,
+    /// Interval iteration: a lower and an upper bound, each from a sound start, improved by
+    /// the same sweeps until they meet (reachability with end components collapsed, the
+    /// discounted objectives with rewards of any sign).
+    IntervalIteration,
     /// Policy iteration (long-run average): each policy evaluated exactly (gain and bias by
     /// sparse LU), improved until stable; the interval from one Bellman step on its bias, as
     /// value iteration checks its own.
@@ -119,15 +141,29 @@ pub fn solve(
     match objective {
         Objective::Lra { .. } => lra::solve(model, rewards, max, opts),
         Objective::Reach { goal, .. } => {
-            let eq = Equations::new(model, max);
-            let eq = Equations {
-                fixed: goal
-                    .iter()
-                    .map(|&g| if g { Some(1.0) } else { None })
-                    .collect(),
-                ..eq
+            let mut eq = Equations::new(model, max);
+            // States whose optimum is 0 are fixed; what remains has one fixed point once the
+            // end components a maximiser could idle in are collapsed.
+            let zero = if max {
+                cannot_reach(model, goal)
+            } else {
+                avoidable(model, goal)
             };
-            eq.solve(model, &vec![0.0; model.choice_count()], opts, false)
+            for s in 0..model.state_count() {
+                eq.fixed[s] = if goal[s] {
+                    Some(1.0)
+                } else if zero[s] {
+                    Some(0.0)
+                } else {
+                    None
+                };
+            }
+            if max {
+                eq.groups = Quotient::new(model, |s| eq.fixed[s].is_none(), |_| true);
+            }
+            let lo: Vec<f64> = eq.fixed.iter().map(|f| f.unwrap_or(0.0)).collect();
+            let up: Vec<f64> = eq.fixed.iter().map(|f| f.unwrap_or(1.0)).collect();
+            eq.solve_interval(model, &vec![0.0; model.choice_count()], lo, up, opts)
         }
         Objective::Total { goal, .. } => {
             if rewards
@@ -156,6 +192,11 @@ pub fn solve(
                 };
             }
             let r = sojourn_rewards(model, rewards, |_| 1.0);
+            if !max {
+                // A minimiser may idle for free in a zero-reward end component, which the
+                // least fixed point counts as 0 though it never reaches the goal: collapsed.
+                eq.groups = Quotient::new(model, |s| eq.fixed[s].is_none(), |c| r[c] == 0.0);
+            }
             eq.solve(model, &r, opts, false)
         }
         Objective::Discounted { rate, .. } => {
@@ -177,7 +218,8 @@ pub fn solve(
                     }
                 }
             }
-            eq.solve(model, &r, opts, true)
+            let (lo, up) = discount_start(model, &eq, &r)?;
+            eq.solve_interval(model, &r, lo, up, opts)
         }
         Objective::DiscountedPerStep { gamma, .. } => {
             if !(*gamma > 0.0 && *gamma < 1.0) {
@@ -207,7 +249,8 @@ pub fn solve(
                     }
                 }
             }
-            eq.solve(model, &r, opts, true)
+            let (lo, up) = discount_start(model, &eq, &r)?;
+            eq.solve_interval(model, &r, lo, up, opts)
         }
     }
 }
@@ -233,6 +276,12 @@ pub(super) fn sojourn_rewards(
 /// States where some policy misses the goal with positive probability (`Pmin < 1`): those
 /// that can reach, avoiding the goal, a state where some policy avoids it for ever.
 fn min_below_one(model: &DecisionModel, goal: &[bool]) -> Vec<bool> {
+    backward_closure(model, avoidable(model, goal), goal)
+}
+
+/// States where some policy avoids the goal for ever (`Pmin = 0`, Prob0E): the greatest set
+/// of non-goal states where some choice stays inside.
+fn avoidable(model: &DecisionModel, goal: &[bool]) -> Vec<bool> {
     let n = model.state_count();
     // Prob0E: the greatest set of non-goal states where some choice stays inside.
     let mut avoid: Vec<bool> = goal.iter().map(|&g| !g).collect();
@@ -249,10 +298,16 @@ fn min_below_one(model: &DecisionModel, goal: &[bool]) -> Vec<bool> {
             }
         }
         if !changed {
-            break;
+            return avoid;
         }
     }
-    backward_closure(model, avoid, goal)
+}
+
+/// States from which no path reaches the goal (`Pmax = 0`).
+fn cannot_reach(model: &DecisionModel, goal: &[bool]) -> Vec<bool> {
+    let none = vec![false; model.state_count()];
+    let reach = backward_closure(model, goal.to_vec(), &none);
+    reach.iter().map(|&x| !x).collect()
 }
 
 /// States from which no policy reaches the goal with probability 1 (`Pmax < 1`).
@@ -319,6 +374,8 @@ pub(super) struct Equations {
     pub(super) scale: Vec<f64>,
     /// Per choice: weight on the state's own value (uniformisation self-loop).
     pub(super) stay: Vec<f64>,
+    /// End components solved as one state each (reach-max, total-min).
+    pub(super) groups: Quotient,
 }
 
 impl Equations {
@@ -329,6 +386,7 @@ impl Equations {
             stop: vec![None; model.state_count()],
             scale: vec![1.0; model.choice_count()],
             stay: vec![0.0; model.choice_count()],
+            groups: Quotient::default(),
         }
     }
 
@@ -365,6 +423,91 @@ impl Equations {
         (best.unwrap_or(0.0), arg)
     }
 
+    /// One Bellman update of every state that is not fixed, in place (Gauss–Seidel, states
+    /// in reverse order); a group is updated at its first member and all its members take
+    /// the value. The choices go to `policy` (states) and `exits` (groups). Returns the
+    /// largest relative change.
+    pub(super) fn sweep(
+        &self,
+        model: &DecisionModel,
+        r: &[f64],
+        x: &mut [f64],
+        policy: &mut [u32],
+        exits: &mut [u32],
+    ) -> f64 {
+        let mut delta = 0.0f64;
+        let mut note = |old: f64, v: f64| {
+            let d = (v - old).abs() / v.abs().max(1e-300);
+            if d > delta && (v - old).abs() > 1e-300 {
+                delta = d;
+            }
+        };
+        for s in (0..model.state_count()).rev() {
+            if self.fixed[s].is_some() {
+                continue;
+            }
+            let g = self.groups.of.get(s).copied().unwrap_or(u32::MAX);
+            if g != u32::MAX {
+                let members = &self.groups.members[g as usize];
+                if members[0] as usize != s {
+                    continue;
+                }
+                let (v, c) = self.group_update(model, r, x, g as usize);
+                note(x[s], v);
+                for &m in members {
+                    x[m as usize] = v;
+                }
+                exits[g as usize] = c;
+                continue;
+            }
+            let (v, c) = self.update(model, r, x, s);
+            note(x[s], v);
+            x[s] = v;
+            policy[s] = c;
+        }
+        delta
+    }
+
+    /// A group's value from `x`: its best exit; no exit is worth 0 (a reach objective's
+    /// missed goal).
+    fn group_update(&self, model: &DecisionModel, r: &[f64], x: &[f64], g: usize) -> (f64, u32) {
+        self.groups
+            .update(model, r, x, g, |a, b| self.better(a, b), 0.0)
+    }
+
+    /// One Bellman step of every state from `x` (Jacobi), groups included.
+    fn step(&self, model: &DecisionModel, r: &[f64], x: &[f64], s: usize) -> f64 {
+        let g = self.groups.of.get(s).copied().unwrap_or(u32::MAX);
+        if g == u32::MAX {
+            self.update(model, r, x, s).0
+        } else {
+            self.group_update(model, r, x, g as usize).0
+        }
+    }
+
+    /// The policy of the last sweep completed: states without a choice yet take their
+    /// best from `x`, groups steer to their exit.
+    pub(super) fn finish_policy(
+        &self,
+        model: &DecisionModel,
+        r: &[f64],
+        x: &[f64],
+        policy: &mut [u32],
+        exits: &[u32],
+    ) {
+        for (s, slot) in policy.iter_mut().enumerate() {
+            if *slot == u32::MAX {
+                *slot = self.update(model, r, x, s).1;
+                if *slot == u32::MAX {
+                    *slot = model.choices(s).start as u32;
+                }
+            }
+        }
+        if !self.groups.is_empty() {
+            self.groups.steer_policy(model, exits, policy);
+        }
+    }
+
     /// Optimistic value iteration; `contraction` also verifies the lower bound.
     pub(super) fn solve(
         &self,
@@ -377,6 +520,7 @@ impl Equations {
         let fixed_or = |s: usize, v: f64| self.fixed[s].unwrap_or(v);
         let mut lo: Vec<f64> = (0..n).map(|s| fixed_or(s, 0.0)).collect();
         let mut policy = vec![u32::MAX; n];
+        let mut exits = vec![u32::MAX; self.groups.members.len()];
         let eps = opts.precision;
         let mut threshold = eps;
         let mut iterations = 0;
@@ -395,19 +539,7 @@ impl Equations {
                     });
                 }
                 iterations += 1;
-                let mut delta = 0.0f64;
-                for s in (0..n).rev() {
-                    if self.fixed[s].is_some() {
-                        continue;
-                    }
-                    let (v, c) = self.update(model, r, &lo, s);
-                    let d = (v - lo[s]).abs() / v.abs().max(1e-300);
-                    if d > delta && (v - lo[s]).abs() > 1e-300 {
-                        delta = d;
-                    }
-                    lo[s] = v;
-                    policy[s] = c;
-                }
+                let delta = self.sweep(model, r, &mut lo, &mut policy, &mut exits);
                 if delta <= threshold {
                     break;
                 }
@@ -431,7 +563,7 @@ impl Equations {
                 if self.fixed[s].is_some() {
                     continue;
                 }
-                let (v, _) = self.update(model, r, &up, s);
+                let v = self.step(model, r, &up, s);
                 // Probabilities that sum to 1 give sums off by a few ulps: tolerate those.
                 if v > up[s] + ROUNDING * up[s].abs() {
                     ok = false;
@@ -439,7 +571,7 @@ impl Equations {
                 }
                 up2[s] = v;
                 if contraction {
-                    let (w, _) = self.update(model, r, &down, s);
+                    let w = self.step(model, r, &down, s);
                     if w < down[s] - ROUNDING * down[s].abs() {
                         ok = false;
                         break;
@@ -456,14 +588,7 @@ impl Equations {
                     .map(|s| (lower_vec[s] + up2[s]) / 2.0)
                     .map(|v| if v.is_nan() { f64::INFINITY } else { v })
                     .collect();
-                for (s, slot) in policy.iter_mut().enumerate() {
-                    if *slot == u32::MAX {
-                        *slot = self.update(model, r, &lo, s).1;
-                        if *slot == u32::MAX {
-                            *slot = model.choices(s).start as u32;
-                        }
-                    }
-                }
+                self.finish_policy(model, r, &lo, &mut policy, &exits);
                 return Ok(Solution {
                     value: (lower + upper) / 2.0,
                     lower,

@@ -1,8 +1,12 @@
-//! `plan-runner analyze FILE [--steady] [--transient T1,T2,..] [--json] [--export-prism PREFIX]
-//! [--max-states N] [--prob EXPR]`: state space and properties, steady state (limiting
-//! distribution for non-ergodic nets), transient measures, PRISM export. FILE is a net (the
-//! bare net) or a plan (its net under its policy, with its reward rates:
-//! `gspn::analysis::under_policy`); the output says which.
+//! `plan-runner analyze FILE [--steady] [--transient T1,A:B:STEP,..] [--json]
+//! [--export-prism PREFIX] [--max-states N] [--prob EXPR] [--query Q] [--csv FILE]
+//! [--plot FILE.svg]`: state space and properties, steady state (limiting distribution for
+//! non-ergodic nets), transient measures (as a table and a plot over time), queries in
+//! Storm's syntax, PRISM export. FILE is a net (the bare net) or a plan (its net under its
+//! policy, with its reward rates: `gspn::analysis::under_policy`); the output says which.
+
+mod queries;
+pub(crate) mod series;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -32,9 +36,9 @@ pub(crate) struct Args {
     /// default when neither --steady nor --transient is given.
     #[arg(long)]
     steady: bool,
-    /// Transient measures at these times (comma-separated).
-    #[arg(long, value_name = "T1,T2,..", value_delimiter = ',')]
-    transient: Vec<f64>,
+    /// Transient measures at these times (comma-separated; `A:B:STEP` is A, A+STEP, … ≤ B).
+    #[arg(long, value_name = "T1,A:B:STEP,..", value_delimiter = ',')]
+    transient: Vec<String>,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -50,6 +54,20 @@ pub(crate) struct Args {
     /// Probability of a marking predicate, e.g. `P1>0 && P3==0` (repeatable).
     #[arg(long = "prob", value_name = "EXPR")]
     prob: Vec<String>,
+    /// A query in Storm's/PRISM's syntax (repeatable): `P=? [F<=600 done=1]`, `P=? [F φ]`,
+    /// `P=? [φ1 U<=t φ2]`, `P=? [G<=t φ]`, `T=? [F φ]`, `S=? [φ]`, `R{"name"}=? [S]`,
+    /// `R{"name"}=? [C<=t]`, `R{"name"}=? [F φ]`; `Pmax=?`/`Pmin=?`/`Tmax=?`/`Tmin=?` over the
+    /// plan's controllable transitions. φ: place names, `=`/`==`, `&`, `|`, `!`.
+    #[arg(long = "query", value_name = "Q")]
+    query: Vec<String>,
+    /// Write the transient measures as CSV, one row per --transient time: E[tokens] of each
+    /// place, P of each --prob, and each time-bounded `P=? [F<=t φ]` --query at that time.
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Draw the same table as an SVG line plot: the probabilities when any were asked, else
+    /// E[tokens] of every place.
+    #[arg(long, value_name = "FILE.svg")]
+    plot: Option<PathBuf>,
     /// Start from the marking of a recorded run (`plan-runner run --journal`): after the last
     /// firing with sequence number ≤ SEQ (the end of the run without one); transient times
     /// count from that point.
@@ -70,9 +88,18 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     } else {
         Regime::UnderPolicy
     };
-    if let Some(t) = bad_time(&args.transient) {
+    let times = series::times(&args.transient)?;
+    if let Some(t) = bad_time(&times) {
         return Err(BadInput(format!("--transient: {t} is not a time ≥ 0")).into());
     }
+    if times.is_empty() && (args.csv.is_some() || args.plot.is_some()) {
+        return Err(BadInput(
+            "--csv and --plot write measures over time: give --transient times (e.g. 0:600:10)"
+                .into(),
+        )
+        .into());
+    }
+    let queries = queries::parse(&plan, &args.query)?;
     let predicates = args
         .prob
         .iter()
@@ -87,7 +114,9 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         threads: 0,
         max_memory: args.max_memory.saturating_mul(1 << 20),
     };
-    let want_steady = args.steady || !args.prob.is_empty() || args.transient.is_empty();
+    // `--transient T` asks for the distribution at T only (its --prob values included);
+    // the steady state comes with --steady, or when no time is asked for.
+    let want_steady = args.steady || times.is_empty();
     let monitor = Monitor::new();
     let unbounded = |e: &AnalysisError| match e {
         AnalysisError::Unbounded { places } => Some(places.clone()),
@@ -134,18 +163,42 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         let markings: Vec<Vec<u32>> = (0..ss.tangible_count()).map(|s| ss.marking(s)).collect();
         let names: Vec<&str> = net.places().iter().map(|p| p.name.as_str()).collect();
         let initial: Vec<u32> = ss.initial().iter().map(|&(s, _)| s).collect();
+        let rewards = plan
+            .rewards
+            .iter()
+            .map(|r| {
+                (
+                    r.name.clone(),
+                    gspn::analysis::query::state_rewards(net, &ss, r),
+                )
+            })
+            .collect();
         Explicit::new(&names, solver.chain(), &markings, &initial)
+            .with_rewards(rewards)
             .write(prefix)
             .with_context(|| format!("writing {}.tra/.sta/.lab", prefix.display()))?;
     }
+    let limiting = analysed.as_ref().map(|(l, _, _)| l.clone());
     let steady = analysed.map(|(l, m, rewards)| {
         let probs = solver.probabilities(&l.pi, &predicates);
         (l.ergodic, m, probs, rewards)
     });
-    if let Some(e) = solver.too_far(&args.transient) {
+    if let Some(e) = solver.too_far(&times) {
         return Err(BadInput(format!("--transient: {e}")).into());
     }
-    let transient = solver.transient_points(&args.transient, &predicates);
+    let transient = solver.transient_points(&times, &predicates);
+    let answers = queries::answer(&plan, &ss, limiting.clone(), &queries, args.max_states)?;
+    if args.csv.is_some() || args.plot.is_some() {
+        let ev = gspn::analysis::query::Evaluator::new(net, &ss, &plan.rewards);
+        let (table, plotted) = series::table(net, &transient, &args.prob, &queries, &ev)?;
+        series::write(
+            &table,
+            &plotted,
+            &format!("{} ({regime})", args.file.display()),
+            args.csv.as_deref(),
+            args.plot.as_deref(),
+        )?;
+    }
     if args.json {
         let report = Report {
             analysed: regime.label().to_string(),
@@ -159,6 +212,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
                 .iter()
                 .map(|p| MeasuresReport::point(net, p, &args.prob))
                 .collect(),
+            queries: answers,
         };
         print_json(&report)?;
         return Ok(ExitCode::SUCCESS);
@@ -194,8 +248,21 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             println!("  P({e}) = {p:.9}");
         }
     }
+    if !answers.is_empty() {
+        println!("\nqueries ({regime}):");
+        for a in &answers {
+            println!("  {}  = {}", a.query, a.value);
+        }
+    }
     if let Some(prefix) = &args.export_prism {
         println!("\nwrote {0}.tra, {0}.sta, {0}.lab", prefix.display());
+        for r in &plan.rewards {
+            println!(
+                "wrote {}.{}.srew",
+                prefix.display(),
+                gspn::io::prism::identifier(&r.name)
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -214,6 +281,7 @@ fn report_unbounded(args: &Args, regime: Regime, places: &[String]) {
             state_space: StateSpaceReport::unbounded(places),
             steady_state: None,
             transient: Vec::new(),
+            queries: Vec::new(),
         };
         let _ = print_json(&report);
     } else {
@@ -249,8 +317,8 @@ fn print_state_space(
         ),
     }
     println!(
-        "state space: {} reachable markings ({} tangible, {} vanishing), {} edges",
-        p.reachable, p.tangible, p.vanishing, p.edges
+        "state space: {} reachable markings ({} tangible, {} vanishing), {} labelled edges ({} distinct successor pairs)",
+        p.reachable, p.tangible, p.vanishing, p.edges, p.successor_pairs
     );
     let bounds: Vec<String> = net
         .places()

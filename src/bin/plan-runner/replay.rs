@@ -1,6 +1,9 @@
-//! `plan-runner replay JOURNAL --net FILE [--web [ADDR]]`: play a run's journal back.
+//! `plan-runner replay JOURNAL [--net FILE] [--web [ADDR]]`: play a run's journal back.
 //!
-//! The journal names its net by hash; `--net` gives the net (or plan) file it was run from.
+//! The journal names its net by hash and records the file the run read it from; `--net`
+//! gives that net (or plan) file when the recorded one is not where it was (without `--net`
+//! the recorded path is tried as written, then relative to the journal's directory; either
+//! way the net must hash as the journal says).
 //! A run that started from another marking than the file's (`run --robots N` scales the
 //! robots' tokens) is recognised by the initial marking its journal's header records (older
 //! journals: the marking before the first firing). Without `--web` the firings are printed
@@ -18,7 +21,7 @@ use anyhow::Context as _;
 use gspn::net::Net;
 use gspn::plan::open;
 use gspn::runtime::EventKind;
-use gspn::runtime::journal::{Entry, JournalError, JournalReader, Recording};
+use gspn::runtime::journal::{Entry, JournalError, JournalHeader, JournalReader, Recording};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -27,9 +30,9 @@ use crate::common::{BadInput, NetArgs};
 pub(crate) struct Args {
     /// The journal (`plan-runner run --journal FILE`).
     journal: PathBuf,
-    /// The net or plan file the run was made from.
+    /// The net or plan file the run was made from [default: the file the journal records].
     #[arg(long, value_name = "FILE")]
-    net: PathBuf,
+    net: Option<PathBuf>,
     /// Show it in the browser: serve the viewer at ADDR [default: 127.0.0.1:8080].
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
     web: Option<SocketAddr>,
@@ -45,10 +48,18 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(addr) = args.web {
         crate::serve::check_bind(addr, args.allow_remote)?;
     }
-    let net = open(&args.net, &args.net_args.read_options())?
+    let (net_file, named) = match &args.net {
+        Some(f) => (f.clone(), format!("--net {}", f.display())),
+        None => {
+            let f = recorded_net(&args.journal)?;
+            let named = format!("the recorded {}", f.display());
+            (f, named)
+        }
+    };
+    let net = open(&net_file, &args.net_args.read_options())?
         .into_plan()
         .net;
-    let journal = read_journal(&args.journal, &net, Some(&args.net))?;
+    let journal = read_journal(&args.journal, &net, Some(&named))?;
     match args.web {
         Some(addr) => {
             let (recording, torn) = journal
@@ -61,13 +72,52 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     }
 }
 
+/// The net file the journal's header records (`"file"`): as written (relative to the
+/// directory the run was started in), else relative to the journal's own directory. Only
+/// the header line is read.
+fn recorded_net(journal: &Path) -> anyhow::Result<PathBuf> {
+    let mut first = String::new();
+    File::open(journal)
+        .and_then(|f| std::io::BufRead::read_line(&mut BufReader::new(f), &mut first))
+        .map_err(|e| BadInput(format!("cannot read {}: {e}", journal.display())))?;
+    let header: JournalHeader<'_> = serde_json::from_str(&first).map_err(|e| {
+        BadInput(format!(
+            "{}:1: not a journal header: {e}",
+            journal.display()
+        ))
+    })?;
+    let Some(file) = header.file else {
+        return Err(BadInput(format!(
+            "{}: the journal does not record its net file (a run from a library caller \
+             without `source`): give it with --net FILE",
+            journal.display()
+        ))
+        .into());
+    };
+    let recorded = PathBuf::from(file.into_owned());
+    let beside = journal.parent().map(|d| d.join(&recorded));
+    [Some(recorded.clone()), beside]
+        .into_iter()
+        .flatten()
+        .find(|p| p.is_file())
+        .ok_or_else(|| {
+            BadInput(format!(
+                "{}: the journal's net file `{}` is not there (nor beside the journal): give \
+                 it with --net FILE",
+                journal.display(),
+                recorded.display()
+            ))
+            .into()
+        })
+}
+
 /// The journal at `path`, read a line at a time (issue 32: a 100 MB journal read whole
-/// took 1.7 GB), its header checked against `net` (read from `--net net_file`, named when
-/// the journal is of another net).
+/// took 1.7 GB), its header checked against `net` (read from `net_file`, named when the
+/// journal is of another net: `--net FILE` or the recorded file).
 pub(crate) fn read_journal(
     path: &Path,
     net: &Net,
-    net_file: Option<&Path>,
+    net_file: Option<&str>,
 ) -> anyhow::Result<JournalReader<BufReader<File>>> {
     let open = || -> anyhow::Result<BufReader<File>> {
         let file = File::open(path)
@@ -85,11 +135,9 @@ pub(crate) fn read_journal(
     };
     reader.map_err(|e| {
         match (e, net_file) {
-            (e @ JournalError::OtherNet { .. }, Some(file)) => BadInput(format!(
-                "{}: {e}, read from --net {}",
-                path.display(),
-                file.display()
-            )),
+            (e @ JournalError::OtherNet { .. }, Some(file)) => {
+                BadInput(format!("{}: {e}, read from {file}", path.display()))
+            }
             (e, _) => BadInput(format!("{}: {e}", path.display())),
         }
         .into()

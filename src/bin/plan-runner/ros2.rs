@@ -226,8 +226,8 @@ pub(crate) struct RobotArgs {
     /// Seed of the robot's draws [default: the plan's, else 0].
     #[arg(long)]
     seed: Option<u64>,
-    /// Seconds per unit of model time for the local delays [default: the plan's
-    /// time_scale, else 1].
+    /// Seconds of real time per unit of model time for the local delays (larger = slower)
+    /// [default: the plan's time_scale, else 1].
     #[arg(long, value_name = "X")]
     time_scale: Option<f64>,
     /// Append `seq stamp_ns received_ns` for every firing received to this file.

@@ -38,7 +38,9 @@ pub(crate) struct Args {
     /// Seed of every random choice (default: the plan's, else from the clock).
     #[arg(long)]
     seed: Option<u64>,
-    /// 0 = virtual time, as fast as possible; 1 = real time (default: the plan's, else 0).
+    /// Seconds of real time per second of model time: 0 = virtual time, as fast as
+    /// possible; 1 = real time; 10 = ten times slower than real time, 0.1 = ten times faster
+    /// (default: the plan's, else 0).
     #[arg(long, value_name = "X")]
     time_scale: Option<f64>,
     /// Stop at this model time.
@@ -104,16 +106,6 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         eprintln!("warning: {w}");
     }
     backends::check(&plan, &args.backends)?;
-    // The summary lists places and transitions in net order (as `analyze` does).
-    let order = NetOrder {
-        places: plan.net.places().iter().map(|p| p.name.clone()).collect(),
-        transitions: plan
-            .net
-            .transitions()
-            .iter()
-            .map(|t| t.name.clone())
-            .collect(),
-    };
     // Registered before the backends start: a signal while ROS 2 waits for its robots
     // ends the wait at once with the signal's exit code.
     let signals = StopSignals::new()?;
@@ -149,7 +141,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             println!("{}", serde_json::to_string_pretty(&v)?);
         }
     } else {
-        print_summary(&summary, &order)?;
+        print_summary(&summary)?;
         for (_, s) in &sections {
             if !s.text.is_empty() {
                 println!("{}", s.text);
@@ -272,13 +264,7 @@ async fn execute(
     Ok((summary, sections, code))
 }
 
-/// The names of the net's places and transitions, in net order.
-struct NetOrder {
-    places: Vec<String>,
-    transitions: Vec<String>,
-}
-
-fn print_summary(s: &Summary, order: &NetOrder) -> anyhow::Result<()> {
+fn print_summary(s: &Summary) -> anyhow::Result<()> {
     println!(
         "stopped: {} after {} firings at time {:.4}",
         s.stopped, s.firings, s.time
@@ -288,16 +274,13 @@ fn print_summary(s: &Summary, order: &NetOrder) -> anyhow::Result<()> {
         s.agents_spawned, s.agents_ended
     );
     println!("place                          final    mean tokens");
-    for p in &order.places {
-        if let (Some(k), Some(m)) = (s.final_marking.get(p), s.mean_tokens.get(p)) {
-            println!("  {p:<28} {k:>6}   {m:>12.6}");
-        }
+    // In net order, as `analyze` lists them.
+    for ((p, k), (_, m)) in s.final_marking.iter().zip(s.mean_tokens.iter()) {
+        println!("  {p:<28} {k:>6}   {m:>12.6}");
     }
     println!("transition                     throughput");
-    for t in &order.transitions {
-        if let Some(x) = s.throughput.get(t) {
-            println!("  {t:<28} {x:>12.6}");
-        }
+    for (t, x) in s.throughput.iter() {
+        println!("  {t:<28} {x:>12.6}");
     }
     for (name, r) in &s.rewards {
         let interval = match r.half_width {

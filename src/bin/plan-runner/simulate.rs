@@ -1,14 +1,17 @@
-//! `plan-runner simulate FILE [--seed S] [--until T | --steps N] [--runs R] [--json]`.
+//! `plan-runner simulate FILE [--seed S] [--until T | --steps N] [--runs R] [--json]
+//! [--transient TIMES --csv FILE --plot FILE.svg]`.
 //!
 //! One run prints its trace (time, transition, marking); `--runs R` prints Monte-Carlo
-//! estimates (mean tokens per place, throughput per transition) with 95% confidence
-//! intervals instead.
+//! estimates (mean tokens per place, throughput per transition, and the rate of each of a
+//! plan's `[rewards.NAME]`) with 95% confidence intervals instead; with `--transient`,
+//! E[tokens] of each place at those times, with their intervals, as CSV and a plot.
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context;
+use gspn::analysis::decision::RewardSpec;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
 
@@ -36,9 +39,26 @@ pub(crate) struct Args {
     /// (a plan's `stop.when` ends a trace only; Monte-Carlo runs use the time or step limit).
     #[arg(long, value_name = "R")]
     runs: Option<u64>,
-    /// Print JSON: `runs, firings, mean_tokens, throughput, ci95` (a single run adds `trace`).
+    /// Print JSON: `runs, firings, mean_tokens, throughput, ci95`, and `rewards` for a plan
+    /// with `[rewards.NAME]` and --runs (a single run adds `trace`).
     #[arg(long)]
     json: bool,
+    /// With --runs: estimate E[tokens] of every place at these times (comma-separated;
+    /// `A:B:STEP` is A, A+STEP, … ≤ B), for --csv and --plot.
+    #[arg(
+        long,
+        value_name = "T1,A:B:STEP,..",
+        value_delimiter = ',',
+        requires = "runs"
+    )]
+    transient: Vec<String>,
+    /// Write the --transient estimates as CSV: per place `E[p]`, `E[p] lo`, `E[p] hi` (the
+    /// 95% interval).
+    #[arg(long, value_name = "FILE", requires = "transient")]
+    csv: Option<PathBuf>,
+    /// Draw the --transient estimates (the means) as an SVG line plot.
+    #[arg(long, value_name = "FILE.svg", requires = "transient")]
+    plot: Option<PathBuf>,
     /// Start from the marking of a recorded run: after the last firing with sequence number
     /// ≤ SEQ (the end of the run without one); times count from that point.
     #[arg(long, value_name = "JOURNAL[:SEQ]")]
@@ -55,6 +75,7 @@ struct Input {
     time_limit: Option<f64>,
     max_firings: Option<u64>,
     stop_when: Option<Predicate>,
+    rewards: Vec<RewardSpec>,
 }
 
 fn load(args: &Args) -> anyhow::Result<Input> {
@@ -68,6 +89,7 @@ fn load(args: &Args) -> anyhow::Result<Input> {
         time_limit: plan.stop.time_limit,
         max_firings: plan.stop.max_firings,
         stop_when: plan.stop.when,
+        rewards: plan.rewards,
         net: plan.net,
     })
 }
@@ -96,6 +118,11 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             (None, None) => Horizon::Steps(100),
         },
     };
+    if let Some(runs) = args.runs
+        && !args.transient.is_empty()
+    {
+        return over_time(&args, &input, runs, seed);
+    }
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     match args.runs {
         Some(runs) => monte_carlo(&args, &input, runs, horizon, seed, &mut out)?,
@@ -235,7 +262,10 @@ fn monte_carlo(
     out: &mut impl Write,
 ) -> anyhow::Result<()> {
     let net = &input.net;
-    let mut mc = MonteCarlo::new(net, horizon).runs(runs).seed(seed);
+    let mut mc = MonteCarlo::new(net, horizon)
+        .runs(runs)
+        .seed(seed)
+        .rewards(&input.rewards);
     if let Some(p) = &input.policy {
         mc = mc.policy(p);
     }
@@ -246,7 +276,7 @@ fn monte_carlo(
     let mean: Vec<f64> = est.mean_tokens.iter().map(|e| e.mean).collect();
     let thr: Vec<f64> = est.throughput.iter().map(|e| e.mean).collect();
     if args.json {
-        let v = summary_json(
+        let mut v = summary_json(
             net,
             est.runs,
             est.firings,
@@ -254,6 +284,26 @@ fn monte_carlo(
             &thr,
             Some((&est.mean_tokens, &est.throughput)),
         );
+        if !input.rewards.is_empty() {
+            let named = |f: &dyn Fn(&Estimate) -> Value| -> Value {
+                Value::Object(
+                    input
+                        .rewards
+                        .iter()
+                        .zip(&est.rewards)
+                        .map(|(r, e)| (r.name.clone(), f(e)))
+                        .collect(),
+                )
+            };
+            v["rewards"] = named(&|e| json!(e.mean));
+            v["ci95"]["rewards"] = named(&|e| {
+                if e.half_width.is_nan() {
+                    json!([null, null])
+                } else {
+                    json!([e.lo(), e.hi()])
+                }
+            });
+        }
         serde_json::to_writer_pretty(&mut *out, &v)?;
         writeln!(out)?;
         return Ok(());
@@ -290,7 +340,55 @@ fn monte_carlo(
         ("transition", "throughput"),
         transitions.zip(&est.throughput),
     )?;
+    if !input.rewards.is_empty() {
+        let names = input.rewards.iter().map(|r| r.name.as_str());
+        section(out, width, ("reward", "rate"), names.zip(&est.rewards))?;
+    }
     Ok(())
+}
+
+/// `--runs R --transient TIMES`: E[tokens] per place at each time with its interval, as a
+/// table on stdout and, when asked, CSV and SVG.
+fn over_time(args: &Args, input: &Input, runs: u64, seed: u64) -> anyhow::Result<ExitCode> {
+    let net = &input.net;
+    let times = crate::analyze::series::times(&args.transient)?;
+    let mut mc = MonteCarlo::new(net, Horizon::Until(0.0))
+        .runs(runs)
+        .seed(seed);
+    if let Some(p) = &input.policy {
+        mc = mc.policy(p);
+    }
+    let at = mc
+        .transient(&times)
+        .map_err(sim_error)
+        .with_context(|| format!("{}: Monte-Carlo simulation", args.file.display()))?;
+    let mut columns = Vec::new();
+    for p in net.places() {
+        columns.extend([
+            format!("E[{}]", p.name),
+            format!("E[{}] lo", p.name),
+            format!("E[{}] hi", p.name),
+        ]);
+    }
+    let mut table = gspn::io::series::Series::new(columns);
+    for (t, est) in times.iter().zip(&at) {
+        table.push(
+            *t,
+            est.iter().flat_map(|e| [e.mean, e.lo(), e.hi()]).collect(),
+        );
+    }
+    let means: Vec<usize> = (0..net.place_count()).map(|p| 3 * p).collect();
+    crate::analyze::series::write(
+        &table,
+        &means,
+        &format!("{}: {runs} runs, seed {seed}", net.name()),
+        args.csv.as_deref(),
+        args.plot.as_deref(),
+    )?;
+    if args.csv.is_none() {
+        print!("{}", table.to_csv());
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn interval(e: &Estimate) -> String {

@@ -28,7 +28,7 @@ mod input;
 mod policy_file;
 mod sweep;
 
-use input::{Goal, algorithm, parse_objective, read_input};
+use input::{Goal, algorithm, parse_objective, read_input, something_to_optimise};
 use policy_file::{rebase_plan, relative_to, rules_toml};
 use sweep::{finite, parse_sweep, run_sweep};
 
@@ -68,7 +68,8 @@ pub(crate) struct Args {
     precision: f64,
     /// `value` (value iteration with sound bounds), `policy` (policy iteration with exact
     /// evaluation, component by component; long-run average only), then the same bounding
-    /// step; `auto`: policy for lra, value for the others.
+    /// step; `auto`: policy for lra while a policy's components stay small (up to 2,000
+    /// states; value iteration for a MEC above), value for the others.
     #[arg(long, value_name = "METHOD", default_value = "auto")]
     method: String,
     /// Most reachable markings before giving up.
@@ -87,7 +88,8 @@ pub(crate) struct Args {
     /// Write the model in Storm's DRN format.
     #[arg(long, value_name = "FILE")]
     export_drn: Option<PathBuf>,
-    /// Solve for each robot count: `robots=1..10` scales the initial tokens.
+    /// Solve for each robot count: `robots=1..10` scales the initial tokens of the places
+    /// that are not `role = "resource"` (as `run --robots` does).
     #[arg(long, value_name = "robots=A..B")]
     sweep: Option<String>,
     #[command(flatten)]
@@ -246,6 +248,19 @@ fn synthesize(
     })
 }
 
+/// The value and its bounds as printed: a probability (reach-) clamped to [0, 1], since the
+/// solver's sound bounds may overshoot by its precision (`1.000000000124984`).
+fn shown(goal: &Goal, sol: &Solution) -> (f64, f64, f64) {
+    match goal {
+        Goal::Reach(_) => (
+            sol.value.clamp(0.0, 1.0),
+            sol.lower.clamp(0.0, 1.0),
+            sol.upper.clamp(0.0, 1.0),
+        ),
+        _ => (sol.value, sol.lower, sol.upper),
+    }
+}
+
 /// The policy table: each decision marking and the transition the solution fires there.
 fn table(s: &Solved) -> (Vec<(Vec<u32>, gspn::net::TransitionId)>, usize) {
     let mut out = Vec::new();
@@ -272,6 +287,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(w) = args.wait {
         controls.wait = w;
     }
+    something_to_optimise(&args, &goal, &spec, &controls)?;
     if matches!(goal, Goal::PerStep(_)) {
         // The toolbox counts every vanishing step, races included.
         controls.keep_races = true;
@@ -283,6 +299,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         return run_sweep(
             &args,
             net,
+            &input.resource,
             &controls,
             &spec,
             &goal,
@@ -318,6 +335,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let compressed = compress(&table);
     check("compressing the policy")?;
     let sol = &s.solution;
+    let (value, lower, upper) = shown(&goal, sol);
     if let Some(out) = &args.out {
         let dir = out
             .parent()
@@ -333,8 +351,8 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         );
         let _ = writeln!(
             text,
-            "# objective: {}, optimal value {} in [{}, {}] ({:?})",
-            args.objective, sol.value, sol.lower, sol.upper, sol.method
+            "# objective: {}, optimal value {value} in [{lower}, {upper}] ({:?})",
+            args.objective, sol.method
         );
         let _ = writeln!(
             text,
@@ -378,9 +396,9 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             .collect();
         let v = json!({
             "objective": args.objective,
-            "value": finite(sol.value),
-            "lower": finite(sol.lower),
-            "upper": finite(sol.upper),
+            "value": finite(value),
+            "lower": finite(lower),
+            "upper": finite(upper),
             "method": format!("{:?}", sol.method),
             "iterations": sol.iterations,
             "states": s.model.state_count(),
@@ -406,8 +424,8 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             s.model.choice_count()
         );
         println!(
-            "{}: {} in [{}, {}] ({:?}, {} iterations)",
-            args.objective, sol.value, sol.lower, sol.upper, sol.method, sol.iterations
+            "{}: {value} in [{lower}, {upper}] ({:?}, {} iterations)",
+            args.objective, sol.method, sol.iterations
         );
         println!(
             "policy: {} decision markings, {} exact rules, {} compressed rules",

@@ -409,8 +409,14 @@ pub(super) fn build(
                 )
             })
         };
-        let (head, tail, kind_attr) = (get("head")?, get("tail")?, get("kind")?);
-        let kind = match kind_attr.value.as_ref() {
+        // The editor writes `kind`/`mult`; files of its v100 format spell them
+        // `type`/`multiplicity` (Storm reads both).
+        let kind_attr = match r.get("kind").or_else(|| r.get("type")) {
+            Some(a) => a,
+            None => get("kind")?,
+        };
+        let (head, tail) = (get("head")?, get("tail")?);
+        let kind = match kind_attr.value.to_ascii_uppercase().as_str() {
             "INPUT" => ArcKind::Input,
             "OUTPUT" => ArcKind::Output,
             "INHIBITOR" => ArcKind::Inhibitor,
@@ -454,7 +460,7 @@ pub(super) fn build(
         let t = *trans_ids
             .get(t_attr.value.as_ref())
             .ok_or_else(|| missing(t_attr, "transition"))?;
-        let weight = match r.get("mult") {
+        let weight = match r.get("mult").or_else(|| r.get("multiplicity")) {
             Some(m) => env.whole(m, &owner, "arc multiplicity", 1)?,
             None => 1,
         };

@@ -54,7 +54,7 @@ pub(super) struct Scanned<'a> {
 }
 
 /// Attributes worth keeping; the editor's label offsets, magnets, rotations... are dropped.
-const KEYS: [&str; 20] = [
+const KEYS: [&str; 21] = [
     "name",
     "marking",
     "domain",
@@ -74,6 +74,7 @@ const KEYS: [&str; 20] = [
     "tail",
     "kind",
     "mult",
+    "multiplicity",
     "definition",
 ];
 

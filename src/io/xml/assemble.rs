@@ -277,11 +277,14 @@ fn check_clashes<T>(
 }
 
 fn place(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Place, LoadError> {
+    // PIPE writes `<initialMarking><value></value>` (and an empty capacity) for a place it
+    // was never given a value for: empty is 0, as PIPE reads it.
     let initial = match &n.initial_marking {
-        Some(v) => count(x, v, Of("initial marking", name), 0)?,
-        None => 0,
+        Some(v) if !v.text.trim().is_empty() => count(x, v, Of("initial marking", name), 0)?,
+        _ => 0,
     };
     let capacity = match &n.capacity {
+        Some(v) if v.text.trim().is_empty() => None,
         Some(v) => match count(x, v, Of("capacity", name), 0)? {
             0 => None,
             k => Some(k),

@@ -35,7 +35,9 @@ fn is_name_char(c: char) -> bool {
     c.is_alphanumeric() || matches!(c, '_' | ':' | '.' | '?' | '@' | '$' | '#')
 }
 
-pub(super) fn lex(text: &str) -> Result<Vec<Tok>, PredicateError> {
+/// Splits `text` into tokens. With `prism`, PRISM's and Storm's single-character `=`, `&`
+/// and `|` are read as `==`, `&&` and `||` (a query's state formulas are written that way).
+pub(super) fn lex(text: &str, prism: bool) -> Result<Vec<Tok>, PredicateError> {
     let chars: Vec<char> = text.chars().collect();
     let mut out = Vec::new();
     let mut i = 0;
@@ -71,6 +73,19 @@ pub(super) fn lex(text: &str) -> Result<Vec<Tok>, PredicateError> {
         };
         if let Some(kind) = kind {
             out.push(Tok { kind, column });
+            i += 1;
+            continue;
+        }
+        if prism && (c == '=' || c == '&' || c == '|') {
+            let op = match c {
+                '=' => "==",
+                '&' => "&&",
+                _ => "||",
+            };
+            out.push(Tok {
+                kind: TokKind::Op(op),
+                column,
+            });
             i += 1;
             continue;
         }

@@ -4,9 +4,10 @@ use super::lex::{Tok, TokKind, lex};
 use super::{CmpOp, Linear, MAX_DEPTH, Node, PredicateError, PredicateErrorKind};
 use crate::net::Net;
 
-/// Parses `text` against `net`'s place names into the root of a predicate.
-pub(super) fn parse(net: &Net, text: &str) -> Result<Node, PredicateError> {
-    let tokens = lex(text)?;
+/// Parses `text` against `net`'s place names into the root of a predicate (`prism`: see
+/// [`lex`]).
+pub(super) fn parse(net: &Net, text: &str, prism: bool) -> Result<Node, PredicateError> {
+    let tokens = lex(text, prism)?;
     let mut p = Parser {
         net,
         tokens,

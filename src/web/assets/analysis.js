@@ -129,7 +129,7 @@ function queryForm() {
   return '<h4>questions</h4><div class="query">' +
     '<label>at times <input id="query-times" class="mono" placeholder="0.5, 1, 10"></label>' +
     '<label>P( … ) <textarea id="query-prob" class="mono" rows="2" ' +
-    'placeholder="one predicate per line, e.g. P1 > 0 &amp;&amp; P2 == 0"></textarea></label>' +
+    'placeholder="one predicate or query per line, e.g. P1 > 0 &amp;&amp; P2 == 0 or P=? [F&lt;=10 P3=1]"></textarea></label>' +
     '<button id="query" title="probabilities and expected tokens, as plan-runner analyze --prob --transient">ask</button>' +
     '<button id="query-cancel" class="hidden" title="stop the question">cancel</button>' +
     '<span id="query-progress" class="mono"></span>' +
@@ -167,7 +167,12 @@ async function ask() {
   const out = $('query-result');
   const text = $('query-times').value.trim();
   const times = text ? text.split(/[\s,]+/).filter((x) => x).map(Number) : [];
-  const prob = $('query-prob').value.split('\n').map((x) => x.trim()).filter((x) => x);
+  const lines = $('query-prob').value.split('\n').map((x) => x.trim()).filter((x) => x);
+  // A line in Storm's syntax (`P=? [F<=10 done=1]`, `T=? …`, `S=? …`, `R{"r"}=? …`) is a
+  // query (`analyze --query`); any other line a predicate (`analyze --prob`).
+  const isQuery = (x) => /^(P|T|S|R\s*\{[^}]*\})\s*(max|min)?\s*=\s*\?/.test(x);
+  const queries = lines.filter(isQuery);
+  const prob = lines.filter((x) => !isQuery(x));
   if (times.some((t) => !Number.isFinite(t))) {
     out.innerHTML = '<p class="error">times: numbers separated by commas</p>';
     return;
@@ -195,7 +200,7 @@ async function ask() {
     const res = await fetch('/api/analysis/query', {
       method: 'POST',
       headers: { 'Content-Type': 'application/json' },
-      body: JSON.stringify({ transient: times, prob }),
+      body: JSON.stringify({ transient: times, prob, query: queries }),
     });
     const data = await res.json();
     if (res.status === 409 && data.kind === 'cancelled') {
@@ -222,7 +227,18 @@ async function ask() {
     showQuestionProgress({ state: 'done' });
   }
   const cell = (attrs, v) => '<td class="mono" ' + attrs + ' data-value="' + v + '">' + fmt(v) + '</td>';
-  let html = '<table class="query"><tr><th></th>' + (prob.length ? '<th>steady</th>' : '') +
+  let html = '';
+  if (q.queries && q.queries.length) {
+    html += '<table class="query-answers">';
+    for (const a of q.queries) {
+      const x = escapeHtml(a.query);
+      html += '<tr><td class="qname mono">' + x + '</td><td class="mono" data-query="' + x +
+        '" data-value="' + a.value + '">' + (typeof a.value === 'number' ? fmt(a.value) : '∞') +
+        '</td></tr>';
+    }
+    html += '</table>';
+  }
+  html += '<table class="query"><tr><th></th>' + (prob.length ? '<th>steady</th>' : '') +
     q.transient.map((p) => '<th>t = ' + fmtTime(p.t) + '</th>').join('') + '</tr>';
   for (const e of prob) {
     const x = escapeHtml(e);
@@ -240,6 +256,7 @@ async function ask() {
     }
   }
   out.innerHTML = html + '</table>';
+  plotAnswers(out, q, prob);
 }
 
 // Most tokens each place ever holds, in the net's order.

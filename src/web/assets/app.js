@@ -93,9 +93,17 @@ function fmt(x) {
   return Number(x.toPrecision(4)).toString();
 }
 
-// A time as the server sent it: every digit (the shortest text that reads back the same).
+// A time to the microsecond (`2.679`, not `2.6790000000000003`), a time under a millisecond
+// to 4 significant figures; the full value goes in the element's tooltip ([`timeTitle`]).
 function fmtTime(x) {
-  return String(x);
+  if (typeof x !== 'number' || !Number.isFinite(x)) return String(x);
+  const a = Math.abs(x);
+  return String(Number(a !== 0 && a < 1e-3 ? x.toPrecision(4) : x.toFixed(6)));
+}
+
+// Every digit of a time (the shortest text that reads back the same), for a tooltip.
+function timeTitle(x) {
+  return 'time ' + String(x);
 }
 
 // A list entry `N  text` with its number in its own cell (no digit is cut however long the
@@ -156,30 +164,93 @@ function paramText(t) {
   return 'λ=' + fmt(t.rate) + s;
 }
 
+// ---- layout ----------------------------------------------------------------------------
+
+// The layout the user chose for a net ('file' or 'layered'), remembered per net name.
+function layoutKey(n) {
+  return 'layout.' + n.name;
+}
+
+
+// Puts the net's other layout (the server sends the file's positions and the automatic
+// layout when the file has positions) in place of the one it came with.
+function swapLayout(n) {
+  const o = n.other_layout;
+  const mine = {
+    layout: n.layout,
+    places: n.places.map((p) => [p.x, p.y]),
+    transitions: n.transitions.map((t) => [t.x, t.y]),
+    arcs: n.arcs.map((a) => a.points),
+  };
+  n.places.forEach((p, i) => { [p.x, p.y] = o.places[i]; });
+  n.transitions.forEach((t, i) => { [t.x, t.y] = o.transitions[i]; });
+  n.arcs.forEach((a, i) => { a.points = o.arcs[i]; });
+  n.layout = o.layout;
+  n.other_layout = mine;
+}
+
+// A net from the server in the layout chosen for it (before its coordinates are scaled).
+// The automatic layout places the names itself: a file's label offsets and rotations are
+// for the file's positions.
+function adoptLayout(n) {
+  if (n.other_layout && remembered(layoutKey(n)) === n.other_layout.layout) swapLayout(n);
+  if (n.layout === 'layered') for (const node of n.places.concat(n.transitions)) delete node.look;
+  const pick = $('layout-choice');
+  pick.classList.toggle('hidden', !n.other_layout);
+  pick.value = n.layout;
+  pick.title = 'the positions drawn: the file\'s or an automatic layered layout' +
+    (n.layout_note ? ' (automatic because ' + n.layout_note + ')' : '');
+}
+
+function showTitle() {
+  $('title').textContent = net.name + (net.layout === 'layered' ? ' (automatic layout)' : '');
+  $('title').title = $('title').textContent + (net.layout_note ? ': ' + net.layout_note : '');
+}
+
+// The `layout` control: draws the net again in the other layout, remembered for this net.
+async function chooseLayout() {
+  const want = $('layout-choice').value;
+  remember(layoutKey(net), want);
+  if (want === net.layout) return;
+  const n = await api('GET', '/api/net');
+  adoptLayout(n);
+  net = n;
+  scaleCoordinates();
+  showTitle();
+  drawNet();
+  fit();
+  if (state) applyState(state);
+}
+
 // ---- drawing ---------------------------------------------------------------------------
 
 // Files use different units (GreatSPN: about one per grid cell; PIPE: pixels): scale the
 // drawing so that nodes sit at least ~70 px from their nearest neighbour (median).
 function scaleCoordinates() {
-  const nodes = net.places.concat(net.transitions).slice(0, 400);
-  if (nodes.length < 2) return;
+  scale = nearestScale(net.places.concat(net.transitions).map((n) => [n.x, n.y]));
+  if (scale === 1) return;
+  for (const n of net.places.concat(net.transitions)) {
+    n.x *= scale;
+    n.y *= scale;
+  }
+  for (const a of net.arcs) a.points = a.points.map((q) => [q[0] * scale, q[1] * scale]);
+}
+
+// The scale that puts the median nearest neighbour of `points` ([x, y]) 70 px away; 1 when
+// they are that far apart already.
+function nearestScale(points) {
+  const nodes = points.slice(0, 400);
+  if (nodes.length < 2) return 1;
   const nearest = nodes.map((a) => {
     let best = Infinity;
     for (const b of nodes) {
-      const d = Math.hypot(a.x - b.x, a.y - b.y);
+      const d = Math.hypot(a[0] - b[0], a[1] - b[1]);
       if (b !== a && d > 0 && d < best) best = d;
     }
     return best;
   }).filter(Number.isFinite).sort((x, y) => x - y);
-  if (!nearest.length) return;
-  const s = 70 / nearest[Math.floor(nearest.length / 2)];
-  if (s <= 1) return;
-  scale = s;
-  for (const n of net.places.concat(net.transitions)) {
-    n.x *= s;
-    n.y *= s;
-  }
-  for (const a of net.arcs) a.points = a.points.map((q) => [q[0] * s, q[1] * s]);
+  if (!nearest.length) return 1;
+  return Math.max(1, 70 / nearest[Math.floor(nearest.length / 2)]);
 }
 
 function drawNet() {
@@ -459,6 +530,7 @@ function applyState(s) {
   ol.textContent = '';
   for (const e of s.trace) {
     const li = listItem(e.step, fmtTime(e.time) + '  ' + e.transition + '  → ' + shorten(e.marking, 160));
+    li.title = timeTitle(e.time);
     if (e.manual) li.classList.add('manual');
     ol.appendChild(li);
   }
@@ -480,9 +552,17 @@ function applyView() {
 // Whether the view is the fitted one (a resize then fits again); panning or zooming by hand
 // keeps the user's view.
 let fitted = false;
+// Whether the fitted view is the whole net (`fit`, key f) or the readable one (on opening,
+// and after a resize): names at least READ_PX high, the rest a pan away.
+let fittedWhole = false;
+// Smallest on-screen size of a name (11 px at zoom 1) in the readable view.
+const READ_PX = 10;
+// Past this many nodes the readable view would show a sliver of the net: it opens whole.
+const READ_MAX_NODES = 1500;
 
-function fit() {
+function fit(whole) {
   fitted = true;
+  fittedWhole = whole === true;
   const box = $('canvas');
   const all = net.places.concat(net.transitions);
   if (!all.length) return;
@@ -505,6 +585,19 @@ function fit() {
   const k = Math.min(box.clientWidth / w, box.clientHeight / h, 2);
   nav.fitK = k;
   view = { k, x: -x0 * k + (box.clientWidth - w * k) / 2, y: -y0 * k + (box.clientHeight - h * k) / 2 };
+  const read = READ_PX / 11;
+  if (!fittedWhole && k < read && all.length <= READ_MAX_NODES) {
+    // Too small to read: zoom to where names are READ_PX high, with the top left marked
+    // place (where the layered layout starts) near the top left corner of the window, and
+    // nothing left of or above the net shown; pan for the rest.
+    const marked = net.places.filter((p) => p.tokens > 0);
+    const anchor = (marked.length ? marked : all).reduce((a, b) => (b.x + b.y < a.x + a.y ? b : a));
+    view.k = read;
+    view.x = w * read <= box.clientWidth ? -x0 * read + (box.clientWidth - w * read) / 2
+      : Math.min(-x0 * read, 120 - anchor.x * read);
+    view.y = h * read <= box.clientHeight ? -y0 * read + (box.clientHeight - h * read) / 2
+      : Math.min(-y0 * read, 100 - anchor.y * read);
+  }
   applyView();
 }
 
@@ -567,7 +660,8 @@ function setupInteraction() {
       fire(net.transitions[d.node.i].name);
     }
     if (d && d.node && !d.moved && d.node.isPlace) {
-      selectPlace(follow.place === d.node.i ? -1 : d.node.i);
+      if (ev.shiftKey) selectPlace(d.node.i, undefined, true);
+      else selectPlace(follow.place === d.node.i ? -1 : d.node.i);
     }
   });
 }
@@ -576,7 +670,12 @@ function setupInteraction() {
 // Positions back in the file's units, as a GreatSPN project the browser downloads.
 async function saveLayout() {
   try {
-    const at = (n) => [n.x / scale, n.y / scale];
+    // The automatic layout of a file with positions is written in the file's own units
+    // (as the page would scale the file's positions), so it opens at the same size.
+    const o = net.other_layout;
+    const units = net.layout === 'layered' && o && o.layout === 'file'
+      ? scale * nearestScale(o.places.concat(o.transitions)) : scale;
+    const at = (n) => [n.x / units, n.y / units];
     const r = await api('POST', '/api/layout', {
       places: net.places.map(at),
       transitions: net.transitions.map(at),
@@ -644,8 +743,9 @@ function setupControls() {
     $('speed-value').textContent = $('speed').value;
     if (runTimer !== null) startRun();
   });
-  $('fit').addEventListener('click', fit);
+  $('fit').addEventListener('click', () => fit(true));
   $('save-layout').addEventListener('click', saveLayout);
+  $('layout-choice').addEventListener('change', chooseLayout);
   $('analyze').addEventListener('click', analyse);
   // The same button stops a running question (transient points) or the analysis.
   $('analysis-cancel').addEventListener('click', () => (asking ? cancelQuestion() :
@@ -660,7 +760,7 @@ const KEYS = [
   ['n', 'step n', () => $('step-n').click()],
   ['r', 'run / pause', () => $('run').click()],
   ['0', 'reset', () => $('reset').click()],
-  ['f', 'fit the net in the view', () => fit()],
+  ['f', 'fit the whole net in the view', () => fit(true)],
   ['a', 'analyse', () => $('analyze').click()],
   ['g', 'find a place or transition by name', () => $('search').focus()],
   [' ', 'replay: play / pause', () => $('play').click()],
@@ -712,7 +812,7 @@ function setupResize() {
     pending = true;
     requestAnimationFrame(() => {
       pending = false;
-      fit();
+      fit(fittedWhole);
     });
   });
 }
@@ -738,9 +838,10 @@ async function main() {
       startLive();
       return;
     }
-    net = await api('GET', '/api/net');
-    $('title').textContent = net.name + (net.layout === 'layered' ? ' (automatic layout)' : '');
-    $('title').title = $('title').textContent;
+    const n = await api('GET', '/api/net');
+    adoptLayout(n);
+    net = n;
+    showTitle();
     document.title = net.name + ' — gspn';
     scaleCoordinates();
     drawNet();

@@ -93,11 +93,26 @@ function nodeAt(x, y) {
   return best;
 }
 
+// A colour of the page's theme (its CSS variable), so that the canvas follows the dark theme
+// like the SVG; read once per theme.
+const inks = new Map();
+let inkTheme = null;
+const darkScheme = window.matchMedia('(prefers-color-scheme: dark)');
+function ink(name) {
+  const theme = (document.documentElement.dataset.theme || '') + darkScheme.matches;
+  if (theme !== inkTheme) {
+    inks.clear();
+    inkTheme = theme;
+  }
+  if (!inks.has(name)) inks.set(name, getComputedStyle(document.documentElement).getPropertyValue(name).trim() || '#888');
+  return inks.get(name);
+}
+
 // Everything that changes only with the view or the layout: arcs, empty places, transitions
 // at rest, names and parameters. Kept as a bitmap; a live update paints the marking over it.
 function drawBase(ctx, w, h, dpr) {
   ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
-  ctx.fillStyle = '#fff';
+  ctx.fillStyle = ink('--bg');
   ctx.fillRect(0, 0, w, h);
   const k = view.k;
   ctx.setTransform(dpr * k, 0, 0, dpr * k, dpr * view.x, dpr * view.y);
@@ -127,14 +142,14 @@ function drawBase(ctx, w, h, dpr) {
     });
   };
   ctx.lineWidth = Math.max(1.2, px);
-  ctx.strokeStyle = '#444';
+  ctx.strokeStyle = ink('--arc');
   arcPath('normal');
   ctx.stroke();
-  ctx.strokeStyle = '#a33';
+  ctx.strokeStyle = ink('--inhib');
   arcPath('inhibitor');
   ctx.stroke();
   if (heads) {
-    ctx.fillStyle = '#fff';
+    ctx.fillStyle = ink('--bg');
     ctx.beginPath();
     net.arcs.forEach((a, i) => {
       if (a.kind !== 'inhibitor' || !inside(net.transitions[a.transition])) return;
@@ -148,8 +163,8 @@ function drawBase(ctx, w, h, dpr) {
   }
 
   ctx.lineWidth = Math.max(1.5, px);
-  ctx.strokeStyle = '#222';
-  ctx.fillStyle = '#fff';
+  ctx.strokeStyle = ink('--stroke');
+  ctx.fillStyle = ink('--node');
   ctx.beginPath();
   net.places.forEach((p) => {
     if (!inside(p)) return;
@@ -158,19 +173,19 @@ function drawBase(ctx, w, h, dpr) {
   });
   ctx.fill();
   ctx.stroke();
-  transitionRects(ctx, inside, (t) => t.kind === 'immediate', '#222', '#222', 1.5, px);
-  transitionRects(ctx, inside, (t) => t.kind !== 'immediate', '#fff', '#222', 1.5, px);
+  transitionRects(ctx, inside, (t) => t.kind === 'immediate', ink('--stroke'), ink('--stroke'), 1.5, px);
+  transitionRects(ctx, inside, (t) => t.kind !== 'immediate', ink('--node'), ink('--stroke'), 1.5, px);
 
   if (k < 0.6) return;
   ctx.textAlign = 'center';
   ctx.textBaseline = 'middle';
   ctx.font = '11px system-ui, sans-serif';
-  ctx.fillStyle = '#333';
+  ctx.fillStyle = ink('--fg');
   for (const n of net.places.concat(net.transitions)) {
     if (inside(n)) ctx.fillText(n.name, n.x, n.y + (n.kind ? TH / 2 : R) + 10);
   }
   ctx.font = '10px system-ui, sans-serif';
-  ctx.fillStyle = '#666';
+  ctx.fillStyle = ink('--muted');
   net.transitions.forEach((t) => {
     if (inside(t)) ctx.fillText(paramText(t), t.x, t.y - TH / 2 - 7);
   });
@@ -241,7 +256,7 @@ function canvasDraw() {
   net.places.forEach((p, i) => {
     if (placeTokens[i] > 0 && inside(p)) marked.push(i);
   });
-  ctx.fillStyle = '#222';
+  ctx.fillStyle = ink('--fg');
   ctx.beginPath();
   for (const i of marked) {
     const p = net.places[i];
@@ -260,28 +275,28 @@ function canvasDraw() {
 
   // Transitions that may fire green, the one fired last yellow.
   const on = (i) => transEnabled[i] && i !== firedIndex;
-  transitionRects(ctx, inside, (t, i) => on(i) && t.kind === 'immediate', '#0a0', '#0a0', 3, px);
-  transitionRects(ctx, inside, (t, i) => on(i) && t.kind !== 'immediate', '#dfd', '#0a0', 3, px);
-  if (firedIndex >= 0) transitionRects(ctx, inside, (t, i) => i === firedIndex, '#fc0', '#222', 1.5, px);
+  transitionRects(ctx, inside, (t, i) => on(i) && t.kind === 'immediate', ink('--enabled'), ink('--enabled'), 3, px);
+  transitionRects(ctx, inside, (t, i) => on(i) && t.kind !== 'immediate', ink('--enabled-fill'), ink('--enabled'), 3, px);
+  if (firedIndex >= 0) transitionRects(ctx, inside, (t, i) => i === firedIndex, ink('--fired'), ink('--stroke'), 1.5, px);
 
   if (!detail) return;
   ctx.textAlign = 'center';
   ctx.textBaseline = 'middle';
   ctx.font = '600 13px system-ui, sans-serif';
-  ctx.fillStyle = '#222';
+  ctx.fillStyle = ink('--fg');
   for (const i of marked) {
     const p = net.places[i];
     if (placeTokens[i] > 5) ctx.fillText(String(placeTokens[i]), p.x, p.y);
   }
   if (k < 0.6) return;
   ctx.font = '10px system-ui, sans-serif';
-  ctx.fillStyle = '#555';
+  ctx.fillStyle = ink('--muted');
   ctx.textAlign = 'start';
   for (const i of marked) {
     const p = net.places[i];
     ctx.fillText(String(placeTokens[i]), p.x + R * 0.75, p.y - R * 0.75);
   }
-  ctx.fillStyle = '#06c';
+  ctx.fillStyle = ink('--accent');
   ctx.textAlign = 'center';
   net.places.forEach((p, i) => {
     if (placeAgents[i] && inside(p)) ctx.fillText(placeAgents[i], p.x, p.y + R + 22);

@@ -28,7 +28,11 @@ function conformPanel() {
     head.appendChild(th);
   }
   table.createTBody();
-  panel.append(summary, table);
+  // Wider than the panel: it scrolls sideways, every column reachable.
+  const scroll = document.createElement('div');
+  scroll.className = 'table-scroll';
+  scroll.appendChild(table);
+  panel.append(summary, scroll);
   const log = $('log-panel');
   log.parentNode.insertBefore(panel, log);
   return panel;

@@ -63,6 +63,7 @@ function editOp(op) {
 // A net from the server drawn in place of the current one: same scale and view, the token
 // game's state, the selection kept by name.
 function adoptNet(n) {
+  adoptLayout(n);
   for (const node of n.places.concat(n.transitions)) {
     node.x *= scale;
     node.y *= scale;

@@ -12,11 +12,13 @@
 
 const follow = {
   place: -1, // selected place
+  plotted: [], // places in the plot
   robot: null, // selected robot id
   times: [], // model time per recorded frame
   tokens: [], // tokens per recorded frame
   robots: new Map(), // robot id -> {agent, place, state}
   segments: new Map(), // robot id -> [{t0, t1, place, state}]
+  cursor: null, // a replay's model time (the timeline's cursor); null: live or the token game
   lastFiredSeq: -1,
   drawPending: false,
 };
@@ -89,8 +91,10 @@ function extendSegment(robot, t, place, state) {
   if (!follow.segments.has(robot)) follow.segments.set(robot, []);
   const segs = follow.segments.get(robot);
   const last = segs[segs.length - 1];
-  if (last && last.place === place && last.state === state) {
+  // A stay from the history (state unknown) goes on with the state a live frame gives.
+  if (last && last.place === place && (last.state === state || last.state === '')) {
     last.t1 = t;
+    last.state = state;
     return;
   }
   if (last) last.t1 = t;
@@ -105,8 +109,16 @@ function placeIndex(name) {
   return i === undefined ? -1 : i;
 }
 
-// Selects place `i` (-1: none), with `robot` when a robot was clicked.
-function selectPlace(i, robot) {
+// Selects place `i` (-1: none), with `robot` when a robot was clicked; `add` (a
+// shift-click) adds the place to the plot, or takes it out, instead of plotting it alone.
+function selectPlace(i, robot, add) {
+  if (add && i >= 0) {
+    const k = follow.plotted.indexOf(i);
+    if (k >= 0) follow.plotted.splice(k, 1);
+    else if (follow.plotted.length < CURVE_COLOURS.length) follow.plotted.push(i);
+  } else {
+    follow.plotted = i >= 0 ? [i] : [];
+  }
   if (follow.place >= 0 && placeEls[follow.place]) placeEls[follow.place].removeAttribute('data-selected');
   follow.place = i;
   follow.robot = robot === undefined ? null : robot;
@@ -139,6 +151,12 @@ function describeSelection() {
   if (follow.robot !== null) {
     const r = follow.robots.get(follow.robot);
     parts.push('robot ' + follow.robot + (r ? ': agent ' + r.id + ' in ' + r.place + ', ' + r.state : ': not in the net'));
+    const segs = (follow.segments.get(follow.robot) || []).filter((x) => follow.cursor === null || x.t0 <= follow.cursor);
+    if (segs.length) {
+      // Its history: the places before this one, the latest last.
+      const past = segs.slice(-4, -1).map((x) => x.place + ' ' + fmtTime(x.t0) + '–' + fmtTime(x.t1) + ' s');
+      parts.push(segs.length + ' stay' + (segs.length === 1 ? '' : 's') + (past.length ? ', before: ' + past.join(', ') : ''));
+    }
   }
   if (follow.place >= 0) {
     const p = net.places[follow.place];
@@ -162,48 +180,46 @@ function scheduleFollowDraw() {
   }, 250);
 }
 
-// Tokens of the selected place over model time, as a step line.
+// Tokens of the plotted places over model time, as step lines (click a place to plot it,
+// shift-click to add or remove one; at most CURVE_COLOURS.length).
+function plotSeries() {
+  return follow.plotted.map((i) => ({
+    name: net.places[i].name,
+    step: true,
+    points: follow.times.map((t, f) => [t, follow.tokens[f][i]]),
+  }));
+}
+
 function drawPlot() {
   const svg = $('plot');
-  svg.textContent = '';
-  const i = follow.place;
-  $('plot-place').textContent = i >= 0 ? net.places[i].name : '(click a place)';
-  svg.classList.toggle('hidden', i < 0);
-  if (i < 0 || !follow.times.length) return;
-  const W = 300;
-  const H = 110;
-  const pad = [28, 8, 8, 18]; // left, right, top, bottom
-  const t0 = follow.times[0];
-  const t1 = Math.max(follow.times[follow.times.length - 1], t0 + 1e-9);
-  const kMax = Math.max(1, ...follow.tokens.map((m) => m[i]));
-  const x = (t) => pad[0] + (t - t0) / (t1 - t0) * (W - pad[0] - pad[1]);
-  const y = (k) => H - pad[3] - k / kMax * (H - pad[2] - pad[3]);
-  svg.setAttribute('viewBox', '0 0 ' + W + ' ' + H);
-  el('line', { class: 'axis', x1: pad[0], y1: H - pad[3], x2: W - pad[1], y2: H - pad[3] }, svg);
-  el('line', { class: 'axis', x1: pad[0], y1: pad[2], x2: pad[0], y2: H - pad[3] }, svg);
-  const label = (text, attrs) => { el('text', attrs, svg).textContent = text; };
-  label(String(kMax), { class: 'tick', x: pad[0] - 3, y: pad[2] + 4, 'text-anchor': 'end' });
-  label('0', { class: 'tick', x: pad[0] - 3, y: H - pad[3], 'text-anchor': 'end' });
-  label(fmt(t0) + ' s', { class: 'tick', x: pad[0], y: H - 3 });
-  label(fmt(t1) + ' s', { class: 'tick', x: W - pad[1], y: H - 3, 'text-anchor': 'end' });
-  const pts = [];
-  const data = [];
-  follow.times.forEach((t, f) => {
-    const k = follow.tokens[f][i];
-    if (f > 0) pts.push(x(t).toFixed(1) + ',' + y(follow.tokens[f - 1][i]).toFixed(1));
-    pts.push(x(t).toFixed(1) + ',' + y(k).toFixed(1));
-    data.push(t + ',' + k);
-  });
-  const line = el('polyline', { class: 'plot-line', points: pts.join(' ') }, svg);
-  line.setAttribute('data-place', net.places[i].name);
-  line.setAttribute('data-points', data.join(' '));
+  const names = follow.plotted.map((i) => net.places[i].name);
+  $('plot-place').textContent = names.length ? names.join(', ') : '(click a place; shift-click adds one)';
+  const empty = !names.length || !follow.times.length;
+  svg.classList.toggle('hidden', empty);
+  $('plot-csv').classList.toggle('hidden', empty);
+  if (empty) {
+    svg.textContent = '';
+    return;
+  }
+  lineChart(svg, plotSeries(), 's');
+  // The first curve keeps the older hook: data-place on its polyline.
+  const first = svg.querySelector('polyline');
+  if (first) first.setAttribute('data-place', names[0]);
 }
 
 // ---- timeline --------------------------------------------------------------------------
 
-const STATE_CLASS = ['free', 'occupied', 'done', 'waiting', 'inactive'];
+// Colours of places in the timeline (a place keeps its colour while the page is open).
+const PLACE_COLOURS = ['#4a90d9', '#e8a33a', '#3a3', '#c55', '#8a6cc8', '#2aa6a6', '#b5762c', '#d36fb0', '#7a8a2a', '#5b6b8c'];
+const placeColour = new Map();
 
-// One row per robot: a bar per stay in a place, coloured by the agent's state.
+function colourOf(place) {
+  if (!placeColour.has(place)) placeColour.set(place, PLACE_COLOURS[placeColour.size % PLACE_COLOURS.length]);
+  return placeColour.get(place);
+}
+
+// One row per robot: a bar per stay in a place, coloured by the place (legend below; the
+// agent's state in the bar's tooltip); in a replay a line at the slider's time.
 function drawGantt() {
   const svg = $('gantt');
   const panel = $('timeline-panel');
@@ -214,43 +230,66 @@ function drawGantt() {
   panel.classList.remove('hidden');
   svg.textContent = '';
   const robots = [...follow.segments.keys()].sort(byId);
-  const W = 300;
-  const row = 14;
+  const W = Math.max(300, svg.clientWidth || 300);
+  const row = 16;
   const left = 34;
   const H = robots.length * row + 16;
   let t0 = Infinity;
   let t1 = -Infinity;
   for (const segs of follow.segments.values()) {
+    if (!segs.length) continue;
     t0 = Math.min(t0, segs[0].t0);
     t1 = Math.max(t1, segs[segs.length - 1].t1);
   }
+  if (!Number.isFinite(t0)) t0 = 0;
   if (!(t1 > t0)) t1 = t0 + 1;
   const x = (t) => left + (t - t0) / (t1 - t0) * (W - left - 4);
   svg.setAttribute('viewBox', '0 0 ' + W + ' ' + H);
+  svg.style.height = H + 'px';
+  const used = new Set();
   robots.forEach((id, r) => {
-    const name = el('text', { class: 'tick robot-name', x: 2, y: r * row + 10 }, svg);
+    const name = el('text', { class: 'tick robot-name', x: 2, y: r * row + 11 }, svg);
     name.textContent = id;
+    name.setAttribute('data-robot-row', id);
     name.addEventListener('click', () => selectRobot(id));
     for (const s of follow.segments.get(id)) {
       const w = Math.max(0.5, x(s.t1) - x(s.t0));
-      const cls = STATE_CLASS.includes(s.state) ? s.state : 'free';
-      const rect = el('rect', { class: 'seg ' + cls, x: x(s.t0).toFixed(1), y: r * row + 2, width: w.toFixed(1), height: row - 4 }, svg);
+      used.add(s.place);
+      const rect = el('rect', { class: 'seg', x: x(s.t0).toFixed(1), y: r * row + 2, width: w.toFixed(1), height: row - 4 }, svg);
+      rect.style.fill = colourOf(s.place);
       rect.setAttribute('data-robot', id);
       rect.setAttribute('data-place', s.place);
       rect.setAttribute('data-state', s.state);
+      rect.addEventListener('click', () => selectRobot(id));
       if (follow.robot === id || (follow.place >= 0 && net.places[follow.place].name === s.place)) rect.classList.add('hi');
       if (w > 40) {
         // The place's own name (after a `p12:` prefix) where the bar has room for it.
-        const label = el('text', { class: 'seg-label', x: (x(s.t0) + 2).toFixed(1), y: r * row + 10 }, svg);
+        const label = el('text', { class: 'seg-label', x: (x(s.t0) + 2).toFixed(1), y: r * row + 11 }, svg);
         label.textContent = s.place.replace(/^[^:]*:/, '').slice(0, Math.floor(w / 5));
       }
-      el('title', {}, rect).textContent = id + ' in ' + s.place + ' (' + s.state + ') ' + fmt(s.t0) + '–' + fmt(s.t1) + ' s';
+      el('title', {}, rect).textContent = id + ' in ' + s.place + ' (' + s.state + ') ' + fmtTime(s.t0) + '–' + fmtTime(s.t1) + ' s';
     }
   });
+  if (follow.cursor !== null) {
+    const cx = x(Math.min(t1, Math.max(t0, follow.cursor))).toFixed(1);
+    el('line', { class: 'cursor', x1: cx, x2: cx, y1: 0, y2: H - 14 }, svg);
+  }
   const axis = el('text', { class: 'tick', x: left, y: H - 3 }, svg);
-  axis.textContent = fmt(t0) + ' s';
+  axis.textContent = fmtTime(t0) + ' s';
   const end = el('text', { class: 'tick', x: W - 4, y: H - 3, 'text-anchor': 'end' }, svg);
-  end.textContent = fmt(t1) + ' s';
+  end.textContent = fmtTime(t1) + ' s';
+  const legend = $('gantt-legend');
+  legend.textContent = '';
+  for (const place of [...placeColour.keys()].filter((p) => used.has(p))) {
+    const item = document.createElement('span');
+    item.className = 'legend-item';
+    item.dataset.legendPlace = place;
+    const swatch = document.createElement('span');
+    swatch.className = 'swatch';
+    swatch.style.background = colourOf(place);
+    item.append(swatch, place);
+    legend.appendChild(item);
+  }
 }
 
 // ---- panes -----------------------------------------------------------------------------
@@ -258,7 +297,14 @@ function drawGantt() {
 // Bars between the panes resize them; the header's buttons collapse them. The net is fitted
 // again when its pane changes size (if it was fitted).
 function setupPanes() {
+  $('plot-csv').addEventListener('click', () => downloadCsv(plotSeries(), 'tokens.csv'));
+  window.gspnPlot = { csv: () => seriesCsv(plotSeries()) };
   for (const bar of document.querySelectorAll('.splitter')) {
+    const width = remembered('pane.' + bar.dataset.pane);
+    if (width) {
+      $(bar.dataset.pane).style.width = width;
+      $(bar.dataset.pane).style.flex = 'none';
+    }
     bar.addEventListener('mousedown', (ev) => {
       ev.preventDefault();
       const pane = $(bar.dataset.pane);
@@ -271,6 +317,7 @@ function setupPanes() {
         refit();
       };
       const up = () => {
+        remember('pane.' + bar.dataset.pane, pane.style.width);
         window.removeEventListener('mousemove', moveTo);
         window.removeEventListener('mouseup', up);
       };
@@ -279,16 +326,40 @@ function setupPanes() {
     });
   }
   for (const b of document.querySelectorAll('[data-collapse]')) {
-    b.addEventListener('click', () => {
-      const pane = $(b.dataset.collapse);
-      const collapsed = pane.classList.toggle('collapsed');
+    const pane = $(b.dataset.collapse);
+    const set = (collapsed) => {
+      pane.classList.toggle('collapsed', collapsed);
       b.setAttribute('aria-pressed', collapsed ? 'false' : 'true');
+    };
+    if (remembered('collapsed.' + b.dataset.collapse) === 'true') set(true);
+    b.addEventListener('click', () => {
+      const collapsed = !pane.classList.contains('collapsed');
+      set(collapsed);
+      remember('collapsed.' + b.dataset.collapse, String(collapsed));
       refit();
     });
   }
   describeSelection();
 }
 
+// The page's remembered settings (pane sizes, collapsed panes), in localStorage when the
+// browser allows it.
+function remembered(key) {
+  try {
+    return localStorage.getItem('gspn.' + key);
+  } catch (_) {
+    return null;
+  }
+}
+
+function remember(key, value) {
+  try {
+    localStorage.setItem('gspn.' + key, value);
+  } catch (_) {
+    // Not remembered: the setting holds for this visit.
+  }
+}
+
 function refit() {
-  if (fitted && net) requestAnimationFrame(fit);
+  if (fitted && net) requestAnimationFrame(() => fit(fittedWhole));
 }

@@ -30,6 +30,7 @@ function connectLive() {
     const msg = JSON.parse(ev.data);
     if (msg.type === 'net') {
       const first = net === null;
+      adoptLayout(msg);
       net = msg;
       $('title').textContent = net.name + ' — live';
       $('title').title = $('title').textContent;
@@ -39,6 +40,15 @@ function connectLive() {
       if (first) fit();
       $('log').textContent = '';
       live.logTotal = 0;
+    } else if (msg.type === 'history') {
+      // The run before this page joined: the plot and the robot timeline start at 0.
+      follow.times.length = follow.tokens.length = 0;
+      for (const f of msg.frames) recordTokens(f.time, f.tokens);
+      follow.segments.clear();
+      for (const row of msg.robots) {
+        follow.segments.set(row.robot, row.stays.map((x) => ({ t0: x.t0, t1: x.t1, place: x.place, state: '' })));
+      }
+      scheduleFollowDraw();
     } else if (msg.type === 'state') {
       const t0 = performance.now();
       applyLive(msg);
@@ -75,6 +85,7 @@ function applyLive(s) {
   const filter = $('log-filter').value.trim().toLowerCase();
   for (const e of s.log) {
     const li = listItem(e.seq, fmtTime(e.time) + '  ' + e.text);
+    li.title = timeTitle(e.time);
     if (filter && !li.textContent.toLowerCase().includes(filter)) li.classList.add('hidden');
     ol.appendChild(li);
     live.logTotal = Math.max(live.logTotal, e.seq);
@@ -88,17 +99,23 @@ function applyLive(s) {
 
 // ---- replay ----------------------------------------------------------------------------
 
+// Speeds of the replay's playback: model seconds per second of wall time.
+const REPLAY_SPEEDS = [0.1, 1, 10, 100, 1000];
+
 // Plays a journal back on a full-width timeline in model seconds: the slider picks a time
 // (the marking after the last firing up to it), ◀ and ▶ (keys ← →) step one firing, play
-// (space) plays the firings at the speed set now (changed while playing, it applies at
-// once), `loop` starts again at the end; the trace follows. A journal with a simulated world
-// shows its map beside the net: the robots where they were at the slider's time.
+// (space) runs model time at the chosen speed (×1 = real time, ×10 ten times faster; a change
+// while playing applies at once), `loop` starts again at the end; the trace follows. The
+// robots' stays (from the journal's events) put their ids on the places that hold them and
+// fill the robot timeline; a journal with a simulated world shows its map, the robots moving
+// between their recorded poses.
 async function startReplay() {
   for (const id of ['step', 'step-n', 'reset', 'n', 'seed']) {
     const e = $(id);
     (e.closest('label') || e).classList.add('hidden');
   }
-  const { frames, world, conform } = await api('GET', '/api/replay');
+  $('speed').closest('label').classList.add('hidden');
+  const { frames, world, conform, robots } = await api('GET', '/api/replay');
   const times = frames.map((f) => f.time);
   const poses = world ? world.frames : [];
   const poseTimes = poses.map((w) => w.time);
@@ -115,13 +132,44 @@ async function startReplay() {
     }
     return lo;
   };
+  // The robots at t: between two recorded poses, on the straight line between them.
   const showWorld = (t) => {
     if (!world || poses.length === 0) return;
-    const w = poses[lastAtOrBefore(poseTimes, t)];
+    const k = lastAtOrBefore(poseTimes, t);
+    const a = poses[k];
+    const b = poses[k + 1];
+    const u = b && b.time > a.time ? Math.min(1, Math.max(0, (t - a.time) / (b.time - a.time))) : 0;
+    const next = new Map(b ? b.robots.map((r) => [r.id, r]) : []);
     drawWorld({
       time: t,
       map: world.map,
-      robots: w.robots.map((r) => Object.assign({ radius: world.radius }, r)),
+      robots: a.robots.map((r) => {
+        const q = next.get(r.id);
+        const moved = q && u > 0 ? { x: r.x + (q.x - r.x) * u, y: r.y + (q.y - r.y) * u } : {};
+        return Object.assign({ radius: world.radius }, r, moved);
+      }),
+    });
+  };
+  // Each robot's stays, for the timeline and for where it is at t.
+  follow.segments.clear();
+  for (const row of robots || []) {
+    follow.segments.set(row.robot, row.stays.map((s) => ({ t0: s.t0, t1: s.t1, place: s.place, state: 'agent ' + s.agent, agent: s.agent })));
+  }
+  const showRobots = (t) => {
+    if (!follow.segments.size) return;
+    follow.robots.clear();
+    follow.cursor = t;
+    const byPlace = new Map();
+    for (const [id, segs] of follow.segments) {
+      const s = segs[lastAtOrBefore(segs.map((x) => x.t0), t)];
+      if (!s || s.t0 > t + 1e-12 * Math.max(1, end)) continue;
+      follow.robots.set(id, { id: s.agent, place: s.place, state: 'since ' + fmtTime(s.t0) + ' s' });
+      if (!byPlace.has(s.place)) byPlace.set(s.place, []);
+      byPlace.get(s.place).push(id);
+    }
+    net.places.forEach((p, i) => {
+      const ids = byPlace.get(p.name);
+      setAgents(i, ids ? ids.sort(byId).join(' ') : '');
     });
   };
   const slider = $('slider');
@@ -130,15 +178,24 @@ async function startReplay() {
   slider.step = 'any';
   $('timeline').classList.remove('hidden');
   $('timeline-end').textContent = fmtTime(end) + ' s';
+  $('timeline-end').title = timeTitle(end);
+  $('timeline-end').dataset.t = String(end);
   let at = 0;
+  let now = 0;
   // Frame i; the map at model time t (the frame's time unless the slider picked another).
   const show = (i, t) => {
-    at = i;
     const f = frames[i];
-    const now = t === undefined ? f.time : t;
+    now = t === undefined ? f.time : t;
     slider.value = String(now);
     showWorld(now);
+    showRobots(now);
     if (conform) showConformAt(conform, now);
+    $('timeline-time').textContent = 't = ' + fmtTime(now) + ' s';
+    $('timeline-time').dataset.t = String(now);
+    $('timeline-time').title = timeTitle(now);
+    scheduleFollowDraw();
+    if (i === at && t !== undefined && $('frame').textContent) return;
+    at = i;
     f.tokens.forEach((k, p) => setTokens(p, k));
     setFired(f.transition ? transitionIndex(f.transition) : -1);
     recordTokens(f.time, f.tokens);
@@ -149,7 +206,6 @@ async function startReplay() {
       li.scrollIntoView({ block: 'nearest' });
     }
     $('frame').textContent = i + '/' + (frames.length - 1);
-    $('timeline-time').textContent = 't = ' + fmtTime(now) + ' s';
     $('clock').textContent = 'time ' + fmtTime(f.time) + ', ' + i + ' firings' +
       (f.transition ? ' — ' + f.transition + ' fired' : '');
   };
@@ -164,40 +220,57 @@ async function startReplay() {
   ol.textContent = '';
   frames.slice(1).forEach((f, i) => {
     const li = listItem(i + 1, fmtTime(f.time) + '  ' + f.transition);
+    li.title = timeTitle(f.time);
     li.addEventListener('click', () => show(i + 1));
     ol.appendChild(li);
   });
   $('trace-count').textContent = (frames.length - 1) + ' firings';
-  let timer = null;
-  const playing = () => timer !== null;
+  const speedBox = $('replay-speed');
+  speedBox.textContent = '';
+  for (const v of REPLAY_SPEEDS) {
+    const o = document.createElement('option');
+    o.value = String(v);
+    o.textContent = '×' + v;
+    speedBox.appendChild(o);
+  }
+  speedBox.value = '1';
+  speedBox.closest('label').classList.remove('hidden');
+  // Playing: every animation frame moves model time on by the wall time since the last
+  // one times the speed.
+  let frame = null;
+  let wall = 0;
+  const playing = () => frame !== null;
   const pause = () => {
-    clearTimeout(timer);
-    timer = null;
+    if (frame !== null) cancelAnimationFrame(frame);
+    frame = null;
     $('run').textContent = 'run';
     $('play').textContent = '▶ play';
   };
-  const tick = () => {
-    let i = at + 1;
-    if (i >= frames.length) {
+  const tick = (ms) => {
+    const dt = Math.max(0, ms - wall) / 1000;
+    wall = ms;
+    let t = now + dt * (Number(speedBox.value) || 1);
+    if (t >= end) {
       if (!$('loop').checked) {
+        show(frames.length - 1, end);
         pause();
         return;
       }
-      i = 0;
+      t = 0;
     }
-    show(i);
-    // The speed as it is now: a change while playing applies from the next firing.
-    timer = setTimeout(tick, 1000 / (Number($('speed').value) || 1));
+    show(frameAt(t), t);
+    frame = requestAnimationFrame(tick);
   };
   const play = () => {
     if (playing()) {
       pause();
       return;
     }
-    if (at >= frames.length - 1) show(0);
+    if (now >= end) show(0, 0);
     $('run').textContent = 'pause';
     $('play').textContent = '❚❚ pause';
-    timer = setTimeout(tick, 1000 / (Number($('speed').value) || 1));
+    wall = performance.now();
+    frame = requestAnimationFrame(tick);
   };
   const stepBy = (d) => {
     pause();
@@ -207,6 +280,6 @@ async function startReplay() {
   $('play').addEventListener('click', play);
   $('step-back').addEventListener('click', () => stepBy(-1));
   $('step-forward').addEventListener('click', () => stepBy(1));
-  window.gspnReplay = { playing, at: () => at };
+  window.gspnReplay = { playing, at: () => at, time: () => now };
   show(0);
 }

@@ -111,7 +111,7 @@ function drawMinimap() {
   }
   const pad = 40;
   [xa, ya, xb, yb] = [xa - pad, ya - pad, xb + pad, yb + pad];
-  const W = 180;
+  const W = 150;
   const s = W / Math.max(xb - xa, (yb - ya) * 1.5, 1);
   const H = Math.max(40, Math.round((yb - ya) * s));
   const dpr = window.devicePixelRatio || 1;

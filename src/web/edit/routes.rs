@@ -62,7 +62,7 @@ pub(crate) fn net_value(state: &WebState) -> Value {
         (h.net().clone(), h.version(), h.edited())
     };
     let source = state.inner.source.get();
-    let mut v = net_json(&net, state.inner.seed, source.filter(|_| !edited));
+    let mut v = net_json(&net, state.inner.seed, source.filter(|_| !edited), edited);
     if edited && let Some(s) = source {
         let original = &state.inner.net;
         for (key, place) in [("places", true), ("transitions", false)] {

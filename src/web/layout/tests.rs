@@ -164,3 +164,48 @@ fn helpers() {
     let y = spaced(&[0.0, 0.0, 100.0], 10.0);
     assert_eq!(y, vec![-5.0, 5.0, 100.0]);
 }
+
+/// The README's home-cleaning plan (GSPNR grid positions: arcs through nodes), MCC's
+/// Peterson (every node at one point) and Dekker: the file's positions are set aside, and
+/// the automatic layout draws no two nodes on each other and no arc through a node.
+#[test]
+fn useless_file_positions_give_way_to_a_readable_automatic_layout() {
+    use crate::io::{ReadOptions, read_net};
+    let read = |rel: &str| {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
+        read_net(&path, &ReadOptions::default()).unwrap().net
+    };
+    let home = read("plans/home-cleaning/net.PNPRO");
+    let file = choose(&home, Choice::File).0;
+    let before = quality::measure(&home, &file);
+    let (auto, why) = choose(&home, Choice::Default);
+    let after = quality::measure(&home, &auto);
+    eprintln!("home-cleaning: file {before:?}, automatic {after:?}, {why:?}");
+    assert_eq!(auto.source, LayoutSource::Layered);
+    assert!(
+        why.unwrap()
+            .contains("arc segments pass through other nodes")
+    );
+    assert_eq!((after.overlaps, after.through_nodes), (0, 0), "{after:?}");
+    assert!(after.crossings <= 40, "{after:?}");
+
+    for rel in [
+        "mcc/Peterson-PT-2/model.pnml",
+        "mcc/Dekker-PT-010/model.pnml",
+    ] {
+        // The shared fixtures: `$GSPN_FIXTURES`, else `../shared/fixtures` (as tests/support).
+        let root = std::env::var("GSPN_FIXTURES")
+            .unwrap_or_else(|_| format!("{}/../shared/fixtures", env!("CARGO_MANIFEST_DIR")));
+        let net = read_net(
+            &std::path::Path::new(&root).join(rel),
+            &ReadOptions::default(),
+        )
+        .unwrap()
+        .net;
+        let (l, why) = choose(&net, Choice::Default);
+        let q = quality::measure(&net, &l);
+        eprintln!("{rel}: {q:?}, {why:?}");
+        assert_eq!(l.source, LayoutSource::Layered);
+        assert_eq!((q.overlaps, q.through_nodes), (0, 0), "{rel}: {q:?}");
+    }
+}

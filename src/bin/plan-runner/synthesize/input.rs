@@ -135,8 +135,7 @@ pub(super) fn read_rewards(
 pub(super) fn algorithm(args: &Args, goal: &Goal) -> anyhow::Result<Algorithm> {
     match args.method.as_str() {
         "value" => Ok(Algorithm::ValueIteration),
-        "auto" if matches!(goal, Goal::Lra) => Ok(Algorithm::PolicyIteration),
-        "auto" => Ok(Algorithm::ValueIteration),
+        "auto" => Ok(Algorithm::Auto),
         "policy" if matches!(goal, Goal::Lra) => Ok(Algorithm::PolicyIteration),
         "policy" => Err(BadInput(format!(
             "--method policy: policy iteration is implemented for lra-max and lra-min only, not --objective {}",
@@ -153,6 +152,9 @@ pub(super) struct Input {
     pub(super) spec: RewardSpec,
     pub(super) controls: Controls,
     pub(super) plan: Option<String>,
+    /// Per place: its tokens are a resource (`role = "resource"`), not robots; a sweep keeps
+    /// them (all false for a bare net).
+    pub(super) resource: Vec<bool>,
 }
 
 pub(super) fn read_input(args: &Args) -> anyhow::Result<Input> {
@@ -173,11 +175,13 @@ pub(super) fn read_input(args: &Args) -> anyhow::Result<Input> {
             None => (RewardSpec::default(), None),
         };
         let controls = file_controls.unwrap_or_else(|| Controls::zero_weight(&net));
+        let resource = vec![false; net.place_count()];
         return Ok(Input {
             net,
             spec,
             controls,
             plan: None,
+            resource,
         });
     }
     if args.rewards.is_some() {
@@ -226,10 +230,49 @@ pub(super) fn read_input(args: &Args) -> anyhow::Result<Input> {
     }
     let text = std::fs::read_to_string(&args.file)
         .with_context(|| format!("reading {}", args.file.display()))?;
+    let resource = plan
+        .roles
+        .iter()
+        .map(|r| matches!(r, Some(gspn::runtime::Role::Resource)))
+        .collect();
     Ok(Input {
         net: plan.net,
         spec,
         controls: plan.controls,
         plan: Some(text),
+        resource,
     })
+}
+
+/// Refuses a synthesis with nothing to optimise (exit 2, with the reason): no decision to
+/// make (no controllable transition, no WAIT), or an objective over rewards without any.
+/// Without the check the solver answers 0 and the command looks like it succeeded.
+pub(super) fn something_to_optimise(
+    args: &Args,
+    goal: &Goal,
+    spec: &RewardSpec,
+    controls: &Controls,
+) -> anyhow::Result<()> {
+    if !controls.controllable.iter().any(|&c| c) && !controls.wait {
+        return Err(BadInput(format!(
+            "{}: nothing to optimise: the net has no decision (no controllable immediate \
+             transition: weight 0, or a plan's/rewards file's `controllable = [...]`)",
+            args.file.display()
+        ))
+        .into());
+    }
+    let uses_rewards = matches!(
+        goal,
+        Goal::Lra | Goal::Total(_) | Goal::Discounted(_) | Goal::PerStep(_)
+    );
+    if uses_rewards && spec.places.is_empty() && spec.transitions.is_empty() {
+        return Err(BadInput(format!(
+            "{}: nothing to optimise: --objective {} needs rewards and there are none (a \
+             plan's [rewards.NAME] or --rewards FILE with [places]/[transitions])",
+            args.file.display(),
+            args.objective
+        ))
+        .into());
+    }
+    Ok(())
 }

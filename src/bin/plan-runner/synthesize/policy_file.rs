@@ -34,7 +34,12 @@ pub(super) fn rules_toml(net: &Net, rules: &[Rule]) -> String {
             .iter()
             .map(|&(i, k)| format!("{} = {k}", toml_key(&net.places()[i].name)))
             .collect();
-        let _ = writeln!(out, "marking = {{ {} }}", marking.join(", "));
+        if marking.is_empty() {
+            // A catch-all (partial, nothing asked of any place) or the empty marking.
+            out.push_str("marking = {}\n");
+        } else {
+            let _ = writeln!(out, "marking = {{ {} }}", marking.join(", "));
+        }
         if partial {
             out.push_str("partial = true\n");
         }

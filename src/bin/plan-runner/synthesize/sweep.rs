@@ -4,7 +4,7 @@ use super::*;
 
 /// Without the robot world (feature `sim`) there is no robot scaling.
 #[cfg(not(feature = "sim"))]
-pub(super) fn scaled(_: &Net, _: usize) -> anyhow::Result<Net> {
+pub(super) fn scaled(_: &Net, _: &[bool], _: usize) -> anyhow::Result<Net> {
     Err(
         BadInput("--sweep scales robots like `run --robots`: build with feature `sim`".into())
             .into(),
@@ -32,11 +32,17 @@ pub(super) fn parse_sweep(s: &str) -> anyhow::Result<std::ops::RangeInclusive<us
     Ok(a..=b)
 }
 
-/// The net with its initial tokens scaled to `n` robots: every marked place's share, largest
-/// remainder first (as `run --robots` scales a plan's robot places).
+/// The net with its initial robots scaled to `n`: every marked place's share, largest
+/// remainder first (as `run --robots` scales a plan's robot places). Places whose tokens
+/// are a `resource` (a charger, a counter) keep theirs: they are not robots.
 #[cfg(feature = "sim")]
-pub(super) fn scaled(net: &Net, n: usize) -> anyhow::Result<Net> {
-    let robot: Vec<bool> = net.places().iter().map(|p| p.initial > 0).collect();
+pub(super) fn scaled(net: &Net, resource: &[bool], n: usize) -> anyhow::Result<Net> {
+    let robot: Vec<bool> = net
+        .places()
+        .iter()
+        .zip(resource)
+        .map(|(p, &res)| p.initial > 0 && !res)
+        .collect();
     let m = gspn::world::fleet::scaled_marking(net, &robot, n);
     net.with_initial_marking(&m)
         .map_err(|e| anyhow::anyhow!("scaling the initial marking: {e}"))
@@ -53,6 +59,7 @@ pub(super) fn finite(v: f64) -> serde_json::Value {
 pub(super) fn run_sweep(
     args: &Args,
     net: &Net,
+    resource: &[bool],
     controls: &Controls,
     spec: &RewardSpec,
     goal: &Goal,
@@ -69,9 +76,10 @@ pub(super) fn run_sweep(
     }
     for n in range {
         let t0 = Instant::now();
-        let net_n = scaled(net, n)?;
+        let net_n = scaled(net, resource, n)?;
         let s = synthesize(&net_n, controls, spec, goal, max, args, false, monitor)?;
         let total = t0.elapsed().as_secs_f64();
+        let (value, lower, upper) = shown(goal, &s.solution);
         if args.json {
             rows.push(json!({
                 "robots": n,
@@ -81,9 +89,9 @@ pub(super) fn run_sweep(
                 "build_s": s.build_s,
                 "solve_s": s.solve_s,
                 "total_s": total,
-                "value": finite(s.solution.value),
-                "lower": finite(s.solution.lower),
-                "upper": finite(s.solution.upper),
+                "value": finite(value),
+                "lower": finite(lower),
+                "upper": finite(upper),
             }));
         } else {
             println!(
@@ -92,7 +100,7 @@ pub(super) fn run_sweep(
                 s.model.choice_count(),
                 s.build_s,
                 s.solve_s,
-                s.solution.value
+                value
             );
         }
     }

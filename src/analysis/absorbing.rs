@@ -1,16 +1,19 @@
 //! Chains of instant steps resolved exactly: where a state that time does not leave ends up
 //! (a distribution over exits) and what fires on the way (expected counts).
 //!
-//! Used twice: the build eliminates uncontrolled vanishing markings (weighted races), and
-//! policy evaluation resolves the decision states under a fixed policy. States are grouped
-//! into strongly connected components and solved sinks first; a component with a cycle is an
-//! absorbing chain solved by LU (`I − P`), as [`vanishing`](crate::analysis::vanishing) does
-//! for CTMC analysis.
+//! The one solver for loops of immediate transitions. [`vanishing`](crate::analysis::vanishing)
+//! eliminates the vanishing markings of a CTMC with it; synthesis eliminates uncontrolled
+//! vanishing markings (weighted races) and resolves the decision states under a fixed policy.
+//! States are grouped into strongly connected components and solved sinks first: a component
+//! without a cycle is a weighted sum of its successors' answers, a component with a cycle is
+//! an absorbing chain solved by LU of `I − P` restricted to it ([`linear`]: dense when small,
+//! sparse above), exits and counts as right-hand-side columns.
 
 use rustc_hash::FxHashMap;
 
+use crate::analysis::linear::{self, SolveError, solve_block};
 use crate::analysis::scc::tarjan;
-use crate::analysis::vanishing::lu_solve;
+use crate::analysis::state_space::AnalysisError;
 
 /// Where an arc leads: an exit (kept state) or another local state.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -28,30 +31,80 @@ pub(crate) struct Absorbed {
     pub(crate) counts: Vec<Vec<(u32, f64)>>,
 }
 
-/// A sparse vector accumulated in a hash map.
+/// A sparse vector accumulated in a dense scratch array (grown on demand).
 #[derive(Default)]
-struct Acc(FxHashMap<u32, f64>);
+struct Acc {
+    dense: Vec<f64>,
+    seen: Vec<bool>,
+    touched: Vec<u32>,
+}
 
 impl Acc {
+    #[inline]
     fn add(&mut self, i: u32, x: f64) {
-        *self.0.entry(i).or_insert(0.0) += x;
+        let at = i as usize;
+        if at >= self.dense.len() {
+            self.dense.resize(at + 1, 0.0);
+            self.seen.resize(at + 1, false);
+        }
+        if !self.seen[at] {
+            self.seen[at] = true;
+            self.touched.push(i);
+        }
+        self.dense[at] += x;
     }
 
+    /// The accumulated entries sorted by index; the scratch is cleared.
     fn take(&mut self) -> Vec<(u32, f64)> {
-        let mut v: Vec<(u32, f64)> = self.0.drain().filter(|&(_, x)| x > 1e-300).collect();
-        v.sort_unstable_by_key(|&(i, _)| i);
-        v
+        self.touched.sort_unstable();
+        let out = self
+            .touched
+            .iter()
+            .map(|&i| {
+                self.seen[i as usize] = false;
+                (i, std::mem::take(&mut self.dense[i as usize]))
+            })
+            .filter(|&(_, x)| x > 1e-300)
+            .collect();
+        self.touched.clear();
+        out
+    }
+}
+
+/// Why a chain was not resolved.
+#[derive(Debug, PartialEq)]
+pub(crate) enum AbsorbError {
+    /// The component of this local state has no way out (a timeless trap).
+    Trap(u32),
+    /// A component of this many states is too large to solve in memory
+    /// ([`linear::MAX_DENSE_NUMBERS`]).
+    TooLarge(usize),
+    /// The LU of a component of this many states failed.
+    Failed(usize, String),
+}
+
+impl AbsorbError {
+    /// The error as the analysis reports it; `marking(v)` names local state `v`'s marking.
+    pub(crate) fn into_analysis(self, marking: impl FnOnce(u32) -> String) -> AnalysisError {
+        match self {
+            AbsorbError::Trap(v) => AnalysisError::TimelessTrap {
+                marking: marking(v),
+            },
+            AbsorbError::TooLarge(markings) => AnalysisError::VanishingLoopTooLarge { markings },
+            AbsorbError::Failed(markings, reason) => {
+                AnalysisError::VanishingLoopFailed { markings, reason }
+            }
+        }
     }
 }
 
 /// Resolves local states `0..n`. `arcs(v, out)` gives v's arcs with their probabilities (sum
-/// 1); `own(v, out)` the counts of v's own step. `Err(v)` when a component of v has no way
-/// out (a timeless trap).
+/// 1); `own(v, out)` the counts of v's own step.
 pub(crate) fn absorb(
     n: usize,
     mut arcs: impl FnMut(u32, &mut Vec<(Target, f64)>),
     mut own: impl FnMut(u32, &mut Vec<(u32, f64)>),
-) -> Result<Absorbed, u32> {
+) -> Result<Absorbed, AbsorbError> {
     let mut buf = Vec::new();
     let sccs = tarjan(n, |v, out| {
         buf.clear();
@@ -113,16 +166,13 @@ fn solve_component(
     arcs: &mut impl FnMut(u32, &mut Vec<(Target, f64)>),
     own: &mut impl FnMut(u32, &mut Vec<(u32, f64)>),
     res: &mut Absorbed,
-) -> Result<(), u32> {
+) -> Result<(), AbsorbError> {
     let k = members.len();
     let comp = component[members[0] as usize];
     let pos: FxHashMap<u32, usize> = members.iter().enumerate().map(|(i, &v)| (v, i)).collect();
     let mut cols_d: FxHashMap<u32, usize> = FxHashMap::default();
     let mut cols_c: FxHashMap<u32, usize> = FxHashMap::default();
-    let mut a = vec![0.0f64; k * k];
-    for i in 0..k {
-        a[i * k + i] = 1.0;
-    }
+    let mut a: Vec<(usize, usize, f64)> = (0..k).map(|i| (i, i, 1.0)).collect();
     let mut rhs_d: Vec<Vec<(usize, f64)>> = vec![Vec::new(); k];
     let mut rhs_c: Vec<Vec<(usize, f64)>> = vec![Vec::new(); k];
     let mut exit = false;
@@ -149,7 +199,7 @@ fn solve_component(
                     rhs_d[i].push((col, p));
                 }
                 Target::In(w) if component[w as usize] == comp => {
-                    a[i * k + pos[&w]] -= p;
+                    a.push((i, pos[&w], -p));
                 }
                 Target::In(w) => {
                     exit = true;
@@ -168,10 +218,13 @@ fn solve_component(
         }
     }
     if !exit {
-        return Err(members[0]);
+        return Err(AbsorbError::Trap(members[0]));
     }
     let (nd, nc) = (cols_d.len(), cols_c.len());
     let w = nd + nc;
+    if k.saturating_mul(w) > linear::MAX_DENSE_NUMBERS {
+        return Err(AbsorbError::TooLarge(k));
+    }
     let mut b = vec![0.0f64; k * w];
     for i in 0..k {
         for &(c, x) in &rhs_d[i] {
@@ -181,7 +234,10 @@ fn solve_component(
             b[i * w + nd + c] += x;
         }
     }
-    lu_solve(&mut a, k, &mut b, w);
+    solve_block(k, &a, &mut b, w).map_err(|e| match e {
+        SolveError::TooLarge => AbsorbError::TooLarge(k),
+        SolveError::Failed(e) => AbsorbError::Failed(k, e),
+    })?;
     let mut col_d: Vec<(u32, usize)> = cols_d.into_iter().collect();
     col_d.sort_unstable();
     let mut col_c: Vec<(u32, usize)> = cols_c.into_iter().collect();
