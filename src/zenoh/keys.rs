@@ -13,7 +13,7 @@
 
 use std::sync::LazyLock;
 
-use super::wire::{Field, TIME, TypeDescription, TypeHash};
+use super::wire::{Field, TIME, TypeDescription, TypeHash, action_hashes, cancel_goal_hash};
 use crate::ros2::msgs;
 
 /// The ROS 2 admin space of liveliness tokens.
@@ -26,9 +26,6 @@ pub const ROBOT_NODE: &str = "gspn_robot";
 pub const SUPERVISOR_NS: &str = "/gspn";
 /// The supervisor's node name.
 pub const SUPERVISOR_NODE: &str = "supervisor";
-
-/// What rmw_zenoh puts where a service type hash goes when it has none (its Humble port).
-pub const NO_TYPE_HASH: &str = "TypeHashNotSupported";
 
 /// A ROS 2 name as a key expression chunk: `/gspn/firings` → `gspn/firings`.
 fn strip(name: &str) -> &str {
@@ -58,18 +55,18 @@ pub fn topic(domain: u16, name: &str, dds_type: &str, hash: &str) -> String {
     format!("{domain}/{}/{dds_type}/{hash}", strip(name))
 }
 
-/// The three services of action `/<robot>/<server>` (ExecPlace).
+/// The three services of action `/<robot>/<server>` (ExecPlace), each with its type's hash.
 pub fn exec_place(domain: u16, robot: &str, server: &str, service: ActionService) -> String {
     let (sub, ty) = match service {
-        ActionService::SendGoal => ("send_goal", "ExecPlace_SendGoal_"),
-        ActionService::GetResult => ("get_result", "ExecPlace_GetResult_"),
-        ActionService::CancelGoal => ("cancel_goal", "CancelGoal_"),
+        ActionService::SendGoal => ("send_goal", "gspn_msgs::action::dds_::ExecPlace_SendGoal_"),
+        ActionService::GetResult => (
+            "get_result",
+            "gspn_msgs::action::dds_::ExecPlace_GetResult_",
+        ),
+        ActionService::CancelGoal => ("cancel_goal", "action_msgs::srv::dds_::CancelGoal_"),
     };
-    let pkg = match service {
-        ActionService::CancelGoal => "action_msgs::srv::dds_",
-        _ => "gspn_msgs::action::dds_",
-    };
-    format!("{domain}/{robot}/{server}/_action/{sub}/{pkg}::{ty}/{NO_TYPE_HASH}")
+    let hash = &SERVICE_HASHES[service as usize].0;
+    format!("{domain}/{robot}/{server}/_action/{sub}/{ty}/{hash}")
 }
 
 /// The services an action is made of.
@@ -172,6 +169,25 @@ const STRING: TypeDescription = TypeDescription {
     fields: &[("data", Field::String)],
 };
 
+const EXEC_PLACE_GOAL: TypeDescription = TypeDescription {
+    name: "gspn_msgs/action/ExecPlace_Goal",
+    fields: &[("place", Field::String), ("agent", Field::String)],
+};
+const EXEC_PLACE_RESULT: TypeDescription = TypeDescription {
+    name: "gspn_msgs/action/ExecPlace_Result",
+    fields: &[("transition", Field::String), ("outcome", Field::String)],
+};
+
+/// The hashes of the ExecPlace action's services, in [`ActionService`] order.
+static SERVICE_HASHES: LazyLock<[TypeHash; 3]> = LazyLock::new(|| {
+    let (send_goal, get_result) = action_hashes(
+        "gspn_msgs/action/ExecPlace",
+        &EXEC_PLACE_GOAL,
+        &EXEC_PLACE_RESULT,
+    );
+    [send_goal, get_result, cancel_goal_hash()]
+});
+
 static HASHES: LazyLock<[TypeHash; 4]> = LazyLock::new(|| {
     [
         TypeHash::of(&FIRING, &[TIME]),
@@ -229,9 +245,16 @@ mod tests {
             Topic::Drift.key(3),
             "3/gspn/drift/std_msgs::msg::dds_::String_/RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
         );
+        let k = exec_place(0, "r1", "exec_place", ActionService::SendGoal);
+        assert!(
+            k.starts_with(
+                "0/r1/exec_place/_action/send_goal/gspn_msgs::action::dds_::ExecPlace_SendGoal_/RIHS01_"
+            ),
+            "{k}"
+        );
         assert_eq!(
-            exec_place(0, "r1", "exec_place", ActionService::SendGoal),
-            "0/r1/exec_place/_action/send_goal/gspn_msgs::action::dds_::ExecPlace_SendGoal_/TypeHashNotSupported"
+            exec_place(0, "r1", "exec_place", ActionService::CancelGoal),
+            "0/r1/exec_place/_action/cancel_goal/action_msgs::srv::dds_::CancelGoal_/RIHS01_573d8b0a534451d7bc2ac8c5ffde8ac14b8593b7001175d0cd6516dcbeb8689a"
         );
     }
 

@@ -21,7 +21,16 @@ pub use crate::ros2::heartbeat::Liveness;
 /// The liveness of some nodes, by namespace and name.
 #[derive(Clone, Debug)]
 pub struct Presence {
-    states: Arc<HashMap<String, watch::Receiver<Liveness>>>,
+    states: Arc<HashMap<String, Watched>>,
+}
+
+/// What is known of one watched node.
+#[derive(Clone, Debug)]
+struct Watched {
+    /// Alive, or lost after its token has been gone for `lost_after`.
+    liveness: watch::Receiver<Liveness>,
+    /// Whether its token is there now (a cut shorter than `lost_after` shows here only).
+    present: watch::Receiver<bool>,
 }
 
 impl Presence {
@@ -70,10 +79,14 @@ impl Presence {
         let mut by_node = HashMap::new();
         let mut states = HashMap::new();
         for (name, node) in names.iter().zip(nodes) {
-            let (tx, rx) = watch::channel(Liveness::Unknown);
-            // (sender, tokens present, since when none is)
-            by_node.insert(node.clone(), (name.clone(), tx, 0usize, None::<Instant>));
-            states.insert(name.clone(), rx);
+            let (tx, liveness) = watch::channel(Liveness::Unknown);
+            let (present_tx, present) = watch::channel(false);
+            // (name, liveness, presence, tokens present, since when none is)
+            by_node.insert(
+                node.clone(),
+                (name.clone(), tx, present_tx, 0usize, None::<Instant>),
+            );
+            states.insert(name.clone(), Watched { liveness, present });
         }
         let check = (lost_after / 4).max(Duration::from_millis(10));
         tokio::spawn(async move {
@@ -85,11 +98,14 @@ impl Presence {
                         let Some(node) = keys::parse_node_token(s.key_expr().as_str()) else {
                             continue;
                         };
-                        let Some((_, tx, n, gone)) = by_node.get_mut(&node) else { continue };
+                        let Some((_, tx, present, n, gone)) = by_node.get_mut(&node) else {
+                            continue;
+                        };
                         match s.kind() {
                             SampleKind::Put => {
                                 *n += 1;
                                 *gone = None;
+                                present.send_replace(true);
                                 tx.send_if_modified(|l| {
                                     let changed = *l != Liveness::Alive;
                                     *l = Liveness::Alive;
@@ -100,13 +116,14 @@ impl Presence {
                                 *n = n.saturating_sub(1);
                                 if *n == 0 {
                                     *gone = Some(Instant::now());
+                                    present.send_replace(false);
                                 }
                             }
                         }
                     }
                     _ = tick.tick() => {
                         let now = Instant::now();
-                        for (name, tx, _, gone) in by_node.values() {
+                        for (name, tx, _, _, gone) in by_node.values() {
                             if let Some(t) = gone
                                 && now.duration_since(*t) >= lost_after
                                 && *tx.borrow() == Liveness::Alive
@@ -115,7 +132,7 @@ impl Presence {
                                 let _ = tx.send(Liveness::Lost);
                             }
                         }
-                        if by_node.values().all(|(_, tx, _, _)| tx.is_closed()) {
+                        if by_node.values().all(|(_, tx, p, _, _)| tx.is_closed() && p.is_closed()) {
                             break;
                         }
                     }
@@ -129,14 +146,19 @@ impl Presence {
 
     /// The liveness of `name`, when it is watched.
     pub fn liveness(&self, name: &str) -> Option<watch::Receiver<Liveness>> {
-        self.states.get(name).cloned()
+        self.states.get(name).map(|w| w.liveness.clone())
+    }
+
+    /// Whether `name`'s token is there now, when it is watched.
+    pub fn present(&self, name: &str) -> Option<watch::Receiver<bool>> {
+        self.states.get(name).map(|w| w.present.clone())
     }
 
     /// How many watched nodes are alive now.
     pub fn alive(&self) -> usize {
         self.states
             .values()
-            .filter(|rx| *rx.borrow() == Liveness::Alive)
+            .filter(|w| *w.liveness.borrow() == Liveness::Alive)
             .count()
     }
 
@@ -144,8 +166,8 @@ impl Presence {
     /// error.
     pub async fn all_alive(&self, deadline: Duration) -> Result<(), Vec<String>> {
         let wait = async {
-            for rx in self.states.values() {
-                let mut rx = rx.clone();
+            for w in self.states.values() {
+                let mut rx = w.liveness.clone();
                 let _ = rx.wait_for(|s| *s == Liveness::Alive).await;
             }
         };
@@ -155,7 +177,7 @@ impl Presence {
         let mut missing: Vec<String> = self
             .states
             .iter()
-            .filter(|(_, rx)| *rx.borrow() != Liveness::Alive)
+            .filter(|(_, w)| *w.liveness.borrow() != Liveness::Alive)
             .map(|(r, _)| r.clone())
             .collect();
         missing.sort();

@@ -7,6 +7,10 @@
 //! - the run stopped, or the action dropped (the place's timeout) → the goal is cancelled on
 //!   the robot;
 //! - the robot's token gone for `lost_after` ([`Liveness::Lost`]) → `Failed("robot … lost")`.
+//!   A call that ends without a reply because the robot's queryables went away with its
+//!   token (a cut link, a dead process) does not fail the goal by itself: the call is made
+//!   again when the token is back (a cut shorter than `lost_after` costs nothing, as over
+//!   DDS), and the goal fails as lost if it is not.
 //!
 //! A call is a Zenoh query whose attachment carries the client's GID and a sequence
 //! number, as rmw_zenoh's service clients send it; `get_result` is a query the robot answers
@@ -35,6 +39,10 @@ use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
 /// How long a goal or cancel request may wait for its answer.
 const CALL_WAIT: Duration = Duration::from_secs(10);
+/// How long after a call failed its robot's token may take to vanish for the failure to be
+/// put down to the robot's absence (the router ends the query and withdraws the token at
+/// about the same time, in either order).
+const GONE_GRACE: Duration = Duration::from_secs(1);
 /// How long a result may take: a goal runs as long as the robot's action does (the place's
 /// own timeout, applied by the runtime, bounds it when the plan has one).
 const RESULT_WAIT: Duration = Duration::from_secs(7 * 24 * 3600);
@@ -111,16 +119,19 @@ pub struct RobotLink {
     client: ClientId,
     keys: [String; 3],
     liveness: watch::Receiver<Liveness>,
+    present: watch::Receiver<bool>,
 }
 
 impl RobotLink {
-    /// A link to `/<robot>/<server>` in `domain`, failing goals when `liveness` turns lost.
+    /// A link to `/<robot>/<server>` in `domain`, failing goals when `liveness` turns lost;
+    /// `present`: whether the robot's token is there now.
     pub fn new(
         session: Session,
         domain: u16,
         robot: String,
         server: &str,
         liveness: watch::Receiver<Liveness>,
+        present: watch::Receiver<bool>,
     ) -> RobotLink {
         let key = |s| keys::exec_place(domain, &robot, server, s);
         let client = ClientId::new(&format!("/{robot}/{server}"));
@@ -134,6 +145,42 @@ impl RobotLink {
             session,
             client,
             liveness,
+            present,
+        }
+    }
+
+    /// After a call failed: whether the robot's token vanished (within [`GONE_GRACE`]) and
+    /// came back, so the call is worth making again. Never returns while the robot stays
+    /// away: the caller also waits for [`Liveness::Lost`].
+    async fn back_after_absence(&self) -> bool {
+        let mut present = self.present.clone();
+        let gone = tokio::time::timeout(GONE_GRACE, present.wait_for(|p| !*p))
+            .await
+            .is_ok_and(|r| r.is_ok());
+        if !gone {
+            return false;
+        }
+        present.wait_for(|p| *p).await.is_ok()
+    }
+
+    /// `send_goal`, made again whenever it failed because the robot was away.
+    async fn send_goal_until_back(&self, goal: &ExecPlaceGoal) -> Result<(GoalId, bool), String> {
+        loop {
+            match self.send_goal(goal.clone()).await {
+                Err(_) if self.back_after_absence().await => continue,
+                r => return r,
+            }
+        }
+    }
+
+    /// `get_result`, asked again whenever it failed because the robot was away (a robot
+    /// that kept running still has the goal; a restarted one answers "unknown goal").
+    async fn result_until_back(&self, goal_id: GoalId) -> Result<GetResultResponse, String> {
+        loop {
+            match self.result(goal_id).await {
+                Err(_) if self.back_after_absence().await => continue,
+                r => return r,
+            }
         }
     }
 
@@ -267,14 +314,14 @@ async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
     };
     let work = async {
         let (id, accepted) = link
-            .send_goal(goal)
+            .send_goal_until_back(&goal)
             .await
             .map_err(|e| format!("sending the goal to robot `{robot}`: {e}"))?;
         if !accepted {
             return Err(format!("robot `{robot}` rejected the goal"));
         }
         guard.set(Some(id));
-        link.result(id)
+        link.result_until_back(id)
             .await
             .map_err(|e| format!("result from robot `{robot}`: {e}"))
     };

@@ -201,11 +201,21 @@ impl ZenohBackend {
         servers.dedup();
         let mut links = Vec::new();
         for robot in robots {
-            let live = presence
-                .liveness(robot)
-                .ok_or_else(|| ZenohError::Startup(format!("robot `{robot}` is not watched")))?;
+            let (Some(live), Some(present)) = (presence.liveness(robot), presence.present(robot))
+            else {
+                return Err(ZenohError::Startup(format!(
+                    "robot `{robot}` is not watched"
+                )));
+            };
             for &server in &servers {
-                let link = RobotLink::new(session.clone(), d, robot.clone(), server, live.clone());
+                let link = RobotLink::new(
+                    session.clone(),
+                    d,
+                    robot.clone(),
+                    server,
+                    live.clone(),
+                    present.clone(),
+                );
                 links.push((server.to_string(), Arc::new(link)));
             }
         }

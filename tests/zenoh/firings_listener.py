@@ -1,7 +1,9 @@
 """A subscriber of the run's firings on the PyPI `eclipse-zenoh` package (not our code):
 connects to the router given as argv[1] as a client, subscribes to `*/gspn/firings/**`
-(any domain, any type hash), and prints `seq transition` for each firing, decoding the
-CDR payload by hand (header 00 01 00 00, then uint64 seq, then the transition string).
+(any domain, any type hash), and prints `seq transition key attachment-seq` for each
+firing, decoding the CDR payload by hand (header 00 01 00 00, then uint64 seq, then the
+transition string) and the attachment with zenoh's own deserializer as rmw_zenoh writes it
+(int64 sequence number, int64 source timestamp, the 16-byte GID as a sequence).
 Prints `ready` once subscribed; exits after argv[2] firings or argv[3] seconds."""
 
 import json
@@ -10,6 +12,7 @@ import sys
 import time
 
 import zenoh
+from zenoh.ext import Int64, UInt8, z_deserialize
 
 
 def main() -> None:
@@ -32,7 +35,11 @@ def main() -> None:
             (seq,) = struct.unpack_from("<Q", b, 4)
             (n,) = struct.unpack_from("<I", b, 12)
             name = b[16 : 16 + n - 1].decode()
-            print(seq, name, str(sample.key_expr), flush=True)
+            att_seq, _stamp, gid = z_deserialize(
+                tuple[Int64, Int64, list[UInt8]], sample.attachment
+            )
+            assert len(gid) == 16, gid
+            print(seq, name, str(sample.key_expr), att_seq, flush=True)
             got += 1
 
 

@@ -197,7 +197,16 @@ async fn a_robot_whose_token_is_gone_fails_its_goal_and_the_plan_stops() {
     let sup = plan_runner(
         dir.path(),
         "supervisor",
-        &["run", PATROL, "--json", "--zenoh", &e],
+        // Far more firings than the patrol makes in the seconds it takes to lose r2.
+        &[
+            "run",
+            PATROL,
+            "--json",
+            "--zenoh",
+            &e,
+            "--max-firings",
+            "1000000",
+        ],
         true,
     );
     assert!(
@@ -224,7 +233,7 @@ async fn a_robot_whose_token_is_gone_fails_its_goal_and_the_plan_stops() {
     );
 }
 
-/// The venv `.ci/run` makes (`target/venv-ros2`, or `$GSPN_ROS2_VENV`), with `eclipse-zenoh`.
+/// The venv `./test.sh` makes (`target/venv-ros2`, or `$GSPN_ROS2_VENV`), with `eclipse-zenoh`.
 fn python() -> PathBuf {
     let venv = std::env::var_os("GSPN_ROS2_VENV")
         .map(PathBuf::from)
@@ -233,7 +242,7 @@ fn python() -> PathBuf {
     assert!(
         py.is_file(),
         "the Zenoh test with a Python subscriber needs a venv with eclipse-zenoh at {} \
-         (python3 -m venv {0} && {0}/bin/pip install eclipse-zenoh==1.10.2; .ci/run does this)",
+         (python3 -m venv {0} && {0}/bin/pip install eclipse-zenoh==1.10.2; ./test.sh does this)",
         venv.display()
     );
     py
@@ -312,6 +321,13 @@ async fn a_python_subscriber_gets_500_firings_of_the_210_robot_fleet() {
                     key.starts_with("0/gspn/firings/gspn_msgs::msg::dds_::Firing_/RIHS01_"),
                     "{l}"
                 );
+                // The attachment's sequence number (the firings publisher's own count,
+                // from 1) as zenoh-ext reads it: the firing's seq.
+                assert_eq!(
+                    w.next(),
+                    Some(seqs.last().unwrap().to_string().as_str()),
+                    "{l}"
+                );
             }
             other => panic!(
                 "after {} firings: {other:?}\nsupervisor: {}\nlistener: {}",
@@ -336,4 +352,113 @@ async fn a_python_subscriber_gets_500_firings_of_the_210_robot_fleet() {
     let (code, _) = finish(fleet, Duration::from_secs(60)).await;
     assert_eq!(code, Some(0));
     eprintln!("210 robots: {N} firings received by the Python subscriber in {took:?}");
+}
+
+/// A robot that is not gspn: `ros2/examples/zenoh_robot.py` on PyPI `eclipse-zenoh` serves
+/// ExecPlace as three queryables and declares its node token; the supervisor drives it,
+/// beside two gspn robots, through the temperature patrol, and it leaves when the run is
+/// over.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_python_robot_on_eclipse_zenoh_completes_a_patrol() {
+    const N: u64 = 200;
+    let dir = tempfile::tempdir().unwrap();
+    let e = endpoint();
+    let _router = router(dir.path(), "router", &e).await;
+    let py = spawn(
+        dir.path(),
+        "python_robot",
+        Command::new(python()),
+        &[
+            repo("ros2/examples/zenoh_robot.py")
+                .to_string_lossy()
+                .into_owned(),
+            "--id".into(),
+            "r1".into(),
+            "--router".into(),
+            e.clone(),
+            "--delay".into(),
+            "0.01".into(),
+        ],
+        false,
+    );
+    let _robots: Vec<Proc> = ["r2", "r3"]
+        .iter()
+        .map(|id| {
+            plan_runner(
+                dir.path(),
+                id,
+                &["robot", "--id", id, "--plan", PATROL, "--zenoh", &e],
+                false,
+            )
+        })
+        .collect();
+    let journal = dir.path().join("journal.jsonl");
+    let sup = plan_runner(
+        dir.path(),
+        "supervisor",
+        &[
+            "run",
+            PATROL,
+            "--json",
+            "--zenoh",
+            &e,
+            "--max-firings",
+            &N.to_string(),
+            "--journal",
+            journal.to_str().unwrap(),
+        ],
+        true,
+    );
+    let log = sup.log.clone();
+    let (code, out) = finish(sup, Duration::from_secs(120)).await;
+    let log = std::fs::read_to_string(log).unwrap();
+    assert_eq!(code, Some(0), "{out}\n{log}\npython robot:\n{}", py.log());
+    let summary: serde_json::Value = serde_json::from_str(&out).expect("JSON summary");
+    assert_eq!(summary["stopped"], "max_firings");
+    assert_eq!(summary["firings"], N);
+
+    // The Python robot leaves by itself when the supervisor says the run is over.
+    let py_log = py.log.clone();
+    let (code, _) = finish(py, Duration::from_secs(20)).await;
+    let text = std::fs::read_to_string(py_log).unwrap();
+    assert_eq!(code, Some(0), "{text}");
+    assert!(
+        text.contains(&format!(
+            "python robot r1: the supervisor's run is over (max_firings after {N} firings): leaving"
+        )),
+        "{text}"
+    );
+    // Every goal it finished became one firing of its agent (the last may have ended as
+    // the run stopped), and it checked the temperature at all four locations.
+    let succeeded = text.lines().filter(|l| l.ends_with(": succeeded")).count();
+    let fired_r1 = std::fs::read_to_string(&journal)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|e| e["event"] == "fired" && e["robots"] == serde_json::json!(["r1"]))
+        .count();
+    assert!(fired_r1 >= 8, "r1 moved {fired_r1} times:\n{text}");
+    assert!(
+        succeeded == fired_r1 || succeeded == fired_r1 + 1,
+        "{succeeded} goals succeeded, {fired_r1} firings of r1:\n{text}"
+    );
+    let checked: std::collections::BTreeSet<&str> = text
+        .lines()
+        .filter_map(|l| {
+            l.strip_prefix("python robot r1: goal ")?
+                .strip_suffix(": started")
+        })
+        .filter_map(|g| g.split(" agent ").next())
+        .filter(|p| p.contains("Check_Temperature"))
+        .collect();
+    assert_eq!(
+        checked,
+        std::collections::BTreeSet::from([
+            "p1:Check_Temperature_L1",
+            "p5:Check_Temperature_L2",
+            "p9:Check_Temperature_L3",
+            "p13:Check_Temperature_L4"
+        ]),
+        "{text}"
+    );
 }

@@ -4,11 +4,13 @@
 //! 5 s and restored: the far site's robots are lost (their tokens vanish with the routers'
 //! link) and come back; the run goes on, its firings numbered without a gap or a repeat.
 //!
-//! Needs root and `ip` (iproute2; `.ci/run` installs it); fails, saying so, without them.
+//! Needs root and `ip` (iproute2; `./test.sh` installs it); fails, saying so, without them.
 
 use std::path::Path;
+
 use std::process::Stdio;
 use std::time::{Duration, Instant};
+use tokio::io::{AsyncBufReadExt, BufReader};
 
 use gspn::io::{Format, write_net};
 use gspn::net::{NetBuilder, Servers};
@@ -74,16 +76,19 @@ impl Sites {
         ]);
     }
 
+    /// `plan-runner ARGS` in site `site`.
     fn spawn(&self, site: usize, dir: &Path, name: &str, args: &[&str]) -> Proc {
+        let mut all = vec![env!("CARGO_BIN_EXE_plan-runner")];
+        all.extend_from_slice(args);
+        self.spawn_cmd(site, dir, name, &all)
+    }
+
+    /// Command `cmd` in site `site`, its stdout piped, its stderr to `<name>.log`.
+    fn spawn_cmd(&self, site: usize, dir: &Path, name: &str, cmd: &[&str]) -> Proc {
         let log = dir.join(format!("{name}.log"));
         let child = tokio::process::Command::new("ip")
-            .args([
-                "netns",
-                "exec",
-                &self.ns[site],
-                env!("CARGO_BIN_EXE_plan-runner"),
-            ])
-            .args(args)
+            .args(["netns", "exec", &self.ns[site]])
+            .args(cmd)
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .env_remove("RUST_LOG")
             .stdin(Stdio::null())
@@ -198,6 +203,38 @@ async fn a_site_cut_off_for_5_s_is_lost_and_comes_back_without_a_gap_in_the_firi
             )
         })
         .collect();
+    // A subscriber on PyPI eclipse-zenoh in site A: every firing, once, in order.
+    let py = super::python();
+    let script = super::repo("tests/zenoh/firings_listener.py");
+    let mut listener = sites.spawn_cmd(
+        0,
+        dir.path(),
+        "listener",
+        &[
+            py.to_str().unwrap(),
+            script.to_str().unwrap(),
+            "tcp/127.0.0.1:7447",
+            "1000000",
+            "240",
+        ],
+    );
+    let mut lines = BufReader::new(listener.child.stdout.take().unwrap()).lines();
+    let first = tokio::time::timeout(Duration::from_secs(60), lines.next_line()).await;
+    assert!(
+        matches!(&first, Ok(Ok(Some(l))) if l == "ready"),
+        "{first:?}: {}",
+        listener.log()
+    );
+    // Read as it prints (a full pipe would stall the subscriber's session).
+    let (seq_tx, mut seq_rx) = tokio::sync::mpsc::unbounded_channel();
+    tokio::spawn(async move {
+        while let Ok(Some(l)) = lines.next_line().await {
+            let seq = l.split(' ').next().and_then(|s| s.parse::<u64>().ok());
+            if seq_tx.send(seq).is_err() {
+                break;
+            }
+        }
+    });
     let journal = dir.path().join("journal.jsonl");
     let sup = sites.spawn(
         0,
@@ -273,6 +310,22 @@ async fn a_site_cut_off_for_5_s_is_lost_and_comes_back_without_a_gap_in_the_firi
             "zenoh: published {fired} firings (0 events lost, 0 publish errors)"
         )),
         "{log}"
+    );
+    // The subscriber's firings: seq 1..=fired, no gap, no repeat.
+    let mut seqs = Vec::new();
+    while seqs.len() < fired as usize {
+        match tokio::time::timeout(Duration::from_secs(10), seq_rx.recv()).await {
+            Ok(Some(Some(seq))) => seqs.push(seq),
+            _ => break,
+        }
+    }
+    let missing: Vec<u64> = (1..=fired).filter(|k| !seqs.contains(k)).collect();
+    assert!(
+        seqs == (1..=fired).collect::<Vec<_>>(),
+        "the subscriber got {} of {fired} firings; missing {missing:?}\n{}\nsupervisor:\n{log}\nrouter A:\n{}",
+        seqs.len(),
+        listener.log(),
+        router_a.log()
     );
     let mut received = Vec::new();
     for r in robots {
