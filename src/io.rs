@@ -41,49 +41,20 @@ pub struct Span {
 }
 
 impl Span {
-    /// The line and column of byte `offset` in `text` (clamped to its end).
+    /// The line and column of byte `offset` in `text` (clamped to its end). The column
+    /// counts characters, not bytes, so it matches what an editor shows.
     pub fn locate(text: &[u8], offset: usize) -> Span {
-        let offset = offset.min(text.len());
-        let before = &text[..offset];
-        let line = before.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
-        let line_start = before
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
-        // Count characters, not bytes, so a column matches what an editor shows.
-        let column = String::from_utf8_lossy(&text[line_start..offset])
-            .chars()
-            .count() as u32
-            + 1;
-        Span { line, column }
+        LineIndex::new(text).locate(text, offset)
     }
 
-    /// [`Span::locate`] for many offsets in one pass over `text`: linear in the text's size
-    /// when `offsets` ascend (a reader's elements in file order); an offset smaller than the
-    /// one before it is located from the start.
+    /// [`Span::locate`] for many offsets, the text indexed once ([`LineIndex`]): linear in
+    /// the text's size plus a binary search per offset, in any order.
     pub fn locate_all(text: &[u8], offsets: impl IntoIterator<Item = usize>) -> Vec<Span> {
-        let (mut at, mut line, mut line_start) = (0usize, 1u32, 0usize);
-        let mut out = Vec::new();
-        for offset in offsets {
-            let offset = offset.min(text.len());
-            if offset < at {
-                out.push(Span::locate(text, offset));
-                continue;
-            }
-            for (i, &b) in text[at..offset].iter().enumerate() {
-                if b == b'\n' {
-                    line += 1;
-                    line_start = at + i + 1;
-                }
-            }
-            at = offset;
-            let column = String::from_utf8_lossy(&text[line_start..offset])
-                .chars()
-                .count() as u32
-                + 1;
-            out.push(Span { line, column });
-        }
-        out
+        let index = LineIndex::new(text);
+        offsets
+            .into_iter()
+            .map(|offset| index.locate(text, offset))
+            .collect()
     }
 }
 
@@ -133,7 +104,8 @@ impl LineIndex {
         self.chars[k] + char_starts(&text[k * Self::STEP..offset])
     }
 
-    /// The same answer as [`Span::locate`] for the (UTF-8) text this index was built from.
+    /// The line and column of byte `offset` in the text this index was built from
+    /// (clamped to its end): the one place the crate turns an offset into a [`Span`].
     pub fn locate(&self, text: &[u8], offset: usize) -> Span {
         let offset = offset.min(text.len());
         let line = self.starts.partition_point(|&s| s <= offset);
