@@ -19,7 +19,7 @@ pub enum NetError {
         name: String,
     },
     /// A rate is zero, negative, NaN or infinite.
-    #[error("transition `{transition}`: rate {rate} must be a finite number > 0")]
+    #[error("transition `{transition}`: rate {rate} {}", Timing::RATE_EXPECTED)]
     BadRate {
         /// The transition's name.
         transition: String,
@@ -27,7 +27,10 @@ pub enum NetError {
         rate: f64,
     },
     /// A weight is negative, NaN or infinite.
-    #[error("transition `{transition}`: weight {weight} must be a finite number ≥ 0")]
+    #[error(
+        "transition `{transition}`: weight {weight} {}",
+        Timing::WEIGHT_EXPECTED
+    )]
     BadWeight {
         /// The transition's name.
         transition: String,
@@ -259,7 +262,7 @@ impl NetBuilder {
         for t in &transitions {
             match t.timing {
                 Timing::Exponential { rate, servers } => {
-                    if !(rate.is_finite() && rate > 0.0) {
+                    if Timing::rate(rate).is_err() {
                         return Err(NetError::BadRate {
                             transition: t.name.clone(),
                             rate,
@@ -273,7 +276,7 @@ impl NetBuilder {
                     }
                 }
                 Timing::Immediate { weight, priority } => {
-                    if !(weight.is_finite() && weight >= 0.0) {
+                    if Timing::weight(weight).is_err() {
                         return Err(NetError::BadWeight {
                             transition: t.name.clone(),
                             weight,

@@ -189,14 +189,10 @@ impl Env<'_> {
         attr: &Attr,
         owner: &str,
         what: &'static str,
-        ok: fn(f64) -> bool,
-        expected: &'static str,
+        check: fn(f64) -> Result<f64, &'static str>,
     ) -> Result<f64, LoadError> {
         let v = self.value(attr, owner)?;
-        if ok(v) {
-            return Ok(v);
-        }
-        Err(self.out_of_range(attr, owner, what, v, expected))
+        check(v).map_err(|expected| self.out_of_range(attr, owner, what, v, expected))
     }
 
     fn coord(&self, attr: &Attr, owner: &str, what: &'static str) -> Result<f64, LoadError> {
@@ -510,13 +506,7 @@ fn timing(env: &Env<'_>, r: &Record, name: &str) -> Result<Timing, LoadError> {
     match ty {
         "EXP" => {
             let rate = match r.get("delay").or_else(|| r.get("rate")) {
-                Some(d) => env.real(
-                    d,
-                    name,
-                    "rate",
-                    |v| v.is_finite() && v > 0.0,
-                    "must be a finite number > 0",
-                )?,
+                Some(d) => env.real(d, name, "rate", Timing::rate)?,
                 None => 1.0,
             };
             let servers = match r.get("nservers") {
@@ -534,13 +524,7 @@ fn timing(env: &Env<'_>, r: &Record, name: &str) -> Result<Timing, LoadError> {
         }
         "IMM" => {
             let weight = match r.get("weight") {
-                Some(w) => env.real(
-                    w,
-                    name,
-                    "weight",
-                    |v| v.is_finite() && v >= 0.0,
-                    "must be a finite number ≥ 0",
-                )?,
+                Some(w) => env.real(w, name, "weight", Timing::weight)?,
                 None => 1.0,
             };
             let priority = match r.get("priority") {

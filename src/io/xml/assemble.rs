@@ -313,7 +313,7 @@ fn transition(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Transitio
     };
     let timing = if timed {
         let rate = match &n.rate {
-            Some(v) => real(x, v, Of("rate", name), true)?,
+            Some(v) => real(x, v, Of("rate", name), Timing::rate)?,
             None => 1.0,
         };
         let infinite = match &n.infinite_server {
@@ -331,7 +331,7 @@ fn transition(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Transitio
         Timing::Exponential { rate, servers }
     } else {
         let weight = match &n.rate {
-            Some(v) => real(x, v, Of("weight", name), false)?,
+            Some(v) => real(x, v, Of("weight", name), Timing::weight)?,
             None => 1.0,
         };
         let priority = match &n.priority {
@@ -525,19 +525,15 @@ fn count(x: &XmlStream<'_>, v: &Value, of: Of<'_>, min: u32) -> Result<u32, Load
     Ok(n as u32)
 }
 
-/// A finite real: `> 0` when `positive`, else `≥ 0`.
-fn real(x: &XmlStream<'_>, v: &Value, of: Of<'_>, positive: bool) -> Result<f64, LoadError> {
+/// A number that passes `check` ([`Timing::rate`], [`Timing::weight`]).
+fn real(
+    x: &XmlStream<'_>,
+    v: &Value,
+    of: Of<'_>,
+    check: fn(f64) -> Result<f64, &'static str>,
+) -> Result<f64, LoadError> {
     let f: f64 = v.text.parse().map_err(|_| of.not_a_number(x, v))?;
-    let ok = f.is_finite() && if positive { f > 0.0 } else { f >= 0.0 };
-    if !ok {
-        let expected = if positive {
-            "must be a finite number > 0"
-        } else {
-            "must be a finite number ≥ 0"
-        };
-        return Err(of.out_of_range(x, v, &v.text, expected));
-    }
-    Ok(f)
+    check(f).map_err(|expected| of.out_of_range(x, v, &v.text, expected))
 }
 
 fn boolean(x: &XmlStream<'_>, v: &Value, of: Of<'_>) -> Result<bool, LoadError> {

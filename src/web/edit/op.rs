@@ -324,28 +324,12 @@ impl Num {
 
     pub(super) fn rate(&self, name: &str) -> Result<f64, EditError> {
         let v = self.value("rate", name)?;
-        if v.is_finite() && v > 0.0 {
-            return Ok(v);
-        }
-        Err(out_of_range(
-            "rate",
-            name,
-            self.shown(v),
-            "must be a finite number > 0",
-        ))
+        Timing::rate(v).map_err(|expected| out_of_range("rate", name, self.shown(v), expected))
     }
 
     pub(super) fn weight(&self, name: &str) -> Result<f64, EditError> {
         let v = self.value("weight", name)?;
-        if v.is_finite() && v >= 0.0 {
-            return Ok(v);
-        }
-        Err(out_of_range(
-            "weight",
-            name,
-            self.shown(v),
-            "must be a finite number ≥ 0",
-        ))
+        Timing::weight(v).map_err(|expected| out_of_range("weight", name, self.shown(v), expected))
     }
 
     /// `single`, `infinite`, or a number of servers k ≥ 1 (1 is single).
