@@ -52,7 +52,7 @@ use crate::analysis::measures::SolverOptions;
 use crate::analysis::state_space::Options as SpaceOptions;
 use crate::net::{Net, PlaceId, Timing, TransitionId};
 use crate::policy::Policy;
-use crate::runtime::event::{Event, EventKind};
+use crate::runtime::event::Event;
 use crate::sim::{SimError, Simulator};
 use crate::stats::Estimate;
 
@@ -110,17 +110,12 @@ impl<'n> TraceBuilder<'n> {
     /// Adds the run's next event.
     pub fn push(&mut self, e: &Event) {
         self.end = self.end.max(e.time);
-        if let EventKind::Fired {
-            transition,
-            marking,
-            ..
-        } = &e.kind
-        {
+        if let Some(f) = e.firing() {
             self.steps.push(TraceStep {
-                seq: e.seq,
-                time: e.time,
-                transition: *transition,
-                marking: marking.as_slice().to_vec(),
+                seq: f.seq,
+                time: f.time,
+                transition: f.transition,
+                marking: f.marking.as_slice().to_vec(),
             });
         }
         self.stays.see(e);

@@ -30,12 +30,20 @@ pub use lines::{Entry, JournalReader};
 
 use super::action::Outcome;
 use super::event::{Event, EventKind};
-use crate::net::{Net, Timing};
+use crate::net::{ArcKind, Net, Servers, Timing};
+use crate::sample::fnv::Fnv;
 
 /// The identity of a net: a 64-bit FNV-1a hash of its places (name, initial marking,
 /// capacity), transitions (name, timing) and arcs, written as 16 hex digits.
+///
+/// Every enum goes in as an explicit tag ([`timing_tag`], [`servers_tag`], [`arc_tag`]),
+/// never as a derived `Debug` text or a declaration-order discriminant, so renaming or
+/// reordering a variant cannot silently orphan every saved journal. The tags are the bytes
+/// the hash was fed before it had them (`0`/`1` for the timings, `"Single"`, `"Infinite"`,
+/// `"K(k)"` for the servers, `0`/`1`/`2` for the arcs), so journals written then still
+/// match; the tests pin one net per variant.
 pub fn net_hash(net: &Net) -> String {
-    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    let mut h = Fnv::new();
     for p in net.places() {
         h.str(&p.name);
         h.u64(p.initial as u64);
@@ -43,43 +51,50 @@ pub fn net_hash(net: &Net) -> String {
     }
     for t in net.transitions() {
         h.str(&t.name);
+        h.u64(timing_tag(&t.timing));
         match t.timing {
             Timing::Immediate { weight, priority } => {
-                h.u64(0);
                 h.u64(weight.to_bits());
                 h.u64(priority as u64);
             }
             Timing::Exponential { rate, servers } => {
-                h.u64(1);
                 h.u64(rate.to_bits());
-                h.str(&format!("{servers:?}"));
+                h.str(&servers_tag(servers));
             }
         }
     }
     for a in net.arcs() {
-        h.u64(a.kind as u64);
+        h.u64(arc_tag(a.kind));
         h.u64(a.place.0 as u64);
         h.u64(a.transition.0 as u64);
         h.u64(a.weight as u64);
     }
-    format!("{:016x}", h.0)
+    format!("{:016x}", h.finish())
 }
 
-struct Fnv(u64);
+/// The hash's tag of a timing.
+fn timing_tag(t: &Timing) -> u64 {
+    match t {
+        Timing::Immediate { .. } => 0,
+        Timing::Exponential { .. } => 1,
+    }
+}
 
-impl Fnv {
-    fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 ^= x as u64;
-            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
-        }
+/// The hash's tag of a server policy (the text `{:?}` gave when the hash took that).
+fn servers_tag(s: Servers) -> std::borrow::Cow<'static, str> {
+    match s {
+        Servers::Single => "Single".into(),
+        Servers::Infinite => "Infinite".into(),
+        Servers::K(k) => format!("K({k})").into(),
     }
-    fn u64(&mut self, v: u64) {
-        self.bytes(&v.to_le_bytes());
-    }
-    fn str(&mut self, s: &str) {
-        self.u64(s.len() as u64);
-        self.bytes(s.as_bytes());
+}
+
+/// The hash's tag of an arc kind.
+fn arc_tag(k: ArcKind) -> u64 {
+    match k {
+        ArcKind::Input => 0,
+        ArcKind::Output => 1,
+        ArcKind::Inhibitor => 2,
     }
 }
 
@@ -649,20 +664,11 @@ impl Recording {
             transition: None,
             tokens: self.net.initial_marking().into_vec(),
         }];
-        for e in &self.events {
-            if let EventKind::Fired {
-                transition,
-                marking,
-                ..
-            } = &e.kind
-            {
-                frames.push(Frame {
-                    time: e.time,
-                    transition: Some(self.net.transition(*transition).name.clone()),
-                    tokens: marking.to_vec(),
-                });
-            }
-        }
+        frames.extend(self.events.iter().filter_map(Event::firing).map(|f| Frame {
+            time: f.time,
+            transition: Some(self.net.transition(f.transition).name.clone()),
+            tokens: f.marking.to_vec(),
+        }));
         frames
     }
 
@@ -689,4 +695,68 @@ pub fn split_torn(text: &str) -> (&str, Option<JournalError>) {
         return (&text[..start], Some(torn));
     }
     (text, None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::net::NetBuilder;
+
+    /// `P(1) → T → Q(0, capacity 2)` with `T` timed as given, plus an inhibitor `Q —o T`
+    /// of weight 2 when asked.
+    fn net(timing: Timing, inhibitor: bool) -> Net {
+        let mut b = NetBuilder::new("n");
+        let p = b.place("P", 1);
+        let q = b.place_with_capacity("Q", 0, Some(2));
+        let t = b.add_transition(crate::net::Transition {
+            name: "T".into(),
+            timing,
+            position: None,
+        });
+        b.input(p, t, 1);
+        b.output(t, q, 1);
+        if inhibitor {
+            b.inhibitor(q, t, 2);
+        }
+        b.build().unwrap()
+    }
+
+    // The hashes below were computed outside the crate (an FNV-1a over the bytes the hash
+    // was fed when it used `{:?}` and `as u64`); a change here orphans saved journals.
+
+    #[test]
+    fn hash_of_an_immediate_transition_with_input_and_output_arcs_is_pinned() {
+        let timing = Timing::Immediate {
+            weight: 2.5,
+            priority: 3,
+        };
+        assert_eq!(net_hash(&net(timing, false)), "3f5e168200c7f0df");
+    }
+
+    #[test]
+    fn hash_of_a_single_server_with_an_inhibitor_arc_is_pinned() {
+        let timing = Timing::Exponential {
+            rate: 1.5,
+            servers: Servers::Single,
+        };
+        assert_eq!(net_hash(&net(timing, true)), "4663924657a906c3");
+    }
+
+    #[test]
+    fn hash_of_an_infinite_server_is_pinned() {
+        let timing = Timing::Exponential {
+            rate: 1.5,
+            servers: Servers::Infinite,
+        };
+        assert_eq!(net_hash(&net(timing, false)), "717c7a63b8d8c76c");
+    }
+
+    #[test]
+    fn hash_of_k_servers_is_pinned() {
+        let timing = Timing::Exponential {
+            rate: 1.5,
+            servers: Servers::K(3),
+        };
+        assert_eq!(net_hash(&net(timing, false)), "2d08252421828c8b");
+    }
 }
