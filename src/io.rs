@@ -129,6 +129,44 @@ impl fmt::Display for Span {
     }
 }
 
+/// An I/O error kept whole — its [`std::io::ErrorKind`], its OS code — in a [`LoadError`],
+/// which is `Clone` and `PartialEq`: shared behind an `Arc`, and equal to another when both
+/// say the same (kind and message).
+#[derive(Clone, Debug)]
+pub struct IoError(std::sync::Arc<std::io::Error>);
+
+impl IoError {
+    /// The error as the system gave it.
+    pub fn get(&self) -> &std::io::Error {
+        &self.0
+    }
+}
+
+impl From<std::io::Error> for IoError {
+    fn from(e: std::io::Error) -> Self {
+        IoError(std::sync::Arc::new(e))
+    }
+}
+
+impl PartialEq for IoError {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.kind() == other.0.kind() && self.0.to_string() == other.0.to_string()
+    }
+}
+
+impl fmt::Display for IoError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+/// Transparent: the chain goes on with the system error's own source, if it has one.
+impl std::error::Error for IoError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
+    }
+}
+
 /// A file we could not load: where, and what was wrong.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoadError {
@@ -192,9 +230,9 @@ impl std::error::Error for LoadError {}
 /// What was wrong with a file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LoadErrorKind {
-    /// The file could not be read.
+    /// The file could not be read (or written), with the system's error as its source.
     #[error("cannot read: {0}")]
-    Io(String),
+    Io(#[source] IoError),
     /// The file is empty (or only whitespace).
     #[error("the file is empty")]
     Empty,
@@ -367,7 +405,7 @@ pub struct Loaded {
 /// dialect as PIPE).
 pub fn read_net(path: &Path, opts: &ReadOptions) -> Result<Loaded, LoadError> {
     let bytes =
-        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.into())))?;
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(LoadError::file(path, LoadErrorKind::Empty));
     }
@@ -421,7 +459,7 @@ pub fn write_net(net: &Net, path: &Path, format: Format) -> Result<(), LoadError
             ));
         }
     };
-    std::fs::write(path, text).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))
+    std::fs::write(path, text).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.into())))
 }
 
 #[cfg(test)]
