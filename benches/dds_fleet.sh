@@ -40,36 +40,32 @@ for i in $(seq 1 "$N"); do
     sleep 0.1
 done
 T_START=$(date +%s.%N)
-"$BIN" run "$DIR/plan.toml" --max-firings "$F" --json --ros2-domain "$D" > "$DIR/out.json" 2> "$DIR/sup.log" &
+/usr/bin/time -f "%U %S %M" -o "$DIR/sup.time" "$BIN" run "$DIR/plan.toml" --max-firings "$F" --json --ros2-domain "$D" > "$DIR/out.json" 2> "$DIR/sup.log" &
 SUP=$!
-HZ=$(getconf CLK_TCK)
 udp_out() { awk '/^Udp:/ { if (h) print $5; h = 1 }' /proc/net/snmp; }
-PEAK=0
 T_READY=""
 while kill -0 $SUP 2>/dev/null; do
     if [ -z "$T_READY" ] && grep -q "robots ready" "$DIR/sup.log"; then
         T_READY=$(date +%s.%N)
         U0=$(udp_out)
-    fi
-    if [ -r /proc/$SUP/status ]; then
-        R=$(awk '/VmHWM/ {print $2}' /proc/$SUP/status 2>/dev/null || echo 0)
-        T=$(awk '{print $14 + $15}' /proc/$SUP/stat 2>/dev/null || echo 0)
-        [ -n "$R" ] && PEAK=$R
-        [ -n "$T" ] && CPU=$T
+        # The robots' peak RSS so far (they leave as soon as the run is over).
+        ROBOTS_RSS=0
+        for p in "${PIDS[@]}"; do
+            r=$(awk '/VmHWM/ {print $2}' /proc/$p/status 2>/dev/null || echo 0)
+            ROBOTS_RSS=$((ROBOTS_RSS + ${r:-0}))
+        done
     fi
     sleep 0.2
 done
 T_END=$(date +%s.%N)
 U1=$(udp_out)
-ROBOTS_RSS=0
-for p in "${PIDS[@]}"; do
-    r=$(awk '/VmHWM/ {print $2}' /proc/$p/status 2>/dev/null || echo 0)
-    ROBOTS_RSS=$((ROBOTS_RSS + ${r:-0}))
-done
 wait $SUP || { echo "supervisor failed:"; tail -20 "$DIR/sup.log"; exit 1; }
+# The supervisor's user + system CPU seconds and peak RSS (GNU time).
+read -r UT ST PEAK < "$DIR/sup.time"
+CPU=$(echo "$UT + $ST" | bc)
 [ -n "$T_READY" ] || { echo "no ready line in the supervisor's log:"; tail "$DIR/sup.log"; exit 1; }
 # From the supervisor's start to its "robots ready" line (polled every 0.2 s).
 READY=$(python3 -c "print(round($T_READY - $T_START, 1))")
 RATE=$(python3 -c "import json;s=json.load(open('$DIR/out.json'));print(round(s['firings']/($T_END-$T_READY),1))")
 DPS=$(python3 -c "print(round(($U1-$U0)/($T_END-$T_READY)))")
-echo "robots=$N ready_after_s=$READY firings=$F firings_per_s=$RATE sup_cpu_s=$(echo "scale=2; ${CPU:-0}/$HZ" | bc) sup_peak_rss_mb=$((PEAK / 1024)) robots_peak_rss_mb=$((ROBOTS_RSS / 1024)) udp_datagrams_per_s=$DPS"
+echo "robots=$N ready_after_s=$READY firings=$F firings_per_s=$RATE sup_cpu_s=$CPU sup_peak_rss_mb=$((PEAK / 1024)) robots_peak_rss_mb=$((ROBOTS_RSS / 1024)) udp_datagrams_per_s=$DPS"

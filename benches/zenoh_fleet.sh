@@ -40,33 +40,29 @@ for k in $(seq 0 $((P - 1))); do
     a=$((k * 100)); b=$(( (k + 1) * 100 < N ? (k + 1) * 100 : N ))
     "$BIN" fleet --plan "$DIR/plan.toml" --robots "$a..$b" 2> "$DIR/fleet$k.log" &
 done
-"$BIN" run "$DIR/plan.toml" --max-firings "$F" --json > "$DIR/out.json" 2> "$DIR/sup.log" &
+/usr/bin/time -f "%U %S %M" -o "$DIR/sup.time" "$BIN" run "$DIR/plan.toml" --max-firings "$F" --json > "$DIR/out.json" 2> "$DIR/sup.log" &
 SUP=$!
 HZ=$(getconf CLK_TCK)
 LO=/sys/class/net/lo/statistics
-PEAK=0
 T_READY=""
 while kill -0 $SUP 2>/dev/null; do
     if [ -z "$T_READY" ] && grep -q "robots ready" "$DIR/sup.log"; then
         T_READY=$(date +%s.%N)
         P0=$(cat $LO/tx_packets) B0=$(cat $LO/tx_bytes)
     fi
-    if [ -r /proc/$SUP/status ]; then
-        R=$(awk '/VmHWM/ {print $2}' /proc/$SUP/status 2>/dev/null || echo 0)
-        T=$(awk '{print $14 + $15}' /proc/$SUP/stat 2>/dev/null || echo 0)
-        [ -n "$R" ] && PEAK=$R
-        [ -n "$T" ] && CPU=$T
-    fi
     sleep 0.2
 done
 T_END=$(date +%s.%N)
 P1=$(cat $LO/tx_packets) B1=$(cat $LO/tx_bytes)
 wait $SUP || { echo "supervisor failed:"; tail -20 "$DIR/sup.log"; exit 1; }
+# The supervisor's user + system CPU seconds and peak RSS (GNU time).
+read -r UT ST PEAK < "$DIR/sup.time"
+CPU=$(echo "$UT + $ST" | bc)
 RCPU=$(awk '{print $14 + $15}' /proc/$ROUTER/stat)
 RRSS=$(awk '/VmHWM/ {print $2}' /proc/$ROUTER/status)
 READY=$(grep -o 'robots ready after [0-9.]*' "$DIR/sup.log" | awk '{print $4}')
 RATE=$(python3 -c "import json;s=json.load(open('$DIR/out.json'));print(round(s['firings']/($T_END-$T_READY),1))")
 PPS=$(python3 -c "print(round(($P1-$P0)/($T_END-$T_READY)))")
 KBPS=$(python3 -c "print(round(($B1-$B0)/($T_END-$T_READY)/1000))")
-echo "robots=$N fleets=$P ready_after_s=$READY firings=$F firings_per_s=$RATE sup_cpu_s=$(echo "scale=2; ${CPU:-0}/$HZ" | bc) sup_peak_rss_mb=$((PEAK / 1024)) router_cpu_s=$(echo "scale=2; $RCPU/$HZ" | bc) router_peak_rss_mb=$((RRSS / 1024)) lo_packets_per_s=$PPS lo_kB_per_s=$KBPS"
+echo "robots=$N fleets=$P ready_after_s=$READY firings=$F firings_per_s=$RATE sup_cpu_s=$CPU sup_peak_rss_mb=$((PEAK / 1024)) router_cpu_s=$(echo "scale=2; $RCPU/$HZ" | bc) router_peak_rss_mb=$((RRSS / 1024)) lo_packets_per_s=$PPS lo_kB_per_s=$KBPS"
 grep -h "published\|fleet:" "$DIR/sup.log" "$DIR"/fleet*.log | head -3

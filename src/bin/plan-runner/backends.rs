@@ -179,14 +179,16 @@ async fn connect_ros2(plan: &Plan, args: &BackendArgs) -> anyhow::Result<Ros2Sid
             crate::zenoh::connect(plan, &e, &args.ros2).await?,
         ));
     }
-    Ok(Ros2Side::Dds(crate::ros2::connect(plan, &args.ros2).await?))
+    Ok(Ros2Side::Dds(Box::new(
+        crate::ros2::connect(plan, &args.ros2).await?,
+    )))
 }
 
 /// The ROS 2 backend of a run, on either transport.
 #[cfg(feature = "ros2")]
 #[derive(Debug)]
 enum Ros2Side {
-    Dds(crate::ros2::Ros2Run),
+    Dds(Box<crate::ros2::Ros2Run>),
     #[cfg(feature = "zenoh")]
     Zenoh(crate::zenoh::ZenohRun),
 }
@@ -195,7 +197,7 @@ enum Ros2Side {
 impl Ros2Side {
     fn inner(&mut self) -> &mut dyn gspn::runtime::Backend {
         match self {
-            Ros2Side::Dds(b) => b,
+            Ros2Side::Dds(b) => b.as_mut(),
             #[cfg(feature = "zenoh")]
             Ros2Side::Zenoh(b) => b,
         }
