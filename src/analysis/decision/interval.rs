@@ -30,10 +30,16 @@ impl Equations {
         let mut exits = vec![u32::MAX; self.groups.members.len()];
         let mut spare_exits = exits.clone();
         let mut iterations = 0;
+        // A value at 0 has no relative precision: the bounds meet there only to within the
+        // rounding of sums of the problem's size (the starts'), which is where they stop.
+        let start = initial_value(model, &lo)
+            .abs()
+            .max(initial_value(model, &up).abs());
+        let rounding = 64.0 * f64::EPSILON * start;
         loop {
             let (lower, upper) = (initial_value(model, &lo), initial_value(model, &up));
             let scale = lower.abs().max(upper.abs());
-            if upper - lower <= opts.precision * scale || upper - lower <= 1e-300 {
+            if upper - lower <= opts.precision * scale || upper - lower <= rounding.max(1e-300) {
                 self.finish_policy(model, r, &lo, &mut policy, &exits);
                 let values = lo.iter().zip(&up).map(|(a, b)| (a + b) / 2.0).collect();
                 return Ok(Solution {
