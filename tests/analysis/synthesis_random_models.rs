@@ -243,12 +243,12 @@ fn solve_exact(
     for c in 0..k {
         let piv = (c..k).find(|&r| !m[r][c].is_zero())?;
         m.swap(c, piv);
-        for r in 0..k {
-            if r != c && !m[r][c].is_zero() {
-                let f = &m[r][c] / &m[c][c];
-                for j in c..=k {
-                    let x = &f * &m[c][j];
-                    m[r][j] -= x;
+        let pivot = m[c].clone();
+        for (r, row) in m.iter_mut().enumerate() {
+            if r != c && !row[c].is_zero() {
+                let f = &row[c] / &pivot[c];
+                for (x, p) in row.iter_mut().zip(&pivot).skip(c) {
+                    *x -= &f * p;
                 }
             }
         }
@@ -457,6 +457,8 @@ fn referee(spec: &Spec, goal: Goal, max: bool) -> Value {
 enum Outcome {
     Held,
     Refused(String),
+    /// The documented refusal of a model whose optimum is finite.
+    Conservative,
     /// The referee has no finite optimum to compare (an instant loop earns a reward).
     Skipped,
 }
@@ -488,12 +490,16 @@ fn check(seed: u64, spec: &Spec, goal: Goal, max: bool) -> Outcome {
     };
     let sol = match solve(&model, &rewards, &objective, &opts) {
         Ok(sol) => sol,
-        // Documented refusal: an instant step inside a loop of instant steps earns a reward
-        // (docs/synthesis.md); a conservative test, so it is allowed, not required.
+        // Documented refusal (docs/synthesis.md): a loop of instant steps that earns for ever
+        // under some policy leaves no finite bound to start from. Right where the optimum
+        // itself is unbounded; counted apart where it is finite (a minimiser avoids the loop).
         Err(DecisionError::Unsupported(m))
             if goal == Goal::Discounted && m.contains("loop of instant steps") =>
         {
-            return Outcome::Skipped;
+            return match referee(&spec, goal, max) {
+                Value::Unbounded => Outcome::Skipped,
+                _ => Outcome::Conservative,
+            };
         }
         Err(e) => return Outcome::Refused(e.to_string()),
     };
@@ -527,6 +533,7 @@ fn every_printed_interval_holds_the_exact_optimum_of_random_models() {
     let goals = [Goal::Reach, Goal::Total, Goal::Discounted, Goal::PerStep];
     let mut held = [[0usize; 2]; 4];
     let mut refused = Vec::new();
+    let mut conservative = Vec::new();
     for seed in 0..150u64 {
         let spec = Spec::random(&mut ChaCha8Rng::seed_from_u64(seed));
         for (g, &goal) in goals.iter().enumerate() {
@@ -534,19 +541,27 @@ fn every_printed_interval_holds_the_exact_optimum_of_random_models() {
                 match check(seed, &spec, goal, max) {
                     Outcome::Held => held[g][usize::from(max)] += 1,
                     Outcome::Refused(e) => refused.push((seed, goal, max, e)),
+                    Outcome::Conservative => conservative.push((seed, max)),
                     Outcome::Skipped => {}
                 }
             }
         }
     }
-    eprintln!("held per objective (min, max): {held:?}; refused: {refused:?}");
+    eprintln!(
+        "held per objective (min, max): {held:?}; refused: {refused:?}; \
+         refused with a finite optimum (continuous discount): {conservative:?}"
+    );
     assert!(refused.is_empty(), "refused: {refused:?}");
-    // Every model is compared, except under the continuous discount those where an instant
-    // step inside a loop of instant steps earns a reward (refused, or no finite optimum):
-    // 60 of the 150 with these seeds.
+    assert!(
+        conservative.is_empty(),
+        "refused with a finite optimum: {conservative:?}"
+    );
+    // Every model is compared, except under the continuous discount those where some policy
+    // reaches a loop of instant steps that earns (no finite value; the solver refuses them
+    // all): 56 of the 150 with these seeds.
     for (g, counts) in held.iter().enumerate() {
         let least = if goals[g] == Goal::Discounted {
-            90
+            94
         } else {
             150
         };

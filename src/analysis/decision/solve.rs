@@ -26,7 +26,7 @@ use super::{DecisionError, DecisionModel, Kind, Objective, Rewards};
 
 /// Relative slack of the bound checks: floating-point sums of probabilities are off by a
 /// few ulps.
-const ROUNDING: f64 = 16.0 * f64::EPSILON;
+pub(super) const ROUNDING: f64 = 16.0 * f64::EPSILON;
 
 /// How to solve.
 #[derive(Clone, Debug)]
