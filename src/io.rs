@@ -219,6 +219,7 @@ impl std::error::Error for LoadError {}
 
 /// What was wrong with a file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum LoadErrorKind {
     /// The file could not be read.
     #[error("cannot read: {0}")]

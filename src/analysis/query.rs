@@ -45,7 +45,7 @@
 
 mod absorbing;
 mod eval;
-pub mod extreme;
+pub(crate) mod extreme;
 mod parse;
 
 use thiserror::Error;

@@ -30,6 +30,7 @@ const PROGRESS: f32 = 0.05;
 
 /// Why a `goto` did not arrive.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum GotoError {
     /// No progress for the map's `stuck_after` seconds, at this position.
     Stuck(f32, f32),

@@ -20,6 +20,7 @@ use crate::runtime::{Role, RuntimeBuilder};
 
 /// Why a plan cannot run on simulated robots.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FleetError {
     /// The plan has no `[map]`.
     #[error("the plan has no [map]: simulated robots need one (see docs/plans.md)")]
