@@ -34,6 +34,7 @@ mod compare;
 mod fit;
 pub mod holding;
 mod monitor;
+mod observe;
 pub(crate) mod stats;
 
 pub use compare::{Report, Row, RowKind, Verdict, compare};
@@ -42,19 +43,16 @@ pub use holding::Holding;
 
 pub use crate::runtime::{Drift, Monitored};
 pub use monitor::{Monitor, MonitorOptions, SharedMonitor, Statistic};
+pub use observe::{Decision, Exposure, Observations, observe};
 
-use std::collections::BTreeMap;
 use std::sync::Arc;
-
-use serde::Serialize;
 
 use crate::analysis::measures::SolverOptions;
 use crate::analysis::state_space::Options as SpaceOptions;
-use crate::net::{Net, PlaceId, Timing, TransitionId};
+use crate::net::{Net, Timing, TransitionId};
 use crate::policy::Policy;
-use crate::runtime::event::{Event, EventKind};
+use crate::runtime::event::Event;
 use crate::sim::{SimError, Simulator};
-use crate::stats::Estimate;
 
 /// The significance level of every verdict.
 pub const ALPHA: f64 = 0.05;
@@ -111,17 +109,12 @@ impl<'n> TraceBuilder<'n> {
     /// Adds the run's next event.
     pub fn push(&mut self, e: &Event) {
         self.end = self.end.max(e.time);
-        if let EventKind::Fired {
-            transition,
-            marking,
-            ..
-        } = &e.kind
-        {
+        if let Some(f) = e.firing() {
             self.steps.push(TraceStep {
-                seq: e.seq,
-                time: e.time,
-                transition: *transition,
-                marking: marking.as_slice().to_vec(),
+                seq: f.seq,
+                time: f.time,
+                transition: f.transition,
+                marking: f.marking.as_slice().to_vec(),
             });
         }
         self.stays.see(e);
@@ -262,254 +255,6 @@ impl Default for Options {
             max_stages: 20,
         }
     }
-}
-
-/// The firings of one exponential transition, by active servers `min(servers, degree)`.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Exposure {
-    /// Firings.
-    pub firings: u64,
-    /// Enabled time weighted by active servers.
-    pub exposure: f64,
-    /// `active servers → (firings, time)`.
-    pub by_servers: BTreeMap<u32, (u64, f64)>,
-    /// Exposure between consecutive firings (the first from time 0; the open last one left
-    /// out).
-    #[serde(skip)]
-    pub gaps: Vec<f64>,
-}
-
-/// The choices made in one decision class: the same firable immediate transitions and the
-/// same policy rule (or none).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Decision {
-    /// The immediate transitions that could fire, in id order.
-    pub firable: Vec<TransitionId>,
-    /// The policy rule that chose, `None` for the net's weights.
-    pub rule: Option<usize>,
-    /// Predicted probability per firable transition.
-    pub probs: Vec<f64>,
-    /// Observed count per firable transition.
-    pub counts: Vec<u64>,
-    /// Firings of transitions that were not firable there (a journal against the rules).
-    pub outside: u64,
-}
-
-/// What one run showed, before any comparison.
-#[derive(Clone, Debug)]
-pub struct Observations {
-    /// The observed span `[0, end]`.
-    pub end: f64,
-    /// Firings.
-    pub firings: u64,
-    /// Batches.
-    pub batches: usize,
-    /// Time-average tokens per place.
-    pub mean_tokens: Vec<Estimate>,
-    /// Throughput per transition.
-    pub throughput: Vec<Estimate>,
-    /// Firings per transition.
-    pub counts: Vec<u64>,
-    /// Per transition (`None` for immediate ones).
-    pub exposure: Vec<Option<Exposure>>,
-    /// `(place, transition, share of the place's departures, departures)` for places with
-    /// more than one output transition.
-    pub choices: Vec<(PlaceId, TransitionId, Estimate, u64)>,
-    /// Decision classes, in order of first appearance.
-    pub decisions: Vec<Decision>,
-    /// The agents' stays that ended within the observed span.
-    pub holdings: Vec<Holding>,
-    /// The most tokens each place held in the run.
-    pub most_tokens: Vec<u32>,
-}
-
-/// Reads a trace of `net` (run under `policy`, if any) into observations.
-pub fn observe(
-    net: &Net,
-    policy: Option<&Policy>,
-    trace: &Trace,
-    opts: &Options,
-) -> Result<Observations, ConformError> {
-    if trace.end.is_nan() || trace.end <= 0.0 {
-        return Err(ConformError::Empty(trace.end));
-    }
-    let (np, nt) = (net.place_count(), net.transition_count());
-    let b = opts.batches.max(2);
-    let mut tokens = stats::BatchMeans::new(b, trace.end, np);
-    let mut fired = stats::BatchMeans::new(b, trace.end, nt);
-    // Places with more than one output transition: (place, [transitions]).
-    let mut outs: Vec<Vec<TransitionId>> = vec![Vec::new(); np];
-    for t in net.transition_ids() {
-        for &(p, _) in net.inputs(t) {
-            outs[p.index()].push(t);
-        }
-    }
-    let pairs: Vec<(PlaceId, TransitionId)> = net
-        .place_ids()
-        .filter(|p| outs[p.index()].len() > 1)
-        .flat_map(|p| outs[p.index()].iter().map(move |&t| (p, t)))
-        .collect();
-    let pair_index: BTreeMap<(usize, usize), usize> = pairs
-        .iter()
-        .enumerate()
-        .map(|(i, (p, t))| ((p.index(), t.index()), i))
-        .collect();
-    let mut chosen = stats::BatchMeans::new(b, trace.end, pairs.len());
-    let mut left = stats::BatchMeans::new(b, trace.end, np);
-    let mut exposure: Vec<Option<Exposure>> = net
-        .transitions()
-        .iter()
-        .map(|t| (!t.is_immediate()).then(Exposure::default))
-        .collect();
-    let mut open_gap = vec![0.0; nt];
-    let mut decisions: Vec<Decision> = Vec::new();
-    let mut class: BTreeMap<(Vec<TransitionId>, Option<usize>), usize> = BTreeMap::new();
-    let mut counts = vec![0u64; nt];
-    let mut m = trace.initial.clone();
-    let mut mf: Vec<f64> = m.iter().map(|&k| k as f64).collect();
-    let mut now = 0.0;
-    let active = |m: &[u32], t: TransitionId| active_servers(net, m, t);
-    let pass_time = |m: &[u32],
-                     mf: &[f64],
-                     from: f64,
-                     to: f64,
-                     tokens: &mut stats::BatchMeans,
-                     exposure: &mut [Option<Exposure>],
-                     open_gap: &mut [f64]| {
-        let to = to.min(trace.end);
-        if to <= from {
-            return;
-        }
-        tokens.advance(to, mf);
-        for (i, x) in exposure.iter_mut().enumerate() {
-            if let Some(x) = x {
-                let a = active(m, TransitionId(i as u32));
-                if a > 0 {
-                    let e = a as f64 * (to - from);
-                    x.exposure += e;
-                    open_gap[i] += e;
-                    x.by_servers.entry(a).or_default().1 += to - from;
-                }
-            }
-        }
-    };
-    for s in &trace.steps {
-        if s.time > trace.end {
-            break;
-        }
-        pass_time(
-            &m,
-            &mf,
-            now,
-            s.time,
-            &mut tokens,
-            &mut exposure,
-            &mut open_gap,
-        );
-        now = now.max(s.time);
-        let t = s.transition;
-        counts[t.index()] += 1;
-        fired.count(s.time, t.index(), 1.0);
-        if let Some(x) = &mut exposure[t.index()] {
-            let a = active(&m, t);
-            x.firings += 1;
-            x.by_servers.entry(a).or_default().0 += 1;
-            x.gaps.push(std::mem::take(&mut open_gap[t.index()]));
-        } else {
-            let firable: Vec<TransitionId> = net
-                .firable(&m)
-                .into_iter()
-                .filter(|&u| net.transition(u).is_immediate())
-                .collect();
-            let rule = policy.and_then(|p| p.rule_for(&m, &firable).map(|(i, _)| i));
-            let key = (firable, rule);
-            let i = match class.get(&key) {
-                Some(&i) => i,
-                None => {
-                    let dist = match policy {
-                        Some(p) => p.distribution_or_weights(net, &m, &key.0),
-                        None => Policy::empty().distribution_or_weights(net, &m, &key.0),
-                    };
-                    let probs = key
-                        .0
-                        .iter()
-                        .map(|u| dist.iter().find(|(v, _)| v == u).map_or(0.0, |d| d.1))
-                        .collect();
-                    decisions.push(Decision {
-                        firable: key.0.clone(),
-                        rule,
-                        probs,
-                        counts: vec![0; key.0.len()],
-                        outside: 0,
-                    });
-                    class.insert(key.clone(), decisions.len() - 1);
-                    decisions.len() - 1
-                }
-            };
-            let d = &mut decisions[i];
-            match d.firable.iter().position(|&u| u == t) {
-                Some(k) => d.counts[k] += 1,
-                None => d.outside += 1,
-            }
-        }
-        for &(p, w) in net.inputs(t) {
-            if let Some(&k) = pair_index.get(&(p.index(), t.index())) {
-                chosen.count(s.time, k, w as f64);
-                left.count(s.time, p.index(), w as f64);
-            }
-        }
-        m.clone_from(&s.marking);
-        mf.clear();
-        mf.extend(m.iter().map(|&k| k as f64));
-    }
-    pass_time(
-        &m,
-        &mf,
-        now,
-        trace.end,
-        &mut tokens,
-        &mut exposure,
-        &mut open_gap,
-    );
-    let choices = pairs
-        .iter()
-        .enumerate()
-        .map(|(k, &(p, t))| {
-            let n = left.sums(p.index()).iter().sum::<f64>() as u64;
-            let e = stats::ratio_estimate(chosen.sums(k), left.sums(p.index()));
-            (p, t, e, n)
-        })
-        .collect();
-    Ok(Observations {
-        end: trace.end,
-        firings: counts.iter().sum(),
-        batches: b,
-        mean_tokens: (0..np)
-            .map(|p| stats::estimate(&tokens.batches(p)))
-            .collect(),
-        throughput: (0..nt)
-            .map(|t| stats::estimate(&fired.batches(t)))
-            .collect(),
-        counts,
-        exposure,
-        choices,
-        decisions,
-        holdings: trace
-            .holdings
-            .iter()
-            .filter(|h| h.entered + h.duration <= trace.end)
-            .cloned()
-            .collect(),
-        most_tokens: trace
-            .steps
-            .iter()
-            .fold(trace.initial.clone(), |mut most, s| {
-                for (k, &x) in most.iter_mut().zip(&s.marking) {
-                    *k = (*k).max(x);
-                }
-                most
-            }),
-    })
 }
 
 /// What the model predicts for the rows that need an analysis (the rest come from the net's

@@ -36,14 +36,14 @@ mod cursor;
 mod input;
 mod json;
 mod pylit;
+mod write;
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::{Plan, read_plan_with};
 use crate::io::{LoadError, LoadErrorKind, ReadOptions, Span, read_net};
-use crate::net::{Net, Timing};
-use rustc_hash::{FxHashMap, FxHashSet};
+
+pub use write::plan_text;
 
 /// A name in the input and where it is.
 #[derive(Clone, Debug, PartialEq)]
@@ -138,7 +138,7 @@ pub struct Imported {
 /// Reads a thesis execution input (JSON with Python-literal values).
 pub fn read_input(path: &Path) -> Result<ThesisInput, LoadError> {
     let bytes =
-        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.into())))?;
     parse_input(path, &bytes)
 }
 
@@ -177,7 +177,7 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, LoadError> 
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "net.xml".into());
-    let io_err = |p: &Path, e: std::io::Error| LoadError::file(p, LoadErrorKind::Io(e.to_string()));
+    let io_err = |p: &Path, e: std::io::Error| LoadError::file(p, LoadErrorKind::Io(e.into()));
     std::fs::create_dir_all(&opts.out).map_err(|e| io_err(&opts.out, e))?;
     let functions = input.actions.iter().any(|a| a.action_type.is_none());
     let mut project_warning = None;
@@ -316,273 +316,4 @@ pub fn locate_net(input: &ThesisInput) -> Result<PathBuf, LoadError> {
             looked.join(" and ")
         )),
     ))
-}
-
-/// The plan (TOML text) for `input` over `net`, whose file will be `net_file` beside the
-/// plan; and the warnings of the translation. `project` is the directory of the functions'
-/// modules as `thesis_functions.py` (beside the plan) is given it: relative to the plan's
-/// directory, or absolute.
-pub fn plan_text(
-    input: &ThesisInput,
-    net: &Net,
-    net_file: &str,
-    project: &str,
-) -> Result<(String, Vec<String>), LoadError> {
-    let err = |span: Span, kind| LoadError::at(&input.path, span, kind);
-    let unknown = |what: &'static str, n: &Named| {
-        err(
-            n.span,
-            LoadErrorKind::UnknownNode {
-                what,
-                name: n.name.clone(),
-            },
-        )
-    };
-    let mut warnings = Vec::new();
-    let mut order = Vec::with_capacity(input.places.len());
-    let mut listed: FxHashSet<&str> = FxHashSet::default();
-    for p in &input.places {
-        if !listed.insert(&p.name) {
-            return Err(err(
-                p.span,
-                LoadErrorKind::Duplicate {
-                    what: "place in places_tuple",
-                    name: p.name.clone(),
-                },
-            ));
-        }
-        order.push(
-            net.place_by_name(&p.name)
-                .ok_or_else(|| unknown("place", p))?,
-        );
-    }
-    let covers_net = order.len() == net.place_count();
-
-    let file_label = input
-        .path
-        .file_name()
-        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let mut out = String::new();
-    let _ = writeln!(
-        out,
-        "# Imported by `plan-runner import-thesis` from {file_label}\n# (the 2020 thesis framework's execution input; see docs/plans.md).\n"
-    );
-    let _ = writeln!(out, "net = {}", toml_str(net_file));
-    if let Some(sync) = input.full_synchronization {
-        let _ = writeln!(
-            out,
-            "# full_synchronization = {sync} (gspn always synchronises fully)"
-        );
-    }
-
-    // Roles.
-    let mut resources: Vec<&Named> = Vec::new();
-    let mut resource_names: FxHashSet<&str> = FxHashSet::default();
-    for r in &input.resources {
-        net.place_by_name(&r.name)
-            .ok_or_else(|| unknown("place", r))?;
-        if resource_names.insert(&r.name) {
-            resources.push(r);
-        }
-    }
-    let mut seen: FxHashSet<&str> = FxHashSet::default();
-    for a in &input.actions {
-        net.place_by_name(&a.place.name)
-            .ok_or_else(|| unknown("place", &a.place))?;
-        if !seen.insert(&a.place.name) {
-            warnings.push(format!(
-                "place `{}` is mapped twice; the first mapping is used",
-                a.place.name
-            ));
-            continue;
-        }
-        if resource_names.contains(a.place.name.as_str()) {
-            warnings.push(format!(
-                "place `{}` is in resources_list and also has action `{}`: it is a resource",
-                a.place.name, a.action
-            ));
-            continue;
-        }
-        let _ = write!(out, "\n[places.{}]\n", toml_key(&a.place.name));
-        match &a.action_type {
-            Some(t) => {
-                let _ = writeln!(
-                    out,
-                    "action = \"ros2\"   # the thesis's {t} action server `{}` (place_to_client_mapping)\nserver = {}",
-                    a.action,
-                    toml_str(&a.action)
-                );
-            }
-            None => {
-                let _ = writeln!(
-                    out,
-                    "action = {{ worker = \"functions\", name = {} }}   # place_to_function_mapping",
-                    toml_str(&a.action)
-                );
-            }
-        }
-    }
-    if input.actions.iter().any(|a| a.action_type.is_none()) {
-        let _ = writeln!(
-            out,
-            "\n# The thesis's functions (`module.function`, called as function(agent_id)), imported\n# from the input's project_path by thesis_functions.py, a gspn worker (docs/actions.md).\n[workers.functions]\ncommand = [\"python3\", \"thesis_functions.py\", {}]",
-            toml_str(project)
-        );
-    }
-    for r in &resources {
-        let _ = writeln!(out, "\n[places.{}]\nrole = \"resource\"", toml_key(&r.name));
-    }
-
-    // Policy: Python dicts keep the first position of a key and the last value.
-    let mut rules: Vec<(&PolicyEntry, Vec<(String, f64)>)> = Vec::new();
-    let mut rule_of: FxHashMap<&[KeyItem], usize> = FxHashMap::default();
-    for (n, e) in input.policy.iter().enumerate() {
-        if e.key.len() != order.len() {
-            return Err(err(
-                e.span,
-                LoadErrorKind::Invalid(format!(
-                    "policy key has {} entries but places_tuple has {} places",
-                    e.key.len(),
-                    order.len()
-                )),
-            ));
-        }
-        let choose = resolve_choice(input, net, e, n + 1, &mut warnings)?;
-        if let Some(first) = rule_of.get(e.key.as_slice()).map(|&i| &mut rules[i]) {
-            warnings.push(format!(
-                "policy key at {} repeats the key at {}: the later value is used (as in Python)",
-                e.span, first.0.span
-            ));
-            first.1 = choose;
-        } else {
-            rule_of.insert(&e.key, rules.len());
-            rules.push((e, choose));
-        }
-    }
-    for (e, choose) in rules {
-        if choose.is_empty() {
-            continue;
-        }
-        let exact = covers_net && e.key.iter().all(|k| matches!(k, KeyItem::Count(_)));
-        let key_text: Vec<String> = e
-            .key
-            .iter()
-            .map(|k| match k {
-                KeyItem::Free => "'-'".to_string(),
-                KeyItem::Count(c) => c.to_string(),
-            })
-            .collect();
-        let _ = writeln!(
-            out,
-            "\n# policy_dictionary at line {}: ({})\n[[policy]]",
-            e.span.line,
-            key_text.join(",")
-        );
-        let cells: Vec<String> = e
-            .key
-            .iter()
-            .zip(&input.places)
-            .filter_map(|(k, p)| match k {
-                KeyItem::Count(c) => Some(format!("{} = {c}", toml_key(&p.name))),
-                KeyItem::Free => None,
-            })
-            .collect();
-        if cells.is_empty() {
-            let _ = writeln!(out, "marking = {{}}");
-        } else {
-            let _ = writeln!(out, "marking = {{ {} }}", cells.join(", "));
-        }
-        if !exact {
-            let _ = writeln!(out, "partial = true");
-        }
-        let probs: Vec<String> = choose
-            .iter()
-            .map(|(t, p)| format!("{} = {p:?}", toml_key(t)))
-            .collect();
-        let _ = writeln!(out, "choose = {{ {} }}", probs.join(", "));
-    }
-    Ok((out, warnings))
-}
-
-/// The transitions of one entry, checked against the net: unknown names are errors,
-/// exponential ones are dropped (the thesis only consulted the policy for immediate ones).
-fn resolve_choice(
-    input: &ThesisInput,
-    net: &Net,
-    e: &PolicyEntry,
-    n: usize,
-    warnings: &mut Vec<String>,
-) -> Result<Vec<(String, f64)>, LoadError> {
-    let mut choose = Vec::new();
-    let mut dropped = false;
-    for (t, p) in &e.choose {
-        // The 2020 framework looked a rule up only when its marking came up and never
-        // checked its names, so its own standalone example ships rules for `t4`/`t5`,
-        // which its net lacks: such a choice is dropped, as there, with a warning.
-        let Some(id) = net.transition_by_name(&t.name) else {
-            warnings.push(format!(
-                "policy entry {n} (line {}, column {}) chooses `{}`, which the net does not \
-                 have: the choice is dropped (the 2020 framework ignored it too)",
-                t.span.line, t.span.column, t.name
-            ));
-            dropped = true;
-            continue;
-        };
-        if !matches!(net.transition(id).timing, Timing::Immediate { .. }) {
-            warnings.push(format!(
-                "policy entry {n} (line {}) chooses `{}`, an exponential transition: a policy \
-                 chooses among immediate transitions, so the entry is dropped",
-                t.span.line, t.name
-            ));
-            dropped = true;
-            continue;
-        }
-        if !(p.is_finite() && (0.0..=1.0).contains(p)) {
-            return Err(LoadError::at(
-                &input.path,
-                t.span,
-                LoadErrorKind::OutOfRange {
-                    what: "probability",
-                    name: t.name.clone(),
-                    value: p.to_string(),
-                    expected: "must be in [0, 1]",
-                },
-            ));
-        }
-        choose.push((t.name.clone(), *p));
-    }
-    let sum: f64 = choose.iter().map(|(_, p)| p).sum();
-    if !choose.is_empty() && (sum - 1.0).abs() > crate::policy::SUM_TOLERANCE {
-        if dropped && sum > 0.0 {
-            for (_, p) in &mut choose {
-                *p /= sum;
-            }
-        } else {
-            return Err(LoadError::at(
-                &input.path,
-                e.span,
-                LoadErrorKind::Invalid(format!(
-                    "the probabilities of this policy entry sum to {sum}, not 1"
-                )),
-            ));
-        }
-    }
-    Ok(choose)
-}
-
-/// A TOML key: bare when it can be, else a quoted string.
-fn toml_key(s: &str) -> String {
-    if !s.is_empty()
-        && s.bytes()
-            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
-    {
-        s.to_string()
-    } else {
-        toml_str(s)
-    }
-}
-
-/// A TOML basic string (JSON's escapes are valid TOML escapes).
-fn toml_str(s: &str) -> String {
-    serde_json::to_string(s).unwrap_or_else(|_| format!("\"{s}\""))
 }
