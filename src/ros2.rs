@@ -8,9 +8,15 @@
 //!   and marking ([`firings`]).
 //! - [`robot`]: the robot's side (`plan-runner robot`): serves ExecPlace for the plan's
 //!   `ros2` places with net-timed local actions.
-//! - [`heartbeat`]: robots' heartbeats and the supervisor's [`heartbeat::RobotWatch`], which
-//!   turns a silent robot into a failed action.
+//! - [`presence`]: whether a robot is there, from DDS discovery of its ExecPlace server
+//!   (any ROS 2 node can be a robot) and its heartbeat when it sends one; a robot lost
+//!   fails its actions.
+//! - [`heartbeat`]: the optional heartbeats of `plan-runner robot` and the supervisor, and
+//!   [`heartbeat::RobotWatch`] that follows them.
+//! - [`bag`]: a run's journal exported as MCAP (ROS 2 messages, CDR), for `ros2 bag play`
+//!   and Foxglove.
 //! - [`rosout`]: the ROS 2 layer's warnings and errors on `/rosout` when asked.
+//! - [`names`]: `--ros-args` and the names of topics and actions under the run's namespace.
 //! - [`config`]: domain, networks (loopback by default), timings.
 //! - [`settings`]: what a plan tells the backend ([`Ros2Settings`]); compiled without the
 //!   feature too, so plans read the same everywhere.
@@ -22,6 +28,8 @@ pub mod settings;
 #[cfg(feature = "ros2")]
 pub mod backend;
 #[cfg(feature = "ros2")]
+pub mod bag;
+#[cfg(feature = "ros2")]
 pub mod config;
 #[cfg(feature = "ros2")]
 pub mod firings;
@@ -29,6 +37,10 @@ pub mod firings;
 pub mod heartbeat;
 #[cfg(feature = "ros2")]
 pub mod msgs;
+#[cfg(feature = "ros2")]
+pub mod names;
+#[cfg(feature = "ros2")]
+pub mod presence;
 #[cfg(feature = "ros2")]
 pub mod remote_place;
 #[cfg(feature = "ros2")]

@@ -30,6 +30,19 @@ pub struct Ros2Settings {
     pub rosout: Option<bool>,
     /// Places whose action is `ros2`, with their ExecPlace server name, in net order.
     pub servers: Vec<(PlaceId, String)>,
+    /// The arguments each `ros2` place sends in its ExecPlace goals (places without any are
+    /// absent), in net order.
+    pub args: Vec<(PlaceId, PlaceArgs)>,
+}
+
+/// A `ros2` place's arguments from the plan, sent with every ExecPlace goal.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PlaceArgs {
+    /// The target pose `[x, y, yaw]` (metres, metres, radians; frame `map`): the place's
+    /// `target`.
+    pub target: Option<[f64; 3]>,
+    /// The place's `args`, by key.
+    pub args: Vec<(String, String)>,
 }
 
 /// How the ExecPlace services (send goal, get result, cancel) carry the id that pairs a

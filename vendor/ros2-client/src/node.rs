@@ -380,6 +380,20 @@ impl Spinner {
               }
               Some(GraphEvent::EntityUndeclared(guid_entity(EntityKind::Publisher, guid)))
             }
+            // A participant whose lease ended (or that was disposed) takes its readers
+            // and writers with it: RustDDS reports only the participant then, not each
+            // endpoint (gspn patch; the matched counts would stay up forever).
+            DomainParticipantStatusEvent::ParticipantLost {id, ..} => {
+              for readers
+              in self.writers_to_remote_readers.lock().unwrap().values_mut() {
+                readers.retain(|g| g.prefix != id);
+              }
+              for writers
+              in self.readers_to_remote_writers.lock().unwrap().values_mut() {
+                writers.retain(|g| g.prefix != id);
+              }
+              None
+            }
 
             _ => None,
           };
@@ -944,6 +958,21 @@ impl Node {
         error!("get_publisher_count: Subscriber {subscription_guid:?} not known to node.");
         0
       })
+  }
+
+  /// [`Node::get_subscription_count`] as a function that outlives the borrow of the node
+  /// (gspn patch).
+  pub(crate) fn subscription_counter(
+    &self,
+    publisher_guid: GUID,
+  ) -> impl Fn() -> usize + Send + Sync + 'static {
+    let map = Arc::clone(&self.writers_to_remote_readers);
+    move || {
+      map
+        .lock()
+        .map(|m| m.get(&publisher_guid).map(BTreeSet::len).unwrap_or(0))
+        .unwrap_or(0)
+    }
   }
 
   pub(crate) fn get_subscription_count(&self, publisher_guid: GUID) -> usize {
