@@ -16,6 +16,8 @@
 //! - [`bag`]: a run's journal exported as MCAP (ROS 2 messages, CDR), for `ros2 bag play`
 //!   and Foxglove.
 //! - [`rosout`]: the ROS 2 layer's warnings and errors on `/rosout` when asked.
+//! - [`nav2`]: `goto` through Nav2's `NavigateToPose`, served by the simulated world for its
+//!   robots (`run --robots N --ros2`), and the robots' poses on `/<robot>/pose`.
 //! - [`names`]: `--ros-args` and the names of topics and actions under the run's namespace.
 //! - [`config`]: domain, networks (loopback by default), timings.
 //! - [`settings`]: what a plan tells the backend ([`Ros2Settings`]); compiled without the
@@ -39,6 +41,8 @@ pub mod heartbeat;
 pub mod msgs;
 #[cfg(feature = "ros2")]
 pub mod names;
+#[cfg(all(feature = "ros2", feature = "sim"))]
+pub mod nav2;
 #[cfg(feature = "ros2")]
 pub mod presence;
 #[cfg(feature = "ros2")]

@@ -8,6 +8,7 @@ use ros2_client::{ActionTypeName, Message, MessageTypeName};
 use serde::{Deserialize, Serialize};
 
 pub mod common;
+pub mod nav2;
 pub mod schema;
 
 pub use common::{Header, KeyValue, MAP_FRAME, Point, Pose, PoseStamped, Quaternion, Time};

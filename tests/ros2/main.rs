@@ -21,6 +21,7 @@ mod interfaces;
 mod interop;
 mod lifecycle;
 mod multiprocess;
+mod nav2_for_goto;
 mod netns;
 mod python_robot;
 mod rosout;

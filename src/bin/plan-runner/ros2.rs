@@ -93,6 +93,14 @@ pub(crate) struct RunArgs {
     /// time, so model times mean nothing.
     #[arg(long)]
     allow_virtual_time: bool,
+    /// With simulated robots (`--robots N`, feature `sim`): every `goto` goes through Nav2's
+    /// NavigateToPose over DDS to /<robot>/navigate_to_pose, which the simulated world
+    /// serves for each robot, and the robots' poses are published on /<robot>/pose
+    /// (geometry_msgs/PoseStamped, frame `map`). Needs a time scale > 0 (DDS is on the wall
+    /// clock).
+    #[cfg(feature = "sim")]
+    #[arg(long)]
+    pub(crate) ros2: bool,
 }
 
 /// Refuses a plan with ros2 places the supervisor cannot run: no robots to send goals to,
@@ -119,6 +127,56 @@ pub(crate) fn check_plan(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// Refuses `--ros2` on a run that cannot serve Nav2 from a simulated world: no `[map]`, or
+/// virtual time (DDS runs on the wall clock, so the world must too).
+#[cfg(feature = "sim")]
+pub(crate) fn check_sim_nav2(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
+    if !args.ros2 {
+        return Ok(());
+    }
+    if plan.map.is_none() {
+        return Err(BadInput(format!(
+            "{}: --ros2 serves Nav2 for simulated robots: the plan needs a [map] (see docs/ros2.md, \"Nav2\")",
+            plan.path.display()
+        ))
+        .into());
+    }
+    if plan.time_scale.unwrap_or(0.0) == 0.0 {
+        return Err(BadInput(format!(
+            "{}: --ros2 with time scale 0 (virtual time): DDS runs on the wall clock, so the \
+             world must too; give --time-scale X > 0 (1 = real time, 0.05 = 20x faster)",
+            plan.path.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// Serves Nav2 for `fleet`'s robots and makes its `goto`s go through it: the world's
+/// servers (a backend of the run, which counts the goals) and the fleet, ready.
+#[cfg(feature = "sim")]
+pub(crate) async fn sim_nav2(
+    fleet: gspn::world::Fleet,
+    cfg: &DdsConfig,
+) -> anyhow::Result<(gspn::world::Fleet, gspn::ros2::nav2::SimNav2)> {
+    use gspn::ros2::nav2::{Nav2Navigator, SimNav2};
+    let servers = SimNav2::serve(&fleet.world, std::sync::Arc::clone(&fleet.map), cfg)?;
+    let robots = fleet.world.robots().to_vec();
+    eprintln!(
+        "ros2: domain {}, Nav2 NavigateToPose served for {} simulated robot(s)",
+        cfg.domain_id,
+        robots.len()
+    );
+    let nav = Nav2Navigator::connect(&robots, std::sync::Arc::clone(&fleet.map), cfg).await?;
+    Ok((fleet.navigate_with(std::sync::Arc::new(nav)), servers))
+}
+
+/// The DDS settings of a run with simulated robots served over ROS 2 (`--ros2`).
+#[cfg(feature = "sim")]
+pub(crate) fn sim_config(plan: &Plan, args: &RunArgs, robots: usize) -> anyhow::Result<DdsConfig> {
+    Ok(args.dds.config(plan)?.for_fleet(robots + 4))
 }
 
 /// Whether the plan has `ros2` places (else the ROS 2 backend stays off).
