@@ -26,10 +26,7 @@ fn peak_rss_mb() -> f64 {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let mut file: Option<PathBuf> = None;
-    let mut opts = Options {
-        progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
-        ..Options::default()
-    };
+    let mut opts = Options::default();
     let mut props = false;
     while let Some(a) = args.next() {
         match a.as_str() {

@@ -46,6 +46,16 @@
 //!   rules that can never apply) for `plan-runner check`.
 //!
 //! The everyday types are in [`prelude`].
+//!
+//! # Features
+//!
+//! `web` (the viewer), `sim` (simulated robots) and `cli` (the `plan-runner` binary's
+//! argument parsing, error reports, logging and terminal spinner) are on by default; `ros2`
+//! adds the DDS backend. A service embedding the library builds it with
+//! `default-features = false` and the backends it wants: no terminal or command-line crate
+//! (clap, anyhow, tracing-subscriber, indicatif) comes with it. Long analyses report
+//! progress only through their [`Monitor`](analysis::state_space::Monitor); a caller draws
+//! its own display by polling it.
 
 #![warn(missing_docs, missing_debug_implementations, unreachable_pub)]
 #![deny(unused_must_use)]

@@ -8,6 +8,7 @@ Model, analyse exactly, synthesise optimal policies, simulate and run plans — 
     net = gspn.load("plans/nets/two_robot_patrol.xml")
     result = gspn.analyze(net)
     print(result.steady.by_place())
+    print(gspn.query(net, "P=? [F<=10 Patrol_A=1]"))
 
     best = gspn.synthesize("plans/home-cleaning/plan.toml")
     print(best.value, best.lower, best.upper)
@@ -41,6 +42,7 @@ _API = (
     "exponential",
     "load",
     "analyze",
+    "query",
     "synthesize",
     "simulate",
     "run",
@@ -71,6 +73,7 @@ if TYPE_CHECKING:
         exponential,
         immediate,
         load,
+        query,
         run,
         simulate,
         synthesize,

@@ -6,7 +6,7 @@ import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping, Sequence, Union
+from typing import Any, Callable, Iterable, Mapping, Sequence, Union, overload
 
 import numpy as np
 
@@ -328,6 +328,41 @@ def analyze(
         transient=[Measures._from(net, p) for p in report["transient"]],
         report=report,
     )
+
+
+@overload
+def query(
+    net_or_plan: Net | PathLike, queries: str, max_states: int = ..., max_memory_mib: int = ...
+) -> float: ...
+@overload
+def query(
+    net_or_plan: Net | PathLike,
+    queries: Sequence[str],
+    max_states: int = ...,
+    max_memory_mib: int = ...,
+) -> list[float]: ...
+def query(
+    net_or_plan: Net | PathLike,
+    queries: str | Sequence[str],
+    max_states: int = 10_000_000,
+    max_memory_mib: int = 4096,
+) -> float | list[float]:
+    """The value of a query in Storm's/PRISM's syntax, as ``plan-runner analyze --query``
+    answers it: ``"P=? [F<=600 done=1]"`` (time-bounded reachability), ``"P=? [F φ]"``,
+    ``"P=? [φ1 U<=t φ2]"``, ``"P=? [G<=t φ]"``, ``"T=? [F φ]"`` (expected time, ``inf``
+    when φ may never hold), ``"S=? [φ]"`` (long-run probability), ``'R{"name"}=? [S]'``,
+    ``[C<=t]`` and ``[F φ]`` over a plan's rewards, and ``Pmax=?``/``Pmin=?``/``Tmin=?``…
+    over a plan's controllable transitions. A plan is read under its policy.
+
+    One query gives a float, a list of queries a list in the same order (the state space
+    is built once). A malformed query raises :class:`gspn.InputError` with the ``column``
+    in the query text. The GIL is released while it runs; Ctrl-C cancels it.
+    """
+    net = _net(net_or_plan)
+    single = isinstance(queries, str)
+    texts = [queries] if single else [str(q) for q in queries]
+    values = _native.query(net._model, texts, max_states, max_memory_mib)
+    return values[0] if single else list(values)
 
 
 # --------------------------------------------------------------------------- synthesis

@@ -21,6 +21,12 @@ def analyze(
     max_states: int = 10_000_000,
     max_memory_mib: int = 4096,
 ) -> str: ...
+def query(
+    model: Model,
+    queries: list[str],
+    max_states: int = 10_000_000,
+    max_memory_mib: int = 4096,
+) -> list[float]: ...
 def synthesize(
     model: Model,
     objective: str = "lra-max",

@@ -2,9 +2,11 @@
 
 use std::sync::Arc;
 
+use gspn::analysis::decision::BuildOptions;
 use gspn::analysis::invariants::{p_invariants, t_invariants};
 use gspn::analysis::measures::{Solver, SolverOptions, bad_time};
 use gspn::analysis::properties::Properties;
+use gspn::analysis::query::{Evaluator, Query, QueryError};
 use gspn::analysis::report::{MeasuresReport, Report, StateSpaceReport};
 use gspn::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
 use gspn::analysis::under_policy::{PolicyAnalysisError, Regime, analyse};
@@ -36,7 +38,6 @@ pub(crate) fn analyze(
     interruptible(py, cancel, move || {
         let opts = Options {
             max_states,
-            progress: false,
             threads: 0,
             max_memory: max_memory_mib.saturating_mul(1 << 20),
         };
@@ -123,4 +124,57 @@ fn report(
 
 fn json(report: &Report) -> Outcome<String> {
     serde_json::to_string(report).map_err(|e| Failure::Analysis(e.to_string()))
+}
+
+/// The value of each of `queries` (Storm/PRISM syntax: `P=? [F<=600 done=1]`, `T=? [F φ]`,
+/// `S=? [φ]`, `R{"name"}=? [S]`, `Pmax=? [F φ]`, …), as `plan-runner analyze --query`
+/// answers them: on the plan's net under its policy, `max`/`min` over its controllable
+/// transitions.
+#[pyfunction]
+#[pyo3(signature = (model, queries, max_states = 10_000_000, max_memory_mib = 4096))]
+pub(crate) fn query(
+    py: Python<'_>,
+    model: &Model,
+    queries: Vec<String>,
+    max_states: usize,
+    max_memory_mib: usize,
+) -> PyResult<Vec<f64>> {
+    let plan = Arc::clone(&model.plan);
+    let monitor = Monitor::new();
+    let cancel = monitor.cancel_flag();
+    interruptible(py, cancel, move || {
+        let parsed = queries
+            .iter()
+            .map(|text| {
+                Query::parse(&plan.net, &plan.rewards, text).map_err(|e| Failure::Input {
+                    message: format!("query `{text}`: {e}"),
+                    file: None,
+                    line: None,
+                    column: e.column().map(|c| c as u32),
+                })
+            })
+            .collect::<Outcome<Vec<_>>>()?;
+        let opts = Options {
+            max_states,
+            threads: 0,
+            max_memory: max_memory_mib.saturating_mul(1 << 20),
+        };
+        let space = StateSpace::build_under_policy(&plan.net, &plan.policy, &opts, &monitor)
+            .map_err(|e| Failure::Analysis(e.to_string()))?;
+        let ev = Evaluator::new(&plan.net, &space, &plan.rewards).with_controls(
+            &plan.controls,
+            BuildOptions {
+                max_states,
+                ..BuildOptions::default()
+            },
+        );
+        parsed
+            .iter()
+            .map(|q| match ev.evaluate(q) {
+                Ok(v) => Ok(v),
+                Err(e @ QueryError::Unsupported(_)) => Err(Failure::input(format!("query: {e}"))),
+                Err(e) => Err(Failure::Analysis(format!("query `{q}`: {e}"))),
+            })
+            .collect()
+    })
 }

@@ -201,7 +201,6 @@ fn run(plan: &Plan, r: &Request, monitor: &Monitor) -> Outcome<String> {
         &controls,
         &BuildOptions {
             max_states: r.max_states,
-            progress: false,
             threads: 0,
         },
         monitor,

@@ -116,8 +116,6 @@ impl Controls {
 pub struct BuildOptions {
     /// Most markings to store before giving up.
     pub max_states: usize,
-    /// Progress bar on stderr.
-    pub progress: bool,
     /// Threads for the search; 0 = all cores.
     pub threads: usize,
 }
@@ -126,7 +124,6 @@ impl Default for BuildOptions {
     fn default() -> Self {
         BuildOptions {
             max_states: 10_000_000,
-            progress: false,
             threads: 0,
         }
     }

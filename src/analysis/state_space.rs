@@ -50,8 +50,6 @@ use table::MoveTable;
 pub struct Options {
     /// Most markings (tangible and vanishing) to store before giving up (default 10,000,000).
     pub max_states: usize,
-    /// Show a progress bar on stderr.
-    pub progress: bool,
     /// Threads to use; 0 = all available cores.
     pub threads: usize,
     /// Most bytes the search may hold (markings, their index and their moves), estimated
@@ -66,7 +64,6 @@ impl Default for Options {
     fn default() -> Self {
         Options {
             max_states: 10_000_000,
-            progress: false,
             threads: 0,
             max_memory: DEFAULT_MAX_MEMORY,
         }
@@ -343,14 +340,15 @@ pub(crate) fn search(
     explore::explore_with(
         net,
         layout,
-        explore::Limits {
-            states: opts.max_states,
-            memory: opts.max_memory,
+        explore::Settings {
+            limits: explore::Limits {
+                states: opts.max_states,
+                memory: opts.max_memory,
+            },
+            threads,
+            monitor,
+            wait,
         },
-        threads,
-        opts.progress,
-        monitor,
-        wait,
     )
 }
 

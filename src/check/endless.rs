@@ -124,7 +124,6 @@ pub fn pumps(net: &Net, p: PlaceId) -> Vec<TransitionId> {
 pub fn ending(net: &Net, max_states: usize) -> Ending {
     let opts = Options {
         max_states,
-        progress: false,
         threads: 1,
         max_memory: 256 << 20,
     };

@@ -49,7 +49,6 @@ pub(crate) fn analyse(
 ) -> (Value, Option<Kept>) {
     let opts = Options {
         max_states,
-        progress: false,
         threads: 0,
         ..Options::default()
     };

@@ -293,6 +293,20 @@ fn priority_violations(net: &Net, s: &Spec, events: &[Event]) -> Vec<String> {
     bad
 }
 
+/// Actions started after the run's last firing: the firing that ends a run (here
+/// `max_firings`) starts none — its output tokens are counted, not put to work.
+fn started_after_the_end(events: &[Event]) -> Vec<String> {
+    let last = events
+        .iter()
+        .rposition(|e| matches!(e.kind, EventKind::Fired { .. }))
+        .unwrap_or(0);
+    events[last..]
+        .iter()
+        .filter(|e| matches!(e.kind, EventKind::ActionStarted { .. }))
+        .map(|e| format!("{} {:?}", e.time, e.kind))
+        .collect()
+}
+
 fn two_threads() -> tokio::runtime::Runtime {
     tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -316,6 +330,10 @@ proptest! {
         prop_assert_eq!(&run, &game, "the run left the token game");
         let bad = priority_violations(&net, &s, &events);
         prop_assert!(bad.is_empty(), "{:?}", bad);
+        if run.len() as u64 == FIRINGS {
+            let late = started_after_the_end(&events);
+            prop_assert!(late.is_empty(), "actions started by the last firing: {:?}", late);
+        }
         // Identity: every token outside resource places is a live agent.
         let any_agents = s.roles.iter().any(|&r| r != 0 && r != 3);
         if any_agents && !marking.is_empty() {
@@ -337,6 +355,10 @@ proptest! {
         let (b, _, _) = rt.block_on(events_of(runtime_of(&s, net.clone(), seed), FIRINGS));
         let bad = priority_violations(&net, &s, &a);
         prop_assert!(bad.is_empty(), "{:?}", bad);
+        if fired(&a).len() as u64 == FIRINGS {
+            let late = started_after_the_end(&a);
+            prop_assert!(late.is_empty(), "actions started by the last firing: {:?}", late);
+        }
         let show = |v: &[Event]| v.iter().map(|e| format!("{} {:?}", e.time, e.kind)).collect::<Vec<_>>();
         let (sa, sb) = (show(&a), show(&b));
         let first = sa.iter().zip(&sb).position(|(x, y)| x != y);

@@ -56,7 +56,6 @@ pub(super) fn build(
 ) -> Result<DecisionModel, DecisionError> {
     let sopts = Options {
         max_states: opts.max_states,
-        progress: opts.progress,
         threads: opts.threads,
         ..Options::default()
     };

@@ -8,7 +8,7 @@ use std::sync::OnceLock;
 use super::absorbing::{Absorbing, Class};
 use super::{Kind, Query, QueryError};
 use crate::analysis::ctmc::{Ctmc, Limiting, poisson_weights};
-use crate::analysis::decision::RewardSpec;
+use crate::analysis::decision::{BuildOptions, Controls, RewardSpec};
 use crate::analysis::measures::{MAX_UNIFORMISATION, Solver, SolverOptions, TRANSIENT_EPS};
 use crate::analysis::state_space::StateSpace;
 use crate::analysis::under_policy::reward_rate;
@@ -16,13 +16,15 @@ use crate::net::Net;
 use crate::net::predicate::Predicate;
 
 /// Answers queries on one state space; the limiting distribution is solved once, on the
-/// first long-run query.
+/// first long-run query. `max`/`min` queries go to the synthesis engine when the
+/// evaluator knows the plan's controllable transitions ([`Evaluator::with_controls`]).
 #[derive(Debug)]
 pub struct Evaluator<'a> {
     net: &'a Net,
     space: &'a StateSpace,
     rewards: &'a [RewardSpec],
     limiting: OnceLock<Result<Limiting, QueryError>>,
+    controls: Option<(&'a Controls, BuildOptions)>,
 }
 
 impl<'a> Evaluator<'a> {
@@ -34,7 +36,16 @@ impl<'a> Evaluator<'a> {
             space,
             rewards,
             limiting: OnceLock::new(),
+            controls: None,
         }
+    }
+
+    /// An evaluator that answers `Pmax=?`, `Tmin=?`, … too: over the policies of
+    /// `controls` (a plan's controllable transitions), through [`super::extreme`], with the
+    /// decision model searched under `build`.
+    pub fn with_controls(mut self, controls: &'a Controls, build: BuildOptions) -> Self {
+        self.controls = Some((controls, build));
+        self
     }
 
     /// An evaluator that reuses a limiting distribution already solved on `space`.
@@ -44,13 +55,19 @@ impl<'a> Evaluator<'a> {
     }
 
     /// The value of `query` (`f64::INFINITY` for an expected time or reward when the goal is
-    /// missed with positive probability). `max`/`min` queries go to [`super::extreme`].
+    /// missed with positive probability). `max`/`min` queries go to [`super::extreme`],
+    /// and are refused unless [`Evaluator::with_controls`] gave the controllable transitions.
     pub fn evaluate(&self, query: &Query) -> Result<f64, QueryError> {
         if query.extreme.is_some() {
-            return Err(QueryError::Unsupported(format!(
-                "`{query}` asks for the best or worst choice: it needs the plan's \
-                 controllable transitions (query::extreme)"
-            )));
+            return match &self.controls {
+                Some((controls, build)) => {
+                    super::extreme::evaluate(self.net, controls, self.rewards, query, build)
+                }
+                None => Err(QueryError::Unsupported(format!(
+                    "`{query}` asks for the best or worst choice: it needs the plan's \
+                     controllable transitions (query::extreme)"
+                ))),
+            };
         }
         match &query.kind {
             Kind::Until { safe, goal, bound } => {

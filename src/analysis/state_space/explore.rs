@@ -10,8 +10,6 @@
 
 use std::sync::mpsc;
 
-use indicatif::{ProgressBar, ProgressStyle};
-
 use super::packing::{Deltas, Layout, MarkingStore};
 use super::table::MoveTable;
 use super::{AnalysisError, Monitor, Move};
@@ -58,6 +56,19 @@ pub(crate) struct Limits {
     pub(crate) states: usize,
     /// Most bytes, estimated ([`Search::bytes_per_marking`]).
     pub(crate) memory: usize,
+}
+
+/// How one search runs: what it may hold, on how many threads, the monitor that watches
+/// it (progress and cancel: the only progress channel, a caller draws its own display by
+/// polling it), and whether a vanishing marking's WAIT targets are searched too.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Settings<'a> {
+    pub(crate) limits: Limits,
+    /// Threads (1 = this one).
+    pub(crate) threads: usize,
+    pub(crate) monitor: &'a Monitor,
+    /// Vanishing markings also list their enabled exponential transitions.
+    pub(crate) wait: bool,
 }
 
 /// Computes the successors of the states whose packed words are `frontier`.
@@ -129,7 +140,6 @@ struct Search<'m> {
     max_states: usize,
     max_memory: usize,
     group: Vec<Move>,
-    bar: Option<ProgressBar>,
 }
 
 impl Search<'_> {
@@ -198,9 +208,6 @@ impl Search<'_> {
             self.raw.tangible.push(tangible);
             self.raw.moves.push_group(&self.group);
         }
-        if let Some(bar) = &self.bar {
-            bar.set_position(self.raw.store.len() as u64);
-        }
         self.monitor.set_markings(self.raw.store.len());
         if self.monitor.is_cancelled() {
             return Err(AnalysisError::Cancelled {
@@ -217,12 +224,14 @@ impl Search<'_> {
 pub(crate) fn explore_with(
     net: &Net,
     layout: Layout,
-    limits: Limits,
-    threads: usize,
-    progress: bool,
-    monitor: &Monitor,
-    wait: bool,
+    settings: Settings<'_>,
 ) -> Result<Raw, AnalysisError> {
+    let Settings {
+        limits,
+        threads,
+        monitor,
+        wait,
+    } = settings;
     let rules = Rules::new(net);
     let mut store = MarkingStore::new(layout, net.place_count());
     let mut m0 = net.initial_marking().into_vec();
@@ -233,15 +242,6 @@ pub(crate) fn explore_with(
     }
     store.insert(&key);
     m0.clear();
-    let bar = progress.then(|| {
-        let bar = ProgressBar::new_spinner();
-        if let Ok(style) =
-            ProgressStyle::with_template("{spinner} {pos} markings ({per_sec}) {elapsed}")
-        {
-            bar.set_style(style);
-        }
-        bar
-    });
     let mut s = Search {
         raw: Raw {
             store,
@@ -253,7 +253,6 @@ pub(crate) fn explore_with(
         max_states: limits.states.max(1),
         max_memory: limits.memory,
         group: Vec::new(),
-        bar,
     };
     s.check_memory()?;
     let mut cursor = 0;
@@ -302,9 +301,6 @@ pub(crate) fn explore_with(
             }
             None => cursor = hi,
         }
-    }
-    if let Some(bar) = &s.bar {
-        bar.finish_and_clear();
     }
     s.raw.moves.shrink();
     s.raw.store.drop_index();
@@ -369,6 +365,15 @@ mod tests {
         memory: 1 << 30,
     };
 
+    fn settings(threads: usize, monitor: &Monitor) -> Settings<'_> {
+        Settings {
+            limits: BIG,
+            threads,
+            monitor,
+            wait: false,
+        }
+    }
+
     /// Two independent two-place cycles with `n` tokens each: (n+1)² markings.
     fn cycles(n: u32) -> Net {
         let mut b = NetBuilder::new("cycles");
@@ -392,8 +397,8 @@ mod tests {
         let narrow = Layout::new(&[Some(60), Some(1), Some(60), Some(1)], &[60, 0, 60, 0]);
         for threads in [1, 2] {
             let m = Monitor::new();
-            let a = explore_with(&net, exact.clone(), BIG, threads, false, &m, false).unwrap();
-            let b = explore_with(&net, narrow.clone(), BIG, threads, false, &m, false).unwrap();
+            let a = explore_with(&net, exact.clone(), settings(threads, &m)).unwrap();
+            let b = explore_with(&net, narrow.clone(), settings(threads, &m)).unwrap();
             assert_eq!(a.store.len(), 61 * 61);
             assert_eq!(b.store.len(), a.store.len());
             assert_eq!(b.moves.total(), a.moves.total());
@@ -412,12 +417,12 @@ mod tests {
         let net = cycles(60);
         let exact = Layout::new(&[Some(60); 4], &[60, 0, 60, 0]);
         let m = Monitor::new();
-        explore_with(&net, exact.clone(), BIG, 1, false, &m, false).unwrap();
+        explore_with(&net, exact.clone(), settings(1, &m)).unwrap();
         assert_eq!(m.markings(), 61 * 61);
         let c = Monitor::new();
         c.cancel();
         // The first block (the initial marking) is expanded, then the flag is seen.
-        match explore_with(&net, exact, BIG, 1, false, &c, false) {
+        match explore_with(&net, exact, settings(1, &c)) {
             Err(AnalysisError::Cancelled { markings }) => assert_eq!(markings, 3),
             other => panic!("expected a cancel, got {:?}", other.map(|r| r.store.len())),
         }

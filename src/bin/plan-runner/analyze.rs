@@ -11,6 +11,7 @@ pub(crate) mod series;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
 
 use anyhow::Context;
 use gspn::analysis::invariants::{Invariants, p_invariants, t_invariants};
@@ -25,6 +26,7 @@ use gspn::net::predicate::Predicate;
 use gspn::plan::{Plan, open};
 
 use crate::common::{BadInput, NetArgs};
+use crate::progress::Spinner;
 
 /// Arguments of `analyze`.
 #[derive(clap::Args, Debug)]
@@ -110,14 +112,14 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         .collect::<Result<Vec<_>, _>>()?;
     let opts = Options {
         max_states: args.max_states,
-        progress: !args.json && std::io::stderr().is_terminal(),
         threads: 0,
         max_memory: args.max_memory.saturating_mul(1 << 20),
     };
     // `--transient T` asks for the distribution at T only (its --prob values included);
     // the steady state comes with --steady, or when no time is asked for.
     let want_steady = args.steady || times.is_empty();
-    let monitor = Monitor::new();
+    let monitor = Arc::new(Monitor::new());
+    let spinner = Spinner::start(!args.json && std::io::stderr().is_terminal(), &monitor);
     let unbounded = |e: &AnalysisError| match e {
         AnalysisError::Unbounded { places } => Some(places.clone()),
         _ => None,
@@ -155,6 +157,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             },
         }
     };
+    drop(spinner);
     let props = Properties::compute(net, &ss);
     let pinv = p_invariants(net, 10_000);
     let tinv = t_invariants(net, 10_000);

@@ -3,11 +3,15 @@
 //! analysis of `gspn::check::endless`), the stop flags checked, and the progress shown —
 //! a spinner on a terminal, else one line on stderr every [`EVERY`] (`--quiet`: none).
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use gspn::analysis::state_space::Monitor;
 use gspn::check::endless;
 use gspn::plan::Plan;
 use gspn::runtime::Progress;
+use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::common::BadInput;
 
@@ -75,6 +79,46 @@ impl Lines {
                 progress.time(),
                 (now - self.start).as_secs_f64()
             );
+        }
+    }
+}
+
+/// A spinner on stderr showing the markings an analysis has stored, drawn by polling its
+/// [`Monitor`] (the library reports progress only there); cleared when dropped.
+pub(crate) struct Spinner {
+    done: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Spinner {
+    /// Starts the spinner when `show` (a terminal, no `--json`); else draws nothing.
+    pub(crate) fn start(show: bool, monitor: &Arc<Monitor>) -> Spinner {
+        let done = Arc::new(AtomicBool::new(false));
+        let thread = show.then(|| {
+            let (done, monitor) = (Arc::clone(&done), Arc::clone(monitor));
+            std::thread::spawn(move || {
+                let bar = ProgressBar::new_spinner();
+                if let Ok(style) =
+                    ProgressStyle::with_template("{spinner} {pos} markings ({per_sec}) {elapsed}")
+                {
+                    bar.set_style(style);
+                }
+                while !done.load(Ordering::Relaxed) {
+                    bar.set_position(monitor.markings() as u64);
+                    std::thread::sleep(Duration::from_millis(100));
+                }
+                bar.finish_and_clear();
+            })
+        });
+        Spinner { done, thread }
+    }
+}
+
+impl Drop for Spinner {
+    fn drop(&mut self) {
+        self.done.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
         }
     }
 }

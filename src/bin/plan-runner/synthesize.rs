@@ -7,6 +7,7 @@ use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
@@ -23,6 +24,7 @@ use gspn::policy::{Pattern, Rule};
 use serde_json::json;
 
 use crate::common::{BadInput, Interrupted, NetArgs, load_net};
+use crate::progress::Spinner;
 
 mod input;
 mod policy_file;
@@ -177,20 +179,21 @@ fn synthesize(
     max: bool,
     args: &Args,
     progress: bool,
-    monitor: &Monitor,
+    monitor: &Arc<Monitor>,
 ) -> anyhow::Result<Solved> {
     let t0 = Instant::now();
+    let spinner = Spinner::start(progress, monitor);
     let model = DecisionModel::build_monitored(
         net,
         controls,
         &BuildOptions {
             max_states: args.max_states,
-            progress,
             threads: 0,
         },
         monitor,
     )
     .map_err(|e| or_interrupted(e, monitor, &args.file, args.file.display().to_string()))?;
+    drop(spinner);
     let build_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let flags = |p: &Predicate| model.states_where(|m| p.eval(m));
@@ -293,7 +296,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         controls.keep_races = true;
     }
     let progress = !args.json && std::io::stderr().is_terminal();
-    let monitor = Monitor::new();
+    let monitor = Arc::new(Monitor::new());
     cancel_on_interrupt(&monitor)?;
     if let Some(sweep) = &args.sweep {
         return run_sweep(

@@ -4,7 +4,7 @@
 
 use gspn::analysis::ctmc::Limiting;
 use gspn::analysis::decision::BuildOptions;
-use gspn::analysis::query::{Evaluator, Query, QueryError, extreme};
+use gspn::analysis::query::{Evaluator, Query, QueryError};
 use gspn::analysis::report::QueryAnswer;
 use gspn::analysis::state_space::StateSpace;
 use gspn::plan::Plan;
@@ -41,36 +41,25 @@ pub(super) fn answer(
     queries: &[Query],
     max_states: usize,
 ) -> anyhow::Result<Vec<QueryAnswer>> {
-    let mut ev = Evaluator::new(&plan.net, space, &plan.rewards);
+    let mut ev = Evaluator::new(&plan.net, space, &plan.rewards).with_controls(
+        &plan.controls,
+        BuildOptions {
+            max_states,
+            ..BuildOptions::default()
+        },
+    );
     if let Some(l) = limiting {
         ev = ev.with_limiting(l);
     }
     queries
         .iter()
-        .map(|q| {
-            let value = match q.extreme {
-                None => ev.evaluate(q),
-                Some(_) => extreme::evaluate(
-                    &plan.net,
-                    &plan.controls,
-                    &plan.rewards,
-                    q,
-                    &BuildOptions {
-                        max_states,
-                        ..BuildOptions::default()
-                    },
-                ),
-            };
-            match value {
-                Ok(value) => Ok(QueryAnswer {
-                    query: q.source().to_string(),
-                    value,
-                }),
-                Err(e @ QueryError::Unsupported(_)) => {
-                    Err(BadInput(format!("--query: {e}")).into())
-                }
-                Err(e) => Err(anyhow::Error::new(e).context(format!("--query `{q}`"))),
-            }
+        .map(|q| match ev.evaluate(q) {
+            Ok(value) => Ok(QueryAnswer {
+                query: q.source().to_string(),
+                value,
+            }),
+            Err(e @ QueryError::Unsupported(_)) => Err(BadInput(format!("--query: {e}")).into()),
+            Err(e) => Err(anyhow::Error::new(e).context(format!("--query `{q}`"))),
         })
         .collect()
 }

@@ -65,7 +65,7 @@ pub(super) fn run_sweep(
     goal: &Goal,
     max: bool,
     range: std::ops::RangeInclusive<usize>,
-    monitor: &Monitor,
+    monitor: &Arc<Monitor>,
 ) -> anyhow::Result<ExitCode> {
     let mut rows = Vec::new();
     if !args.json {
