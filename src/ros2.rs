@@ -16,8 +16,9 @@
 //! - [`bag`]: a run's journal exported as MCAP (ROS 2 messages, CDR), for `ros2 bag play`
 //!   and Foxglove.
 //! - [`rosout`]: the ROS 2 layer's warnings and errors on `/rosout` when asked.
-//! - [`nav2`]: `goto` through Nav2's `NavigateToPose`, served by the simulated world for its
-//!   robots (`run --robots N --ros2`), and the robots' poses on `/<robot>/pose`.
+//! - [`nav2`]: Nav2's `NavigateToPose` for `ros2` places with `server = "navigate_to_pose"`
+//!   (real Nav2 robots) and for `goto` on simulated robots (`run --robots N --ros2`), which
+//!   the world serves, with the robots' poses on `/<robot>/pose`.
 //! - [`names`]: `--ros-args` and the names of topics and actions under the run's namespace.
 //! - [`config`]: domain, networks (loopback by default), timings.
 //! - [`settings`]: what a plan tells the backend ([`Ros2Settings`]); compiled without the
@@ -41,7 +42,7 @@ pub mod heartbeat;
 pub mod msgs;
 #[cfg(feature = "ros2")]
 pub mod names;
-#[cfg(all(feature = "ros2", feature = "sim"))]
+#[cfg(feature = "ros2")]
 pub mod nav2;
 #[cfg(feature = "ros2")]
 pub mod presence;
@@ -56,7 +57,7 @@ pub mod rosout;
 pub use backend::Ros2Backend;
 #[cfg(feature = "ros2")]
 pub use config::DdsConfig;
-pub use settings::{DEFAULT_SERVER, ROS2_ACTION, Ros2Settings};
+pub use settings::{DEFAULT_SERVER, NAV2_SERVER, ROS2_ACTION, Ros2Settings};
 
 /// What went wrong in the ROS 2 backend.
 #[cfg(feature = "ros2")]

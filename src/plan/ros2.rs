@@ -13,7 +13,9 @@ use super::file::PlaceFile;
 use super::resolve::out_of_range;
 use crate::io::{LoadError, LoadErrorKind};
 use crate::net::Net;
-use crate::ros2::settings::{DEFAULT_SERVER, PlaceArgs, ROS2_ACTION, Ros2Settings, ServiceMapping};
+use crate::ros2::settings::{
+    DEFAULT_SERVER, NAV2_SERVER, PlaceArgs, ROS2_ACTION, Ros2Settings, ServiceMapping,
+};
 
 /// The `[ros2]` table: how the ROS 2 backend joins DDS and watches robots.
 #[derive(Debug, Deserialize, JsonSchema)]
@@ -149,6 +151,18 @@ pub(super) fn resolve_ros2(
             None => DEFAULT_SERVER.to_string(),
         };
         let args = place_args(name.get_ref(), f, is_ros2, at)?;
+        if let Some(srv) = &f.server
+            && srv.get_ref() == NAV2_SERVER
+            && args.target.is_none()
+        {
+            return Err(at(
+                srv.span(),
+                LoadErrorKind::Invalid(format!(
+                    "place `{}`: server \"{NAV2_SERVER}\" sends Nav2 goals: it needs a `target = [x, y]` or `[x, y, yaw]` (frame map)",
+                    name.get_ref()
+                )),
+            ));
+        }
         if is_ros2 && let Some(p) = net.place_by_name(name.get_ref()) {
             s.servers.push((p, server));
             if args != PlaceArgs::default() {

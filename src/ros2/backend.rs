@@ -28,8 +28,8 @@ use super::firings::{FiringPublisher, Published, RunStatePublisher};
 use super::heartbeat::{self, Liveness, RobotWatch};
 use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, exec_place_type};
 use super::presence::{Presence, ServerCounter};
-use super::remote_place::{RemotePlaces, RobotLink};
-use super::settings::{ROS2_ACTION, Ros2Settings};
+use super::remote_place::{Nav2Link, RemotePlaces, RobotLink};
+use super::settings::{NAV2_SERVER, ROS2_ACTION, Ros2Settings};
 use crate::net::Net;
 use crate::runtime::{Events, RuntimeBuilder};
 
@@ -105,9 +105,22 @@ impl Ros2Backend {
         let watch = RobotWatch::start(&mut node, robots, cfg.lost_after)?;
         let publisher = FiringPublisher::new(&mut node, Arc::new(net.clone()))?;
         let run_state = RunStatePublisher::new(&mut node)?;
-        let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
+        // Nav2 places go to the robots' own Nav2 (`navigate_to_pose`), the rest to ExecPlace.
+        let mut servers: Vec<&str> = settings
+            .servers
+            .iter()
+            .map(|(_, s)| s.as_str())
+            .filter(|&s| s != NAV2_SERVER)
+            .collect();
         servers.sort_unstable();
         servers.dedup();
+        let mut nav2_clients = Vec::new();
+        if settings.servers.iter().any(|(_, s)| s == NAV2_SERVER) {
+            for robot in robots {
+                let client = super::nav2::client(&mut node, cfg, robot)?;
+                nav2_clients.push((robot.clone(), Arc::new(client)));
+            }
+        }
         let mut clients = Vec::new();
         for robot in robots {
             for &server in &servers {
@@ -133,6 +146,12 @@ impl Ros2Backend {
                 missing.push(format!("/{robot}/{server}"));
             }
         }
+        for (robot, c) in &nav2_clients {
+            let found = super::nav2::wait_for_server(c, &node);
+            if tokio::time::timeout_at(deadline, found).await.is_err() {
+                missing.push(format!("/{robot}/{NAV2_SERVER} (Nav2)"));
+            }
+        }
         if !missing.is_empty() {
             return Err(Ros2Error::Startup(format!(
                 "no ExecPlace server at {} within {startup:?} (domain {}): are the robots running (`plan-runner robot`, or any ROS 2 node serving gspn_msgs/action/ExecPlace)?",
@@ -147,13 +166,16 @@ impl Ros2Backend {
                     let heartbeat = watch
                         .liveness(r)
                         .unwrap_or_else(|| tokio::sync::watch::channel(Liveness::Unknown).1);
-                    let counters: Vec<ServerCounter> = clients
+                    let mut counters: Vec<ServerCounter> = clients
                         .iter()
                         .filter(|(robot, _, _)| robot == r)
                         .map(|(_, _, c)| {
                             Box::new(c.goal_client().server_counter(&node)) as ServerCounter
                         })
                         .collect();
+                    counters.extend(nav2_clients.iter().filter(|(robot, _)| robot == r).map(
+                        |(_, c)| Box::new(c.goal_client().server_counter(&node)) as ServerCounter,
+                    ));
                     (r.clone(), heartbeat, counters)
                 })
                 .collect(),
@@ -165,6 +187,19 @@ impl Ros2Backend {
                 .liveness(&robot)
                 .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))?;
             links.push((server, Arc::new(RobotLink::new(robot, client, live))));
+        }
+        let mut nav2 = HashMap::new();
+        for (robot, client) in nav2_clients {
+            let live = presence
+                .liveness(&robot)
+                .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))?;
+            nav2.insert(
+                robot,
+                Nav2Link {
+                    client,
+                    liveness: live,
+                },
+            );
         }
         let subs = async {
             while publisher.firing_subscribers(&node) < subscribers {
@@ -192,7 +227,12 @@ impl Ros2Backend {
             beat,
             publisher: Arc::new(publisher),
             task: None,
-            places: RemotePlaces::new(servers, settings.args.iter().cloned().collect(), links),
+            places: RemotePlaces::new(
+                servers,
+                settings.args.iter().cloned().collect(),
+                links,
+                nav2,
+            ),
             watch,
             presence,
             rosout,

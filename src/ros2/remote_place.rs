@@ -31,7 +31,8 @@ use tokio::sync::{mpsc, oneshot, watch};
 
 use super::heartbeat::Liveness;
 use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, KeyValue, PoseStamped};
-use super::settings::PlaceArgs;
+use super::nav2::{Nav2Client, navigate};
+use super::settings::{NAV2_SERVER, PlaceArgs};
 use crate::net::PlaceId;
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
@@ -225,6 +226,25 @@ pub struct RemotePlaces {
     args: Arc<HashMap<PlaceId, PlaceArgs>>,
     /// Links by (robot, server).
     links: Arc<HashMap<(String, String), Arc<RobotLink>>>,
+    /// Each robot's Nav2 (`navigate_to_pose`) client and presence, for Nav2 places.
+    nav2: Arc<HashMap<String, Nav2Link>>,
+}
+
+/// A robot's `NavigateToPose` client and its presence.
+#[derive(Clone)]
+pub struct Nav2Link {
+    /// The client of `/<robot>/navigate_to_pose`.
+    pub client: Arc<Nav2Client>,
+    /// The robot's presence.
+    pub liveness: watch::Receiver<Liveness>,
+}
+
+impl std::fmt::Debug for Nav2Link {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Nav2Link")
+            .field("liveness", &*self.liveness.borrow())
+            .finish_non_exhaustive()
+    }
 }
 
 impl RemotePlaces {
@@ -233,10 +253,12 @@ impl RemotePlaces {
         servers: HashMap<PlaceId, String>,
         args: HashMap<PlaceId, PlaceArgs>,
         links: Vec<(String, Arc<RobotLink>)>,
+        nav2: HashMap<String, Nav2Link>,
     ) -> Self {
         RemotePlaces {
             servers: Arc::new(servers),
             args: Arc::new(args),
+            nav2: Arc::new(nav2),
             links: Arc::new(
                 links
                     .into_iter()
@@ -261,6 +283,16 @@ impl Action for RemotePlaces {
             );
             return Box::pin(async move { Outcome::Failed(m) });
         };
+        if server == NAV2_SERVER {
+            let target = self.args.get(&ctx.place).and_then(|a| a.target);
+            let (Some(link), Some([x, y, yaw])) = (self.nav2.get(&*robot), target) else {
+                let m = format!("robot `{robot}` has no Nav2 client (or the place no target)");
+                return Box::pin(async move { Outcome::Failed(m) });
+            };
+            let pose = PoseStamped::on_map(x, y, yaw);
+            let (client, live) = (Arc::clone(&link.client), link.liveness.clone());
+            return Box::pin(nav2_exec(client, robot.to_string(), pose, live, ctx));
+        }
         let Some(link) = self.links.get(&(robot.to_string(), server.clone())) else {
             let m = format!("robot `{robot}` has no link to server `{server}`");
             return Box::pin(async move { Outcome::Failed(m) });
@@ -381,6 +413,38 @@ async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> 
                 let _ = tokio::time::timeout(CANCEL_WAIT, link.cancel_goal(id)).await;
             }
             Outcome::Cancelled
+        }
+    }
+}
+
+/// A Nav2 place's action: `robot` drives to `pose` through its Nav2; arrived → the policy
+/// decides, anything else (aborted, rejected, the robot lost) fails the action; the run
+/// stopped or the place's timeout cancels the goal (`nav2::navigate`'s drop guard).
+async fn nav2_exec(
+    client: Arc<Nav2Client>,
+    robot: String,
+    pose: PoseStamped,
+    mut live: watch::Receiver<Liveness>,
+    ctx: ActionContext,
+) -> Outcome {
+    let lost = |l: Liveness| match l {
+        Liveness::Gone => {
+            format!("robot `{robot}` lost (its {NAV2_SERVER} server left DDS discovery)")
+        }
+        _ => format!("robot `{robot}` lost (its heartbeats stopped)"),
+    };
+    let now = *live.borrow();
+    if now.is_lost() {
+        return Outcome::Failed(lost(now));
+    }
+    tokio::select! {
+        r = navigate(client, &robot, pose, ctx.cancel.cancelled()) => match r {
+            Ok(()) => Outcome::Decide,
+            Err(_) if ctx.cancel.is_cancelled() => Outcome::Cancelled,
+            Err(e) => Outcome::Failed(format!("robot `{robot}`: {e}")),
+        },
+        l = live.wait_for(|s| s.is_lost()) => {
+            Outcome::Failed(lost(l.map(|l| *l).unwrap_or(Liveness::Gone)))
         }
     }
 }

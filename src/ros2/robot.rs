@@ -32,7 +32,7 @@ use super::heartbeat::{Liveness, RobotWatch, SUPERVISOR};
 use super::msgs::{
     ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, Time, exec_place_type,
 };
-use super::settings::Ros2Settings;
+use super::settings::{NAV2_SERVER, Ros2Settings};
 use super::{Ros2Error, heartbeat};
 use crate::net::{Net, PlaceId, Timing};
 use crate::sample::{self, Rng};
@@ -216,7 +216,13 @@ pub async fn serve(
         goal_tasks: Mutex::new(Vec::new()),
         goal_seen: tokio::sync::Notify::new(),
     });
-    let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
+    // Nav2 places' goals go to the robot's Nav2 (`navigate_to_pose`), not to this process.
+    let mut servers: Vec<&str> = settings
+        .servers
+        .iter()
+        .map(|(_, s)| s.as_str())
+        .filter(|&s| s != NAV2_SERVER)
+        .collect();
     servers.sort_unstable();
     servers.dedup();
     let mut tasks = Vec::new();

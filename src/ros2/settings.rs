@@ -10,6 +10,11 @@ pub const ROS2_ACTION: &str = "ros2";
 /// The ExecPlace action server a `ros2` place uses when the plan names none.
 pub const DEFAULT_SERVER: &str = "exec_place";
 
+/// The server name that makes a `ros2` place a Nav2 goal: its agents' actions are
+/// `nav2_msgs/action/NavigateToPose` goals to the place's `target` pose, sent to
+/// `/<robot>/navigate_to_pose` (Nav2's own action on a robot running Nav2), not ExecPlace.
+pub const NAV2_SERVER: &str = "navigate_to_pose";
+
 /// The plan's `[ros2]` table and its `ros2` places, resolved.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Ros2Settings {

@@ -22,6 +22,7 @@ mod interop;
 mod lifecycle;
 mod multiprocess;
 mod nav2_for_goto;
+mod nav2_places;
 mod netns;
 mod python_robot;
 mod rosout;
