@@ -68,9 +68,11 @@ fn fake_nav2(
     Vec<tokio::task::JoinHandle<()>>,
     ros2_client::Node,
 ) {
-    let mut settings = Ros2Settings::default();
-    settings.domain_id = Some(d);
-    settings.service_mapping = ServiceMapping::Enhanced;
+    let settings = Ros2Settings {
+        domain_id: Some(d),
+        service_mapping: ServiceMapping::Enhanced,
+        ..Ros2Settings::default()
+    };
     let cfg = DdsConfig::resolve(&settings).unwrap().for_fleet(8);
     let mut node = cfg.node("nav2_fake", None).unwrap();
     let spinner = node.spinner().unwrap();
@@ -99,6 +101,9 @@ fn fake_nav2(
     (seen, tasks, node)
 }
 
+/// A goal held until cancelled, and the sender that ends it.
+type Held = (GoalId, tokio::sync::oneshot::Sender<()>);
+
 async fn serve(
     server: Arc<Server>,
     robot: String,
@@ -106,7 +111,7 @@ async fn serve(
     abort_x: f64,
     hold_x: f64,
 ) {
-    let held: Arc<Mutex<Vec<(GoalId, tokio::sync::oneshot::Sender<()>)>>> = Arc::default();
+    let held: Arc<Mutex<Vec<Held>>> = Arc::default();
     loop {
         tokio::select! {
             g = server.receive_new_goal() => {
