@@ -88,7 +88,7 @@ fn stated_seconds(v: &serde_json::Value) -> Option<f64> {
 /// A command's last stdout line: `NAME`, `NAME after S` or `after S` (NAME a transition or
 /// `decide`; S model seconds the outcome takes effect after). The name, and the seconds or
 /// why they are not seconds.
-fn split_after(line: &str) -> (&str, Result<f64, String>) {
+fn split_after(line: &str) -> (&str, Result<f64, BadAfter>) {
     let line = line.trim();
     let (name, secs) = if let Some(s) = line.strip_prefix("after ") {
         ("", s)
@@ -100,14 +100,14 @@ fn split_after(line: &str) -> (&str, Result<f64, String>) {
     let secs = secs.trim();
     match secs.parse::<f64>() {
         Ok(v) if crate::limits::valid_wait(v) => (name, Ok(v)),
-        _ => (
-            name,
-            Err(format!(
-                "`after {secs}`: not a number of model seconds (finite, ≥ 0, ≤ 315576000)"
-            )),
-        ),
+        _ => (name, Err(BadAfter(secs.to_string()))),
     }
 }
+
+/// An answer's `after S` whose `S` is not a number of model seconds.
+#[derive(Debug, thiserror::Error)]
+#[error("`after {0}`: not a number of model seconds (finite, ≥ 0, ≤ 315576000)")]
+struct BadAfter(String);
 
 /// What a program's answer (a last stdout line, a worker's `fire`) means for the run.
 fn outcome_of_name(ctx: &ActionContext, who: &str, name: &str) -> crate::runtime::Outcome {

@@ -52,7 +52,7 @@ use crate::analysis::measures::SolverOptions;
 use crate::analysis::state_space::Options as SpaceOptions;
 use crate::net::{Net, PlaceId, Timing, TransitionId};
 use crate::policy::Policy;
-use crate::runtime::event::{Event, EventKind};
+use crate::runtime::event::Event;
 use crate::sim::{SimError, Simulator};
 use crate::stats::Estimate;
 
@@ -110,17 +110,12 @@ impl<'n> TraceBuilder<'n> {
     /// Adds the run's next event.
     pub fn push(&mut self, e: &Event) {
         self.end = self.end.max(e.time);
-        if let EventKind::Fired {
-            transition,
-            marking,
-            ..
-        } = &e.kind
-        {
+        if let Some(f) = e.firing() {
             self.steps.push(TraceStep {
-                seq: e.seq,
-                time: e.time,
-                transition: *transition,
-                marking: marking.as_slice().to_vec(),
+                seq: f.seq,
+                time: f.time,
+                transition: f.transition,
+                marking: f.marking.as_slice().to_vec(),
             });
         }
         self.stays.see(e);
@@ -322,7 +317,10 @@ pub struct Observations {
     pub most_tokens: Vec<u32>,
 }
 
-/// Reads a trace of `net` (run under `policy`, if any) into observations.
+/// Reads a trace of `net` (run under `policy`, if any) into observations: step by step,
+/// time passing between firings ([`Exposures::pass`]), each timed firing's exposure
+/// ([`Exposures::fired`]), each immediate firing's decision class ([`DecisionClasses::see`]),
+/// and the departures of places with a choice ([`choice_pairs`]).
 pub fn observe(
     net: &Net,
     policy: Option<&Policy>,
@@ -334,122 +332,27 @@ pub fn observe(
     }
     let (np, nt) = (net.place_count(), net.transition_count());
     let b = opts.batches.max(2);
-    let mut tokens = stats::BatchMeans::new(b, trace.end, np);
+    let mut time = Exposures::new(net, trace.end, b);
     let mut fired = stats::BatchMeans::new(b, trace.end, nt);
-    // Places with more than one output transition: (place, [transitions]).
-    let mut outs: Vec<Vec<TransitionId>> = vec![Vec::new(); np];
-    for t in net.transition_ids() {
-        for &(p, _) in net.inputs(t) {
-            outs[p.index()].push(t);
-        }
-    }
-    let pairs: Vec<(PlaceId, TransitionId)> = net
-        .place_ids()
-        .filter(|p| outs[p.index()].len() > 1)
-        .flat_map(|p| outs[p.index()].iter().map(move |&t| (p, t)))
-        .collect();
-    let pair_index: BTreeMap<(usize, usize), usize> = pairs
-        .iter()
-        .enumerate()
-        .map(|(i, (p, t))| ((p.index(), t.index()), i))
-        .collect();
+    let (pairs, pair_index) = choice_pairs(net);
     let mut chosen = stats::BatchMeans::new(b, trace.end, pairs.len());
     let mut left = stats::BatchMeans::new(b, trace.end, np);
-    let mut exposure: Vec<Option<Exposure>> = net
-        .transitions()
-        .iter()
-        .map(|t| (!t.is_immediate()).then(Exposure::default))
-        .collect();
-    let mut open_gap = vec![0.0; nt];
-    let mut decisions: Vec<Decision> = Vec::new();
-    let mut class: BTreeMap<(Vec<TransitionId>, Option<usize>), usize> = BTreeMap::new();
+    let mut decisions = DecisionClasses::default();
     let mut counts = vec![0u64; nt];
     let mut m = trace.initial.clone();
     let mut mf: Vec<f64> = m.iter().map(|&k| k as f64).collect();
     let mut now = 0.0;
-    let active = |m: &[u32], t: TransitionId| active_servers(net, m, t);
-    let pass_time = |m: &[u32],
-                     mf: &[f64],
-                     from: f64,
-                     to: f64,
-                     tokens: &mut stats::BatchMeans,
-                     exposure: &mut [Option<Exposure>],
-                     open_gap: &mut [f64]| {
-        let to = to.min(trace.end);
-        if to <= from {
-            return;
-        }
-        tokens.advance(to, mf);
-        for (i, x) in exposure.iter_mut().enumerate() {
-            if let Some(x) = x {
-                let a = active(m, TransitionId(i as u32));
-                if a > 0 {
-                    let e = a as f64 * (to - from);
-                    x.exposure += e;
-                    open_gap[i] += e;
-                    x.by_servers.entry(a).or_default().1 += to - from;
-                }
-            }
-        }
-    };
     for s in &trace.steps {
         if s.time > trace.end {
             break;
         }
-        pass_time(
-            &m,
-            &mf,
-            now,
-            s.time,
-            &mut tokens,
-            &mut exposure,
-            &mut open_gap,
-        );
+        time.pass(&m, &mf, now, s.time);
         now = now.max(s.time);
         let t = s.transition;
         counts[t.index()] += 1;
         fired.count(s.time, t.index(), 1.0);
-        if let Some(x) = &mut exposure[t.index()] {
-            let a = active(&m, t);
-            x.firings += 1;
-            x.by_servers.entry(a).or_default().0 += 1;
-            x.gaps.push(std::mem::take(&mut open_gap[t.index()]));
-        } else {
-            let firable: Vec<TransitionId> = net
-                .firable(&m)
-                .into_iter()
-                .filter(|&u| net.transition(u).is_immediate())
-                .collect();
-            let rule = policy.and_then(|p| p.rule_for(&m, &firable).map(|(i, _)| i));
-            let key = (firable, rule);
-            let i = match class.get(&key) {
-                Some(&i) => i,
-                None => {
-                    let dist = match policy {
-                        Some(p) => p.distribution_or_weights(net, &m, &key.0),
-                        None => Policy::empty().distribution_or_weights(net, &m, &key.0),
-                    };
-                    let probs = key
-                        .0
-                        .iter()
-                        .map(|u| dist.iter().find(|(v, _)| v == u).map_or(0.0, |d| d.1))
-                        .collect();
-                    decisions.push(Decision {
-                        firable: key.0.clone(),
-                        rule,
-                        probs,
-                        counts: vec![0; key.0.len()],
-                        outside: 0,
-                    });
-                    class.insert(key.clone(), decisions.len() - 1);
-                    decisions.len() - 1
-                }
-            };
-            let d = &mut decisions[i];
-            match d.firable.iter().position(|&u| u == t) {
-                Some(k) => d.counts[k] += 1,
-                None => d.outside += 1,
-            }
+        if !time.fired(&m, t) {
+            decisions.see(net, policy, &m, t);
         }
         for &(p, w) in net.inputs(t) {
             if let Some(&k) = pair_index.get(&(p.index(), t.index())) {
@@ -461,15 +364,7 @@ pub fn observe(
         mf.clear();
         mf.extend(m.iter().map(|&k| k as f64));
     }
-    pass_time(
-        &m,
-        &mf,
-        now,
-        trace.end,
-        &mut tokens,
-        &mut exposure,
-        &mut open_gap,
-    );
+    time.pass(&m, &mf, now, trace.end);
     let choices = pairs
         .iter()
         .enumerate()
@@ -484,15 +379,15 @@ pub fn observe(
         firings: counts.iter().sum(),
         batches: b,
         mean_tokens: (0..np)
-            .map(|p| stats::estimate(&tokens.batches(p)))
+            .map(|p| stats::estimate(&time.tokens.batches(p)))
             .collect(),
         throughput: (0..nt)
             .map(|t| stats::estimate(&fired.batches(t)))
             .collect(),
         counts,
-        exposure,
+        exposure: time.exposure,
         choices,
-        decisions,
+        decisions: decisions.list,
         holdings: trace
             .holdings
             .iter()
@@ -509,6 +404,143 @@ pub fn observe(
                 most
             }),
     })
+}
+
+/// The `(place, transition)` pairs of places with more than one output transition, and
+/// each pair's index.
+#[allow(clippy::type_complexity)]
+fn choice_pairs(
+    net: &Net,
+) -> (
+    Vec<(PlaceId, TransitionId)>,
+    BTreeMap<(usize, usize), usize>,
+) {
+    let mut outs: Vec<Vec<TransitionId>> = vec![Vec::new(); net.place_count()];
+    for t in net.transition_ids() {
+        for &(p, _) in net.inputs(t) {
+            outs[p.index()].push(t);
+        }
+    }
+    let pairs: Vec<(PlaceId, TransitionId)> = net
+        .place_ids()
+        .filter(|p| outs[p.index()].len() > 1)
+        .flat_map(|p| outs[p.index()].iter().map(move |&t| (p, t)))
+        .collect();
+    let index = pairs
+        .iter()
+        .enumerate()
+        .map(|(i, (p, t))| ((p.index(), t.index()), i))
+        .collect();
+    (pairs, index)
+}
+
+/// Time as it passes in a trace: the tokens' batch means and each exponential transition's
+/// exposure (server-time enabled) and the enabled time since its last firing.
+struct Exposures<'n> {
+    net: &'n Net,
+    end: f64,
+    tokens: stats::BatchMeans,
+    exposure: Vec<Option<Exposure>>,
+    open_gap: Vec<f64>,
+}
+
+impl<'n> Exposures<'n> {
+    fn new(net: &'n Net, end: f64, batches: usize) -> Self {
+        Exposures {
+            net,
+            end,
+            tokens: stats::BatchMeans::new(batches, end, net.place_count()),
+            exposure: net
+                .transitions()
+                .iter()
+                .map(|t| (!t.is_immediate()).then(Exposure::default))
+                .collect(),
+            open_gap: vec![0.0; net.transition_count()],
+        }
+    }
+
+    /// Time from `from` to `to` (cut at the end) in marking `m` (`mf` as numbers).
+    fn pass(&mut self, m: &[u32], mf: &[f64], from: f64, to: f64) {
+        let to = to.min(self.end);
+        if to <= from {
+            return;
+        }
+        self.tokens.advance(to, mf);
+        for (i, x) in self.exposure.iter_mut().enumerate() {
+            if let Some(x) = x {
+                let a = active_servers(self.net, m, TransitionId(i as u32));
+                if a > 0 {
+                    let e = a as f64 * (to - from);
+                    x.exposure += e;
+                    self.open_gap[i] += e;
+                    x.by_servers.entry(a).or_default().1 += to - from;
+                }
+            }
+        }
+    }
+
+    /// `t` fired in marking `m`: counted and its gap closed when it is exponential (true);
+    /// false for an immediate one.
+    fn fired(&mut self, m: &[u32], t: TransitionId) -> bool {
+        let Some(x) = &mut self.exposure[t.index()] else {
+            return false;
+        };
+        let a = active_servers(self.net, m, t);
+        x.firings += 1;
+        x.by_servers.entry(a).or_default().0 += 1;
+        x.gaps.push(std::mem::take(&mut self.open_gap[t.index()]));
+        true
+    }
+}
+
+/// The immediate choices of a trace, by class: the firable immediate transitions and the
+/// policy's rule that applies, in order of first appearance.
+#[derive(Default)]
+struct DecisionClasses {
+    list: Vec<Decision>,
+    class: BTreeMap<(Vec<TransitionId>, Option<usize>), usize>,
+}
+
+impl DecisionClasses {
+    /// Immediate `t` fired in marking `m`: counted in its class (made on first sight, with
+    /// the probabilities the policy, or the weights, give each option).
+    fn see(&mut self, net: &Net, policy: Option<&Policy>, m: &[u32], t: TransitionId) {
+        let firable: Vec<TransitionId> = net
+            .firable(m)
+            .into_iter()
+            .filter(|&u| net.transition(u).is_immediate())
+            .collect();
+        let rule = policy.and_then(|p| p.rule_for(m, &firable).map(|(i, _)| i));
+        let key = (firable, rule);
+        let i = match self.class.get(&key) {
+            Some(&i) => i,
+            None => {
+                let dist = match policy {
+                    Some(p) => p.distribution_or_weights(net, m, &key.0),
+                    None => Policy::empty().distribution_or_weights(net, m, &key.0),
+                };
+                let probs = key
+                    .0
+                    .iter()
+                    .map(|u| dist.iter().find(|(v, _)| v == u).map_or(0.0, |d| d.1))
+                    .collect();
+                self.list.push(Decision {
+                    firable: key.0.clone(),
+                    rule,
+                    probs,
+                    counts: vec![0; key.0.len()],
+                    outside: 0,
+                });
+                self.class.insert(key, self.list.len() - 1);
+                self.list.len() - 1
+            }
+        };
+        let d = &mut self.list[i];
+        match d.firable.iter().position(|&u| u == t) {
+            Some(k) => d.counts[k] += 1,
+            None => d.outside += 1,
+        }
+    }
 }
 
 /// What the model predicts for the rows that need an analysis (the rest come from the net's

@@ -41,49 +41,20 @@ pub struct Span {
 }
 
 impl Span {
-    /// The line and column of byte `offset` in `text` (clamped to its end).
+    /// The line and column of byte `offset` in `text` (clamped to its end). The column
+    /// counts characters, not bytes, so it matches what an editor shows.
     pub fn locate(text: &[u8], offset: usize) -> Span {
-        let offset = offset.min(text.len());
-        let before = &text[..offset];
-        let line = before.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
-        let line_start = before
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
-        // Count characters, not bytes, so a column matches what an editor shows.
-        let column = String::from_utf8_lossy(&text[line_start..offset])
-            .chars()
-            .count() as u32
-            + 1;
-        Span { line, column }
+        LineIndex::new(text).locate(text, offset)
     }
 
-    /// [`Span::locate`] for many offsets in one pass over `text`: linear in the text's size
-    /// when `offsets` ascend (a reader's elements in file order); an offset smaller than the
-    /// one before it is located from the start.
+    /// [`Span::locate`] for many offsets, the text indexed once ([`LineIndex`]): linear in
+    /// the text's size plus a binary search per offset, in any order.
     pub fn locate_all(text: &[u8], offsets: impl IntoIterator<Item = usize>) -> Vec<Span> {
-        let (mut at, mut line, mut line_start) = (0usize, 1u32, 0usize);
-        let mut out = Vec::new();
-        for offset in offsets {
-            let offset = offset.min(text.len());
-            if offset < at {
-                out.push(Span::locate(text, offset));
-                continue;
-            }
-            for (i, &b) in text[at..offset].iter().enumerate() {
-                if b == b'\n' {
-                    line += 1;
-                    line_start = at + i + 1;
-                }
-            }
-            at = offset;
-            let column = String::from_utf8_lossy(&text[line_start..offset])
-                .chars()
-                .count() as u32
-                + 1;
-            out.push(Span { line, column });
-        }
-        out
+        let index = LineIndex::new(text);
+        offsets
+            .into_iter()
+            .map(|offset| index.locate(text, offset))
+            .collect()
     }
 }
 
@@ -133,7 +104,8 @@ impl LineIndex {
         self.chars[k] + char_starts(&text[k * Self::STEP..offset])
     }
 
-    /// The same answer as [`Span::locate`] for the (UTF-8) text this index was built from.
+    /// The line and column of byte `offset` in the text this index was built from
+    /// (clamped to its end): the one place the crate turns an offset into a [`Span`].
     pub fn locate(&self, text: &[u8], offset: usize) -> Span {
         let offset = offset.min(text.len());
         let line = self.starts.partition_point(|&s| s <= offset);
@@ -154,6 +126,44 @@ fn char_starts(bytes: &[u8]) -> usize {
 impl fmt::Display for Span {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}:{}", self.line, self.column)
+    }
+}
+
+/// An I/O error kept whole — its [`std::io::ErrorKind`], its OS code — in a [`LoadError`],
+/// which is `Clone` and `PartialEq`: shared behind an `Arc`, and equal to another when both
+/// say the same (kind and message).
+#[derive(Clone, Debug)]
+pub struct IoError(std::sync::Arc<std::io::Error>);
+
+impl IoError {
+    /// The error as the system gave it.
+    pub fn get(&self) -> &std::io::Error {
+        &self.0
+    }
+}
+
+impl From<std::io::Error> for IoError {
+    fn from(e: std::io::Error) -> Self {
+        IoError(std::sync::Arc::new(e))
+    }
+}
+
+impl PartialEq for IoError {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.kind() == other.0.kind() && self.0.to_string() == other.0.to_string()
+    }
+}
+
+impl fmt::Display for IoError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+/// Transparent: the chain goes on with the system error's own source, if it has one.
+impl std::error::Error for IoError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
     }
 }
 
@@ -220,9 +230,9 @@ impl std::error::Error for LoadError {}
 /// What was wrong with a file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LoadErrorKind {
-    /// The file could not be read.
+    /// The file could not be read (or written), with the system's error as its source.
     #[error("cannot read: {0}")]
-    Io(String),
+    Io(#[source] IoError),
     /// The file is empty (or only whitespace).
     #[error("the file is empty")]
     Empty,
@@ -395,7 +405,7 @@ pub struct Loaded {
 /// dialect as PIPE).
 pub fn read_net(path: &Path, opts: &ReadOptions) -> Result<Loaded, LoadError> {
     let bytes =
-        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.into())))?;
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(LoadError::file(path, LoadErrorKind::Empty));
     }
@@ -449,7 +459,7 @@ pub fn write_net(net: &Net, path: &Path, format: Format) -> Result<(), LoadError
             ));
         }
     };
-    std::fs::write(path, text).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))
+    std::fs::write(path, text).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.into())))
 }
 
 #[cfg(test)]

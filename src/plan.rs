@@ -261,7 +261,7 @@ pub(crate) fn read_plan_with(
     net: Option<Loaded>,
 ) -> Result<Plan, LoadError> {
     let bytes =
-        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.into())))?;
     let text = String::from_utf8(bytes).map_err(|e| {
         let bytes = e.as_bytes();
         let at = e.utf8_error().valid_up_to();

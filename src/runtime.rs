@@ -97,7 +97,7 @@ pub use backend::{
     Backend, BackendError, BackendFuture, Backends, RunError, Section, Start, Started,
 };
 pub use builder::RuntimeBuilder;
-pub use builtin::{BUILTIN_WORDS, Builtin};
+pub use builtin::{BUILTIN_WORDS, Builtin, BuiltinError};
 pub use by_name::InNetOrder;
 pub use clock::ModelClock;
 pub use event::{Drift, Event, EventKind, Events, Monitored, Received, Watcher};
@@ -235,7 +235,8 @@ pub enum RuntimeError {
         /// The place.
         place: String,
         /// What is wrong, with the action's text.
-        reason: String,
+        #[source]
+        reason: builtin::BuiltinError,
     },
     /// A place's action is neither registered nor a built-in.
     #[error(

@@ -13,6 +13,7 @@
 //!
 //! Nothing outside this module calls `f64::ln` or draws a weighted choice by hand.
 
+pub(crate) mod fnv;
 pub(crate) mod sum_tree;
 
 pub(crate) use sum_tree::SumTree;

@@ -7,10 +7,6 @@
 //! dense O(k³) elimination took minutes (docs/benchmarks.md, "Vanishing loops"). The one limit
 //! is memory: the right-hand sides and the solution are dense `k × w` blocks.
 
-use faer::Mat;
-use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
-
 /// Systems up to this many unknowns are solved by dense LU; larger ones by sparse LU.
 pub(crate) const DENSE: usize = 48;
 
@@ -58,22 +54,8 @@ pub(crate) fn solve_block(
         }
         lu_solve(&mut a, k, b, w);
     } else {
-        let triplets: Vec<Triplet<usize, usize, f64>> = entries
-            .iter()
-            .map(|&(i, j, x)| Triplet::new(i, j, x))
-            .collect();
-        let a = SparseColMat::<usize, f64>::try_new_from_triplets(k, k, &triplets)
-            .map_err(|e| SolveError::Failed(format!("{e:?}")))?;
-        let lu = a
-            .sp_lu()
-            .map_err(|e| SolveError::Failed(format!("{e:?}")))?;
-        let rhs = Mat::from_fn(k, w, |r, c| b[r * w + c]);
-        let x = lu.solve(&rhs);
-        for r in 0..k {
-            for c in 0..w {
-                b[r * w + c] = x[(r, c)];
-            }
-        }
+        crate::analysis::ctmc::lu::solve_columns(k, entries, b, w)
+            .map_err(|e| SolveError::Failed(e.to_string()))?;
     }
     if b.iter().all(|x| x.is_finite()) {
         Ok(())

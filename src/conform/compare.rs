@@ -129,7 +129,9 @@ fn batch_row(
     }
 }
 
-/// Sets the observations beside the model: the rows of the module's table.
+/// Sets the observations beside the model: the rows of the module's table, in its order —
+/// tokens and throughputs, then [`rate_rows`], [`choice_rows`], [`decision_row`]s and
+/// [`holding_rows`].
 pub fn compare(net: &Net, obs: &Observations, pred: &Predictions, opts: &Options) -> Report {
     let mut rows = Vec::new();
     for (p, e) in obs.mean_tokens.iter().enumerate() {
@@ -142,6 +144,28 @@ pub fn compare(net: &Net, obs: &Observations, pred: &Predictions, opts: &Options
         let name = net.transitions()[t].name.clone();
         rows.push(batch_row(RowKind::Throughput, name, e, x, obs.batches));
     }
+    rate_rows(net, obs, opts, &mut rows);
+    choice_rows(net, obs, pred, &mut rows);
+    rows.extend(
+        obs.decisions
+            .iter()
+            .filter(|d| d.firable.len() >= 2 || d.outside > 0)
+            .map(|d| decision_row(net, d, opts)),
+    );
+    holding_rows(net, obs, pred, opts, &mut rows);
+    Report {
+        net: net.name().to_string(),
+        predictions: pred.source.clone(),
+        time: obs.end,
+        firings: obs.firings,
+        batches: obs.batches,
+        rows,
+    }
+}
+
+/// Per exponential transition, its `rate` row (firings over exposure against the net's
+/// rate) and its `shape` row (the enabled-time gaps against an exponential law).
+fn rate_rows(net: &Net, obs: &Observations, opts: &Options, rows: &mut Vec<Row>) {
     for (t, x) in obs.exposure.iter().enumerate() {
         let (Some(x), Timing::Exponential { rate, .. }) = (x, net.transitions()[t].timing) else {
             continue;
@@ -182,6 +206,11 @@ pub fn compare(net: &Net, obs: &Observations, pred: &Predictions, opts: &Options
             detail: None,
         });
     }
+}
+
+/// Per place with a choice and each of its output transitions, the share of the place's
+/// departures against the share of the predicted flows.
+fn choice_rows(net: &Net, obs: &Observations, pred: &Predictions, rows: &mut Vec<Row>) {
     for &(p, t, e, n) in &obs.choices {
         let predicted = pred.throughput.as_ref().and_then(|thr| {
             let flow = |u: TransitionId| {
@@ -215,75 +244,65 @@ pub fn compare(net: &Net, obs: &Observations, pred: &Predictions, opts: &Options
         }
         rows.push(row);
     }
-    for d in &obs.decisions {
-        if d.firable.len() < 2 && d.outside == 0 {
-            continue;
-        }
-        let total: u64 = d.counts.iter().sum::<u64>() + d.outside;
-        let names: Vec<&str> = d
-            .firable
-            .iter()
-            .map(|&t| net.transition(t).name.as_str())
-            .collect();
-        let item = match d.rule {
-            Some(r) => format!("{{{}}} rule {}", names.join(", "), r + 1),
-            None => format!("{{{}}}", names.join(", ")),
-        };
-        let x2: f64 = d
-            .counts
+}
+
+/// The `decision` row of one class of immediate choices: the counts against the
+/// probabilities (a χ² test where enough are expected; p = 0 for an impossible choice).
+fn decision_row(net: &Net, d: &Decision, opts: &Options) -> Row {
+    let total: u64 = d.counts.iter().sum::<u64>() + d.outside;
+    let names: Vec<&str> = d
+        .firable
+        .iter()
+        .map(|&t| net.transition(t).name.as_str())
+        .collect();
+    let item = match d.rule {
+        Some(r) => format!("{{{}}} rule {}", names.join(", "), r + 1),
+        None => format!("{{{}}}", names.join(", ")),
+    };
+    let x2: f64 = d
+        .counts
+        .iter()
+        .zip(&d.probs)
+        .filter(|(_, p)| **p > 0.0)
+        .map(|(&c, &p)| (c as f64 - p * total as f64).powi(2) / (p * total as f64))
+        .sum();
+    let min_expected = d
+        .probs
+        .iter()
+        .filter(|p| **p > 0.0)
+        .map(|p| p * total as f64)
+        .fold(f64::INFINITY, f64::min);
+    let impossible = d.outside > 0
+        || d.counts
             .iter()
             .zip(&d.probs)
-            .filter(|(_, p)| **p > 0.0)
-            .map(|(&c, &p)| (c as f64 - p * total as f64).powi(2) / (p * total as f64))
-            .sum();
-        let min_expected = d
-            .probs
-            .iter()
-            .filter(|p| **p > 0.0)
-            .map(|p| p * total as f64)
-            .fold(f64::INFINITY, f64::min);
-        let impossible = d.outside > 0
-            || d.counts
-                .iter()
-                .zip(&d.probs)
-                .any(|(&c, &p)| c > 0 && p <= 0.0);
-        let p = if impossible {
-            Some(0.0)
-        } else if min_expected >= opts.min_expected
-            || d.probs.iter().filter(|p| **p > 0.0).count() <= 1
-        {
-            Some(stats::chi_square(&d.counts, &d.probs))
-        } else {
-            None
-        };
-        let mut detail: Vec<String> = names
-            .iter()
-            .zip(d.counts.iter().zip(&d.probs))
-            .map(|(n, (&c, &p))| format!("{n} {c} (expected {:.1})", p * total as f64))
-            .collect();
-        if d.outside > 0 {
-            detail.push(format!("{} not firable there", d.outside));
-        }
-        rows.push(Row {
-            kind: RowKind::Decision,
-            item,
-            observed: x2,
-            interval: None,
-            predicted: None,
-            n: total,
-            p_value: p,
-            verdict: p.map_or(Verdict::TooLittleData, verdict),
-            detail: Some(detail.join(", ")),
-        });
+            .any(|(&c, &p)| c > 0 && p <= 0.0);
+    let p = if impossible {
+        Some(0.0)
+    } else if min_expected >= opts.min_expected || d.probs.iter().filter(|p| **p > 0.0).count() <= 1
+    {
+        Some(stats::chi_square(&d.counts, &d.probs))
+    } else {
+        None
+    };
+    let mut detail: Vec<String> = names
+        .iter()
+        .zip(d.counts.iter().zip(&d.probs))
+        .map(|(n, (&c, &p))| format!("{n} {c} (expected {:.1})", p * total as f64))
+        .collect();
+    if d.outside > 0 {
+        detail.push(format!("{} not firable there", d.outside));
     }
-    holding_rows(net, obs, pred, opts, &mut rows);
-    Report {
-        net: net.name().to_string(),
-        predictions: pred.source.clone(),
-        time: obs.end,
-        firings: obs.firings,
-        batches: obs.batches,
-        rows,
+    Row {
+        kind: RowKind::Decision,
+        item,
+        observed: x2,
+        interval: None,
+        predicted: None,
+        n: total,
+        p_value: p,
+        verdict: p.map_or(Verdict::TooLittleData, verdict),
+        detail: Some(detail.join(", ")),
     }
 }
 

@@ -385,6 +385,10 @@ fn phase_fits(net: &Net, obs: &Observations, opts: &Options) -> Vec<PhaseFit> {
     fits
 }
 
+/// Fits the weights of immediate transitions from the decisions without a policy rule:
+/// the transitions that meet in a class form a group ([`choice_groups`]); a group with
+/// enough decisions gets Luce's maximum-likelihood weights ([`luce_weights`]), scaled to
+/// its old total, each with an interval ([`weight_interval`]); the others keep theirs.
 fn fit_weights(
     net: &Net,
     obs: &Observations,
@@ -402,24 +406,6 @@ fn fit_weights(
         Timing::Immediate { weight, .. } => weight,
         Timing::Exponential { .. } => 0.0,
     };
-    // Groups: transitions linked by appearing in one class (union–find).
-    let mut parent: Vec<usize> = (0..nt).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for d in &classes {
-        for w in d.firable.windows(2) {
-            let (a, b) = (
-                root(&mut parent, w[0].index()),
-                root(&mut parent, w[1].index()),
-            );
-            parent[a] = b;
-        }
-    }
     let mut wins = vec![0u64; nt];
     let mut decided = vec![0u64; nt];
     for d in &classes {
@@ -429,16 +415,7 @@ fn fit_weights(
             decided[t.index()] += total;
         }
     }
-    let mut groups: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-    for d in &classes {
-        for &t in &d.firable {
-            let r = root(&mut parent, t.index());
-            let g = groups.entry(r).or_default();
-            if !g.contains(&t.index()) {
-                g.push(t.index());
-            }
-        }
-    }
+    let (mut parent, groups) = choice_groups(&classes, nt);
     for members in groups.values() {
         let enough = members
             .iter()
@@ -447,35 +424,11 @@ fn fit_weights(
             .iter()
             .map(|&t| weight(TransitionId(t as u32)))
             .sum();
-        let mut w: Vec<f64> = vec![1.0; nt];
-        if enough {
-            // Minorisation–maximisation for Luce's model (Hunter 2004).
-            for _ in 0..500 {
-                let mut denom = vec![0.0; nt];
-                for d in &classes {
-                    if root(&mut parent, d.firable[0].index()) != root(&mut parent, members[0]) {
-                        continue;
-                    }
-                    let total: u64 = d.counts.iter().sum();
-                    let s: f64 = d.firable.iter().map(|t| w[t.index()]).sum();
-                    for t in &d.firable {
-                        denom[t.index()] += total as f64 / s;
-                    }
-                }
-                for &t in members {
-                    w[t] = wins[t] as f64 / denom[t];
-                }
-            }
-            let sum: f64 = members.iter().map(|&t| w[t]).sum();
-            let scale = if old_total > 0.0 {
-                old_total / sum
-            } else {
-                members.len() as f64 / sum
-            };
-            for &t in members {
-                w[t] *= scale;
-            }
-        }
+        let w = if enough {
+            luce_weights(&classes, &mut parent, members, &wins, old_total)
+        } else {
+            vec![1.0; nt]
+        };
         for &t in members {
             let id = TransitionId(t as u32);
             let old = weight(id);
@@ -486,34 +439,7 @@ fn fit_weights(
                     priority,
                 };
             }
-            // The interval: the share in the class where it was decided most, as a weight
-            // against the others' fitted weights there (Wilson score interval).
-            let interval = enough
-                .then(|| {
-                    let d = classes
-                        .iter()
-                        .filter(|d| d.firable.contains(&id))
-                        .max_by_key(|d| d.counts.iter().sum::<u64>())?;
-                    let k = d.firable.iter().position(|&u| u == id)?;
-                    let n: u64 = d.counts.iter().sum();
-                    let others: f64 = d
-                        .firable
-                        .iter()
-                        .filter(|&&u| u != id)
-                        .map(|u| w[u.index()])
-                        .sum();
-                    let (lo, hi) = wilson(d.counts[k], n);
-                    let odds = |p: f64| {
-                        if p >= 1.0 {
-                            f64::INFINITY
-                        } else {
-                            p / (1.0 - p) * others
-                        }
-                    };
-                    Some([odds(lo), odds(hi)])
-                })
-                .flatten()
-                .filter(|[_, hi]| hi.is_finite());
+            let interval = enough.then(|| weight_interval(&classes, id, &w)).flatten();
             out.push(Fitted {
                 transition: net.transition(id).name.clone(),
                 parameter: "weight",
@@ -525,6 +451,108 @@ fn fit_weights(
             });
         }
     }
+}
+
+/// The union–find root of `i`, halving the path on the way.
+fn root(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
+/// Groups of transitions linked by appearing in one class (union–find): the parents, and
+/// each group's members by root, in order of first appearance.
+fn choice_groups(classes: &[&Decision], nt: usize) -> (Vec<usize>, BTreeMap<usize, Vec<usize>>) {
+    let mut parent: Vec<usize> = (0..nt).collect();
+    for d in classes {
+        for w in d.firable.windows(2) {
+            let (a, b) = (
+                root(&mut parent, w[0].index()),
+                root(&mut parent, w[1].index()),
+            );
+            parent[a] = b;
+        }
+    }
+    let mut groups: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for d in classes {
+        for &t in &d.firable {
+            let r = root(&mut parent, t.index());
+            let g = groups.entry(r).or_default();
+            if !g.contains(&t.index()) {
+                g.push(t.index());
+            }
+        }
+    }
+    (parent, groups)
+}
+
+/// Luce's model's weights for one group by minorisation–maximisation (Hunter 2004),
+/// scaled to the group's old total (or to one each when it had none); indexed by
+/// transition, 1 outside the group.
+fn luce_weights(
+    classes: &[&Decision],
+    parent: &mut [usize],
+    members: &[usize],
+    wins: &[u64],
+    old_total: f64,
+) -> Vec<f64> {
+    let nt = wins.len();
+    let mut w: Vec<f64> = vec![1.0; nt];
+    for _ in 0..500 {
+        let mut denom = vec![0.0; nt];
+        for d in classes {
+            if root(parent, d.firable[0].index()) != root(parent, members[0]) {
+                continue;
+            }
+            let total: u64 = d.counts.iter().sum();
+            let s: f64 = d.firable.iter().map(|t| w[t.index()]).sum();
+            for t in &d.firable {
+                denom[t.index()] += total as f64 / s;
+            }
+        }
+        for &t in members {
+            w[t] = wins[t] as f64 / denom[t];
+        }
+    }
+    let sum: f64 = members.iter().map(|&t| w[t]).sum();
+    let scale = if old_total > 0.0 {
+        old_total / sum
+    } else {
+        members.len() as f64 / sum
+    };
+    for &t in members {
+        w[t] *= scale;
+    }
+    w
+}
+
+/// The interval of `id`'s fitted weight: its share in the class where it was decided most,
+/// as a weight against the others' fitted weights `w` there (Wilson score interval);
+/// `None` when unbounded.
+fn weight_interval(classes: &[&Decision], id: TransitionId, w: &[f64]) -> Option<[f64; 2]> {
+    let d = classes
+        .iter()
+        .filter(|d| d.firable.contains(&id))
+        .max_by_key(|d| d.counts.iter().sum::<u64>())?;
+    let k = d.firable.iter().position(|&u| u == id)?;
+    let n: u64 = d.counts.iter().sum();
+    let others: f64 = d
+        .firable
+        .iter()
+        .filter(|&&u| u != id)
+        .map(|u| w[u.index()])
+        .sum();
+    let (lo, hi) = wilson(d.counts[k], n);
+    let odds = |p: f64| {
+        if p >= 1.0 {
+            f64::INFINITY
+        } else {
+            p / (1.0 - p) * others
+        }
+    };
+    Some([odds(lo), odds(hi)]).filter(|[_, hi]| hi.is_finite())
 }
 
 /// The 95% Wilson score interval of a proportion `k / n`.

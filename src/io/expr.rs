@@ -274,22 +274,40 @@ fn truth(b: bool) -> f64 {
     if b { 1.0 } else { 0.0 }
 }
 
-fn whole(x: f64, what: &str) -> Result<f64, String> {
+/// Why a function of an expression has no value for its arguments (the evaluator adds the
+/// function's name and where it stands).
+#[derive(Debug, thiserror::Error)]
+enum CallError {
+    /// An argument that must be a whole number ≥ 0.
+    #[error("{what} must be a whole number ≥ 0, got {x}")]
+    NotWhole { what: &'static str, x: f64 },
+    /// `Mod[x, 0]`.
+    #[error("modulo by zero")]
+    ModuloByZero,
+    /// A binomial coefficient past the largest float.
+    #[error("the result for n = {n}, k = {k} is too large")]
+    BinomialTooLarge { n: f64, k: f64 },
+    /// A factorial past the largest float.
+    #[error("{0}! is too large")]
+    FactorialTooLarge(f64),
+}
+
+fn whole(x: f64, what: &'static str) -> Result<f64, CallError> {
     if x.fract() == 0.0 && x.is_finite() && x >= 0.0 {
         Ok(x)
     } else {
-        Err(format!("{what} must be a whole number ≥ 0, got {x}"))
+        Err(CallError::NotWhole { what, x })
     }
 }
 
-fn call(f: Func, x: f64, y: f64) -> Result<f64, String> {
+fn call(f: Func, x: f64, y: f64) -> Result<f64, CallError> {
     use Func::*;
     Ok(match f {
         Min => x.min(y),
         Max => x.max(y),
         Mod => {
             if y == 0.0 {
-                return Err("modulo by zero".into());
+                return Err(CallError::ModuloByZero);
             }
             x - y * (x / y).floor()
         }
@@ -306,7 +324,7 @@ fn call(f: Func, x: f64, y: f64) -> Result<f64, String> {
                 for i in 0..k as u64 {
                     acc = acc * (n - i as f64) / (i as f64 + 1.0);
                     if !acc.is_finite() {
-                        return Err(format!("the result for n = {n}, k = {k} is too large"));
+                        return Err(CallError::BinomialTooLarge { n, k });
                     }
                 }
                 acc
@@ -316,7 +334,7 @@ fn call(f: Func, x: f64, y: f64) -> Result<f64, String> {
         Factorial => {
             let n = whole(x, "the argument")?;
             if n > 170.0 {
-                return Err(format!("{n}! is too large"));
+                return Err(CallError::FactorialTooLarge(n));
             }
             (1..=n as u64).fold(1.0, |acc, i| acc * i as f64)
         }

@@ -17,24 +17,46 @@ use plotters::prelude::*;
 /// Most times one `A:B:STEP` range may expand to.
 pub const MAX_POINTS: usize = 100_000;
 
+/// Why [`parse_times`] refused an item (each names it).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TimesError {
+    /// A time that is not a finite number ≥ 0.
+    #[error("{0} is not a time ≥ 0")]
+    NotATime(String),
+    /// A range `A:B:STEP` with `B < A` or `STEP ≤ 0`.
+    #[error("{0}: a range is A:B:STEP with A ≤ B and STEP > 0")]
+    BadRange(String),
+    /// A range of more than [`MAX_POINTS`] times.
+    #[error("{item}: {count} times, at most {MAX_POINTS}")]
+    TooMany {
+        /// The range as written.
+        item: String,
+        /// How many times it holds.
+        count: f64,
+    },
+    /// Neither a time nor a range.
+    #[error("{0}: expected a time or A:B:STEP")]
+    Syntax(String),
+}
+
 /// Times written as the CLI takes them (`--transient 0.5,0:600:10`): each item a time `T`
 /// or a range `A:B:STEP` (A, A+STEP, … up to B), every time ≥ 0. The error names the item.
 ///
 /// ```
 /// use gspn::io::series::parse_times;
 /// assert_eq!(parse_times(&["0:1:0.25".into(), "5".into()]).unwrap(), vec![0.0, 0.25, 0.5, 0.75, 1.0, 5.0]);
-/// assert!(parse_times(&["2:1:1".into()]).unwrap_err().contains("A ≤ B"));
+/// assert!(parse_times(&["2:1:1".into()]).unwrap_err().to_string().contains("A ≤ B"));
 /// ```
-pub fn parse_times(items: &[String]) -> Result<Vec<f64>, String> {
+pub fn parse_times(items: &[String]) -> Result<Vec<f64>, TimesError> {
     let mut out = Vec::new();
     for item in items {
         let parts: Vec<&str> = item.split(':').collect();
-        let num = |s: &str| -> Result<f64, String> {
+        let num = |s: &str| -> Result<f64, TimesError> {
             s.trim()
                 .parse::<f64>()
                 .ok()
                 .filter(|t| t.is_finite() && *t >= 0.0)
-                .ok_or_else(|| format!("{} is not a time ≥ 0", s.trim()))
+                .ok_or_else(|| TimesError::NotATime(s.trim().to_string()))
         };
         match parts.as_slice() {
             [t] => out.push(num(t)?),
@@ -42,17 +64,18 @@ pub fn parse_times(items: &[String]) -> Result<Vec<f64>, String> {
                 let (a, b) = (num(a)?, num(b)?);
                 let step: f64 = step.trim().parse().unwrap_or(f64::NAN);
                 if !(step.is_finite() && step > 0.0) || b < a {
-                    return Err(format!(
-                        "{item}: a range is A:B:STEP with A ≤ B and STEP > 0"
-                    ));
+                    return Err(TimesError::BadRange(item.clone()));
                 }
                 let count = ((b - a) / step * (1.0 + 1e-12)).floor() + 1.0;
                 if count > MAX_POINTS as f64 {
-                    return Err(format!("{item}: {count} times, at most {MAX_POINTS}"));
+                    return Err(TimesError::TooMany {
+                        item: item.clone(),
+                        count,
+                    });
                 }
                 out.extend((0..count as usize).map(|k| a + k as f64 * step));
             }
-            _ => return Err(format!("{item}: expected a time or A:B:STEP")),
+            _ => return Err(TimesError::Syntax(item.clone())),
         }
     }
     Ok(out)

@@ -19,7 +19,7 @@ pub enum NetError {
         name: String,
     },
     /// A rate is zero, negative, NaN or infinite.
-    #[error("transition `{transition}`: rate {rate} must be a finite number > 0")]
+    #[error("transition `{transition}`: rate {rate} {}", Timing::RATE_EXPECTED)]
     BadRate {
         /// The transition's name.
         transition: String,
@@ -27,7 +27,10 @@ pub enum NetError {
         rate: f64,
     },
     /// A weight is negative, NaN or infinite.
-    #[error("transition `{transition}`: weight {weight} must be a finite number ≥ 0")]
+    #[error(
+        "transition `{transition}`: weight {weight} {}",
+        Timing::WEIGHT_EXPECTED
+    )]
     BadWeight {
         /// The transition's name.
         transition: String,
@@ -234,7 +237,9 @@ impl NetBuilder {
         &self.transitions
     }
 
-    /// Validates and indexes the net.
+    /// Validates and indexes the net: the places and transitions one by one
+    /// ([`check_places`], [`check_transitions`]), the arcs gathered per transition
+    /// ([`arc_lists`]), then the indices the firing rule reads ([`deltas`], [`affects`]).
     pub fn build(self) -> Result<Net, NetError> {
         let NetBuilder {
             name,
@@ -245,133 +250,17 @@ impl NetBuilder {
         let place_index = index_names("place", places.iter().map(|p| p.name.as_str()))?;
         let transition_index =
             index_names("transition", transitions.iter().map(|t| t.name.as_str()))?;
-        for p in &places {
-            if let Some(c) = p.capacity
-                && p.initial > c
-            {
-                return Err(NetError::OverCapacity {
-                    place: p.name.clone(),
-                    initial: p.initial,
-                    capacity: c,
-                });
-            }
-        }
-        for t in &transitions {
-            match t.timing {
-                Timing::Exponential { rate, servers } => {
-                    if !(rate.is_finite() && rate > 0.0) {
-                        return Err(NetError::BadRate {
-                            transition: t.name.clone(),
-                            rate,
-                        });
-                    }
-                    if servers == Servers::K(0) {
-                        return Err(NetError::BadCount {
-                            transition: t.name.clone(),
-                            what: "servers",
-                        });
-                    }
-                }
-                Timing::Immediate { weight, priority } => {
-                    if !(weight.is_finite() && weight >= 0.0) {
-                        return Err(NetError::BadWeight {
-                            transition: t.name.clone(),
-                            weight,
-                        });
-                    }
-                    if priority == 0 {
-                        return Err(NetError::BadCount {
-                            transition: t.name.clone(),
-                            what: "priority",
-                        });
-                    }
-                }
-            }
-        }
-        let nt = transitions.len();
-        let np = places.len();
-        let mut pre = vec![Vec::new(); nt];
-        let mut post = vec![Vec::new(); nt];
-        let mut inhib = vec![Vec::new(); nt];
-        for a in &arcs {
-            if a.weight == 0 {
-                return Err(NetError::ZeroWeight {
-                    place: places[a.place.index()].name.clone(),
-                    transition: transitions[a.transition.index()].name.clone(),
-                });
-            }
-            let list: &mut Vec<(PlaceId, u32)> = match a.kind {
-                ArcKind::Input => &mut pre[a.transition.index()],
-                ArcKind::Output => &mut post[a.transition.index()],
-                ArcKind::Inhibitor => &mut inhib[a.transition.index()],
-            };
-            // Parallel arcs of the same kind add up (inhibitors: the tightest threshold).
-            match list.iter_mut().find(|(p, _)| *p == a.place) {
-                Some((_, w)) if a.kind == ArcKind::Inhibitor => *w = (*w).min(a.weight),
-                Some((_, w)) => {
-                    *w = w
-                        .checked_add(a.weight)
-                        .ok_or_else(|| NetError::WeightOverflow {
-                            place: places[a.place.index()].name.clone(),
-                            transition: transitions[a.transition.index()].name.clone(),
-                        })?
-                }
-                None => list.push((a.place, a.weight)),
-            }
-        }
-        let mut delta = Vec::with_capacity(nt);
-        for t in 0..nt {
-            let mut d: Vec<(PlaceId, i64)> = Vec::new();
-            for &(p, w) in &pre[t] {
-                d.push((p, -(w as i64)));
-            }
-            for &(p, w) in &post[t] {
-                match d.iter_mut().find(|(q, _)| *q == p) {
-                    Some((_, v)) => *v += w as i64,
-                    None => d.push((p, w as i64)),
-                }
-            }
-            d.retain(|&(_, v)| v != 0);
-            d.sort_by_key(|&(p, _)| p);
-            delta.push(d);
-        }
-        // Which transitions read each place (input or inhibitor arcs, or capacity-bound outputs).
+        check_places(&places)?;
+        check_transitions(&transitions)?;
+        let ArcLists { pre, post, inhib } = arc_lists(&places, &transitions, &arcs)?;
+        let delta = deltas(&pre, &post);
         let capacity: Vec<u32> = places
             .iter()
             .map(|p| p.capacity.unwrap_or(u32::MAX))
             .collect();
         let has_capacity = places.iter().any(|p| p.capacity.is_some());
-        let mut readers: Vec<Vec<TransitionId>> = vec![Vec::new(); np];
-        for t in 0..nt {
-            let tid = TransitionId(t as u32);
-            let mut touch = |p: PlaceId| {
-                let r = &mut readers[p.index()];
-                if r.last() != Some(&tid) {
-                    r.push(tid);
-                }
-            };
-            for &(p, _) in pre[t].iter().chain(&inhib[t]) {
-                touch(p);
-            }
-            if has_capacity {
-                for &(p, _) in &post[t] {
-                    if capacity[p.index()] != u32::MAX {
-                        touch(p);
-                    }
-                }
-            }
-        }
-        let mut affects = Vec::with_capacity(nt);
-        for d in &delta {
-            let mut a: Vec<TransitionId> = d
-                .iter()
-                .flat_map(|&(p, _)| readers[p.index()].iter().copied())
-                .collect();
-            a.sort_unstable();
-            a.dedup();
-            affects.push(a);
-        }
-        let mut consumers: Vec<Vec<TransitionId>> = vec![Vec::new(); np];
+        let affects = affects(&pre, &post, &inhib, &delta, &capacity, has_capacity);
+        let mut consumers: Vec<Vec<TransitionId>> = vec![Vec::new(); places.len()];
         for (t, inputs) in pre.iter().enumerate() {
             for &(p, _) in inputs {
                 consumers[p.index()].push(TransitionId(t as u32));
@@ -396,6 +285,171 @@ impl NetBuilder {
             transition_index,
         })
     }
+}
+
+/// No place starts above its capacity.
+fn check_places(places: &[Place]) -> Result<(), NetError> {
+    for p in places {
+        if let Some(c) = p.capacity
+            && p.initial > c
+        {
+            return Err(NetError::OverCapacity {
+                place: p.name.clone(),
+                initial: p.initial,
+                capacity: c,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Rates, weights, servers and priorities in range ([`Timing::rate`], [`Timing::weight`]).
+fn check_transitions(transitions: &[Transition]) -> Result<(), NetError> {
+    for t in transitions {
+        match t.timing {
+            Timing::Exponential { rate, servers } => {
+                if Timing::rate(rate).is_err() {
+                    return Err(NetError::BadRate {
+                        transition: t.name.clone(),
+                        rate,
+                    });
+                }
+                if servers == Servers::K(0) {
+                    return Err(NetError::BadCount {
+                        transition: t.name.clone(),
+                        what: "servers",
+                    });
+                }
+            }
+            Timing::Immediate { weight, priority } => {
+                if Timing::weight(weight).is_err() {
+                    return Err(NetError::BadWeight {
+                        transition: t.name.clone(),
+                        weight,
+                    });
+                }
+                if priority == 0 {
+                    return Err(NetError::BadCount {
+                        transition: t.name.clone(),
+                        what: "priority",
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Per transition, its input, output and inhibitor arcs as `(place, weight)`.
+struct ArcLists {
+    pre: Vec<Vec<(PlaceId, u32)>>,
+    post: Vec<Vec<(PlaceId, u32)>>,
+    inhib: Vec<Vec<(PlaceId, u32)>>,
+}
+
+/// The arcs gathered per transition: no zero weight; parallel arcs of the same kind add up
+/// (inhibitors: the tightest threshold), within the largest token count.
+fn arc_lists(
+    places: &[Place],
+    transitions: &[Transition],
+    arcs: &[Arc],
+) -> Result<ArcLists, NetError> {
+    let nt = transitions.len();
+    let mut pre = vec![Vec::new(); nt];
+    let mut post = vec![Vec::new(); nt];
+    let mut inhib = vec![Vec::new(); nt];
+    for a in arcs {
+        if a.weight == 0 {
+            return Err(NetError::ZeroWeight {
+                place: places[a.place.index()].name.clone(),
+                transition: transitions[a.transition.index()].name.clone(),
+            });
+        }
+        let list: &mut Vec<(PlaceId, u32)> = match a.kind {
+            ArcKind::Input => &mut pre[a.transition.index()],
+            ArcKind::Output => &mut post[a.transition.index()],
+            ArcKind::Inhibitor => &mut inhib[a.transition.index()],
+        };
+        match list.iter_mut().find(|(p, _)| *p == a.place) {
+            Some((_, w)) if a.kind == ArcKind::Inhibitor => *w = (*w).min(a.weight),
+            Some((_, w)) => {
+                *w = w
+                    .checked_add(a.weight)
+                    .ok_or_else(|| NetError::WeightOverflow {
+                        place: places[a.place.index()].name.clone(),
+                        transition: transitions[a.transition.index()].name.clone(),
+                    })?
+            }
+            None => list.push((a.place, a.weight)),
+        }
+    }
+    Ok(ArcLists { pre, post, inhib })
+}
+
+/// Per transition, the change of each place it touches (outputs minus inputs; zeros
+/// dropped), sorted by place.
+fn deltas(pre: &[Vec<(PlaceId, u32)>], post: &[Vec<(PlaceId, u32)>]) -> Vec<Vec<(PlaceId, i64)>> {
+    let mut delta = Vec::with_capacity(pre.len());
+    for t in 0..pre.len() {
+        let mut d: Vec<(PlaceId, i64)> = Vec::new();
+        for &(p, w) in &pre[t] {
+            d.push((p, -(w as i64)));
+        }
+        for &(p, w) in &post[t] {
+            match d.iter_mut().find(|(q, _)| *q == p) {
+                Some((_, v)) => *v += w as i64,
+                None => d.push((p, w as i64)),
+            }
+        }
+        d.retain(|&(_, v)| v != 0);
+        d.sort_by_key(|&(p, _)| p);
+        delta.push(d);
+    }
+    delta
+}
+
+/// Per transition, the transitions whose enabling its firing may change: those that read
+/// a place it changes (input or inhibitor arcs, or capacity-bound outputs).
+fn affects(
+    pre: &[Vec<(PlaceId, u32)>],
+    post: &[Vec<(PlaceId, u32)>],
+    inhib: &[Vec<(PlaceId, u32)>],
+    delta: &[Vec<(PlaceId, i64)>],
+    capacity: &[u32],
+    has_capacity: bool,
+) -> Vec<Vec<TransitionId>> {
+    let mut readers: Vec<Vec<TransitionId>> = vec![Vec::new(); capacity.len()];
+    for t in 0..pre.len() {
+        let tid = TransitionId(t as u32);
+        let mut touch = |p: PlaceId| {
+            let r = &mut readers[p.index()];
+            if r.last() != Some(&tid) {
+                r.push(tid);
+            }
+        };
+        for &(p, _) in pre[t].iter().chain(&inhib[t]) {
+            touch(p);
+        }
+        if has_capacity {
+            for &(p, _) in &post[t] {
+                if capacity[p.index()] != u32::MAX {
+                    touch(p);
+                }
+            }
+        }
+    }
+    delta
+        .iter()
+        .map(|d| {
+            let mut a: Vec<TransitionId> = d
+                .iter()
+                .flat_map(|&(p, _)| readers[p.index()].iter().copied())
+                .collect();
+            a.sort_unstable();
+            a.dedup();
+            a
+        })
+        .collect()
 }
 
 /// The names' index (name → position), or the first repeated name.

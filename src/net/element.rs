@@ -89,6 +89,34 @@ impl Transition {
     }
 }
 
+/// What a rate and a weight must be: one rule, and one way of saying it, for
+/// [`NetBuilder::build`](super::NetBuilder::build), the readers and the viewer's editor, so a
+/// bad number reads the same wherever it was typed.
+impl Timing {
+    /// What a rate must be, as the error messages say it.
+    pub(crate) const RATE_EXPECTED: &'static str = "must be a finite number > 0";
+    /// What a weight must be, as the error messages say it.
+    pub(crate) const WEIGHT_EXPECTED: &'static str = "must be a finite number ≥ 0";
+
+    /// `v` as an exponential transition's rate, or what a rate must be.
+    pub(crate) fn rate(v: f64) -> Result<f64, &'static str> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(Self::RATE_EXPECTED)
+        }
+    }
+
+    /// `v` as an immediate transition's weight, or what a weight must be.
+    pub(crate) fn weight(v: f64) -> Result<f64, &'static str> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(Self::WEIGHT_EXPECTED)
+        }
+    }
+}
+
 /// What an arc does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum ArcKind {

@@ -138,7 +138,32 @@ fn positive(
 
 impl MapFile {
     /// Checks the map against `net`; `at` turns a span of the plan's text into an error.
+    /// In the order of the section: the [`topology`](Self::topology) (edges and patrol by
+    /// location), the [`locations`](Self::locations) and their places,
+    /// [`queue directions`](Self::queue_directions), [`walls and obstacles`](Self::solids),
+    /// then the robots' and queues' [`settings`](Self::settings).
     pub fn resolve(&self, net: &Net, section: Range<usize>, at: At<'_>) -> Result<Map, LoadError> {
+        let (edges, patrol) = self.topology(at)?;
+        let mut locations = self.locations(net, at)?;
+        self.queue_directions(&mut locations, &edges, &patrol, at)?;
+        let (walls, obstacles) = self.solids(at)?;
+        let (robot, queue, step_hz, stuck_after) = self.settings(section, at)?;
+        Ok(Map {
+            locations,
+            edges,
+            patrol,
+            walls,
+            obstacles,
+            robot,
+            queue,
+            step_hz,
+            stuck_after,
+        })
+    }
+
+    /// The edges and the patrol loop, as indices of locations (in name order).
+    #[allow(clippy::type_complexity)]
+    fn topology(&self, at: At<'_>) -> Result<(Vec<(usize, usize)>, Vec<usize>), LoadError> {
         let names: Vec<&str> = self
             .locations
             .keys()
@@ -170,6 +195,12 @@ impl MapFile {
         for n in &self.patrol {
             patrol.push(find(n)?);
         }
+        Ok((edges, patrol))
+    }
+
+    /// The locations with their places (each place at one location at most); queue
+    /// directions are left for [`queue_directions`](Self::queue_directions).
+    fn locations(&self, net: &Net, at: At<'_>) -> Result<Vec<Location>, LoadError> {
         let mut locations = Vec::with_capacity(self.locations.len());
         let mut owner: Vec<Option<String>> = vec![None; net.place_count()];
         for (name, loc) in &self.locations {
@@ -214,7 +245,18 @@ impl MapFile {
                 places,
             });
         }
-        // Queue directions: as written, else towards the location before it.
+        Ok(locations)
+    }
+
+    /// Queue directions: as written, else towards the location before it (on the patrol,
+    /// else along an edge).
+    fn queue_directions(
+        &self,
+        locations: &mut [Location],
+        edges: &[(usize, usize)],
+        patrol: &[usize],
+        at: At<'_>,
+    ) -> Result<(), LoadError> {
         for (k, (name, loc)) in self.locations.iter().enumerate() {
             let l = loc.get_ref();
             let dir = match l.queue {
@@ -258,6 +300,12 @@ impl MapFile {
             };
             locations[k].queue_dir = dir;
         }
+        Ok(())
+    }
+
+    /// The walls (finite segments) and obstacles (finite rectangles of positive size).
+    #[allow(clippy::type_complexity)]
+    fn solids(&self, at: At<'_>) -> Result<(Vec<[f64; 4]>, Vec<Rect>), LoadError> {
         let mut walls = Vec::with_capacity(self.walls.len());
         for w in &self.walls {
             if w.get_ref().iter().any(|v| !v.is_finite()) {
@@ -279,6 +327,17 @@ impl MapFile {
             }
             obstacles.push(r);
         }
+        Ok((walls, obstacles))
+    }
+
+    /// The robots' size and speed, the queues, the physics rate and the stuck timeout, each
+    /// as written or its default.
+    #[allow(clippy::type_complexity)]
+    fn settings(
+        &self,
+        section: Range<usize>,
+        at: At<'_>,
+    ) -> Result<(RobotSpec, QueueSpec, f64, f64), LoadError> {
         let rf = self.robot.unwrap_or(RobotFile {
             radius: None,
             max_speed: None,
@@ -345,16 +404,6 @@ impl MapFile {
             }
             None => 30.0,
         };
-        Ok(Map {
-            locations,
-            edges,
-            patrol,
-            walls,
-            obstacles,
-            robot,
-            queue: QueueSpec { lanes, spacing },
-            step_hz,
-            stuck_after,
-        })
+        Ok((robot, QueueSpec { lanes, spacing }, step_hz, stuck_after))
     }
 }

@@ -188,8 +188,8 @@ impl<'a> Programs<'a> {
                 ));
             }
             let f = w.get_ref();
-            check_argv(&f.command).map_err(bad)?;
-            check_seconds("kill_grace", f.kill_grace).map_err(bad)?;
+            check_argv(&f.command).map_err(|e| bad(e.to_string()))?;
+            check_seconds("kill_grace", f.kill_grace).map_err(|e| bad(e.to_string()))?;
         }
         Ok(Programs {
             workers,
@@ -208,8 +208,8 @@ impl<'a> Programs<'a> {
                     .into(),
             ));
         }
-        check_seconds("timeout", f.timeout).map_err(bad)?;
-        check_seconds("kill_grace", f.kill_grace).map_err(bad)?;
+        check_seconds("timeout", f.timeout).map_err(|e| bad(e.to_string()))?;
+        check_seconds("kill_grace", f.kill_grace).map_err(|e| bad(e.to_string()))?;
         let env = |e: &BTreeMap<String, String>| -> Vec<(String, String)> {
             e.iter().map(|(k, v)| (k.clone(), v.clone())).collect()
         };
@@ -218,7 +218,7 @@ impl<'a> Programs<'a> {
                 if f.name.is_some() {
                     return Err(bad("`name` goes with `worker`, not `command`".into()));
                 }
-                check_argv(argv).map_err(bad)?;
+                check_argv(argv).map_err(|e| bad(e.to_string()))?;
                 ProgramAction {
                     name: format!("command `{}`", argv.join(" ")),
                     argv: argv.clone(),
@@ -236,7 +236,7 @@ impl<'a> Programs<'a> {
                 };
                 match w {
                     WorkerRef::Argv(argv) => {
-                        check_argv(argv).map_err(bad)?;
+                        check_argv(argv).map_err(|e| bad(e.to_string()))?;
                         ProgramAction {
                             name: format!("worker `{}` action `{action}`", argv.join(" ")),
                             argv: argv.clone(),
@@ -298,19 +298,29 @@ impl<'a> Programs<'a> {
     }
 }
 
-fn check_argv(argv: &[String]) -> Result<(), String> {
+/// Why a program's entry is refused (the plan reader adds where).
+#[derive(Debug, thiserror::Error)]
+enum ProgramError {
+    /// No program, or an empty first word.
+    #[error("the program is empty")]
+    Empty,
+    /// A duration that is not a number of seconds.
+    #[error("`{key}` = {value}: {}", crate::limits::SECONDS_EXPECTED)]
+    Seconds { key: &'static str, value: f64 },
+}
+
+fn check_argv(argv: &[String]) -> Result<(), ProgramError> {
     if argv.first().is_none_or(|a| a.trim().is_empty()) {
-        return Err("the program is empty".into());
+        return Err(ProgramError::Empty);
     }
     Ok(())
 }
 
-fn check_seconds(key: &str, v: Option<f64>) -> Result<(), String> {
+fn check_seconds(key: &'static str, v: Option<f64>) -> Result<(), ProgramError> {
     match v {
-        Some(v) if !crate::limits::valid_seconds(v) => Err(format!(
-            "`{key}` = {v}: {}",
-            crate::limits::SECONDS_EXPECTED
-        )),
+        Some(value) if !crate::limits::valid_seconds(value) => {
+            Err(ProgramError::Seconds { key, value })
+        }
         _ => Ok(()),
     }
 }

@@ -20,177 +20,33 @@ use crate::runtime::{FailurePolicy, Role, StopConditions};
 
 impl PlanFile {
     /// Checks the plan against `net` (read from [`PlanFile::net_path`]) and resolves names
-    /// to ids. `text` is the plan's text, for line and column numbers.
+    /// to ids. `text` is the plan's text, for line and column numbers. In the order of the
+    /// file's sections: the time scale, the places' roles, the ROS 2 places, the policy,
+    /// the stop conditions, the robots, the map (and the robot actions that name its
+    /// locations), the rewards and controls.
     pub fn resolve(self, path: &Path, text: &str, net: Net) -> Result<Plan, LoadError> {
         let at =
             |span: Range<usize>, kind: LoadErrorKind| LoadError::at(path, locate(text, span), kind);
-        let mut warnings = Vec::new();
-
-        if let Some(ts) = &self.time_scale {
-            let v = *ts.get_ref();
-            if !(v.is_finite() && (0.0..=crate::limits::MAX_SECONDS).contains(&v)) {
-                return Err(at(
-                    ts.span(),
-                    out_of_range("time_scale", "plan", v, TIME_SCALE_EXPECTED),
-                ));
-            }
-            // In real time a rate is a wait on the clock: refuse one that would never end.
-            if let Some((t, rate)) = crate::limits::too_slow_for_real_time(&net, v) {
-                return Err(at(
-                    ts.span(),
-                    LoadErrorKind::Invalid(real_time_wait(
-                        &format!("time_scale = {}", show(v)),
-                        &net,
-                        t,
-                        rate,
-                        v,
-                    )),
-                ));
-            }
-        }
-
-        let mut roles: Vec<Option<Role>> = vec![None; net.place_count()];
-        let mut action_spans = vec![None; net.place_count()];
+        self.check_time_scale(&net, &at)?;
         let mut programs = Programs::new(&self.workers, path, &at)?;
         // Positions of many places and rules: one line index, not a scan per position.
         let lines = crate::io::LineIndex::new(text.as_bytes());
-        for (name, role) in &self.places {
-            let p = net
-                .place_by_name(name.get_ref())
-                .ok_or_else(|| at(name.span(), unknown("place", name.get_ref())))?;
-            roles[p.index()] = Some(resolve_role(
-                &net,
-                p,
-                role,
-                &at,
-                &mut programs,
-                self.map.is_some(),
-            )?);
-            if let Some(a) = &role.get_ref().action {
-                action_spans[p.index()] = Some(lines.locate(text.as_bytes(), a.span().start));
-            }
-            if matches!(roles[p.index()], Some(Role::Action { .. })) && net.consumers(p).is_empty()
-            {
-                warnings.push(format!(
-                    "place `{}` has an action but no output transition: its agents end Inactive",
-                    name.get_ref()
-                ));
-            }
-        }
-
+        let Roles {
+            roles,
+            action_spans,
+            warnings,
+        } = self.roles(&net, text, &lines, &mut programs, &at)?;
         let ros2 = resolve_ros2(&net, self.ros2.as_ref(), &self.places, &at)?;
-
-        let mut rules = Vec::with_capacity(self.policy.len());
-        let mut rule_spans = Vec::with_capacity(self.policy.len());
-        for rule in &self.policy {
-            rules.push(resolve_rule(&net, rule.get_ref(), &at)?);
-            rule_spans.push(lines.locate(text.as_bytes(), rule.span().start));
-        }
-        let policy = Policy::new(&net, rules).map_err(|e| {
-            let rule = self.policy[e.rule()].get_ref();
-            let span = policy_error_span(&e, rule).unwrap_or_else(|| self.policy[e.rule()].span());
-            at(span, LoadErrorKind::Invalid(format!("policy {e}")))
-        })?;
-
-        let mut stop = StopConditions::default();
-        if let Some(s) = &self.stop {
-            if let Some(w) = &s.when {
-                let pred = Predicate::parse(&net, w.get_ref()).map_err(|e| {
-                    let span = w.span();
-                    let start = span.start + string_content_offset(text, span.start);
-                    // Columns count characters; the content starts after the opening quote.
-                    let byte = w
-                        .get_ref()
-                        .char_indices()
-                        .nth(e.column.saturating_sub(1))
-                        .map_or(w.get_ref().len(), |(i, _)| i);
-                    let kind = match (e.kind, e.name) {
-                        (PredicateErrorKind::UnknownPlace, Some(n)) => unknown("place", &n),
-                        _ => LoadErrorKind::Invalid(format!("stop.when: {}", e.message)),
-                    };
-                    at(start + byte..start + byte, kind)
-                })?;
-                stop.when = Some(pred);
-            }
-            if let Some(t) = &s.time_limit {
-                let v = *t.get_ref();
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(at(
-                        t.span(),
-                        out_of_range("time_limit", "stop", v, "must be a finite number > 0"),
-                    ));
-                }
-                stop.time_limit = Some(v);
-            }
-            if let Some(n) = &s.max_firings {
-                if *n.get_ref() == 0 {
-                    return Err(at(
-                        n.span(),
-                        LoadErrorKind::OutOfRange {
-                            what: "max_firings",
-                            name: "stop".into(),
-                            value: "0".into(),
-                            expected: "must be at least 1 (a run that may not fire at all would do nothing)",
-                        },
-                    ));
-                }
-                stop.max_firings = Some(*n.get_ref());
-            }
-        }
-
-        let mut robots: Vec<String> = Vec::with_capacity(self.robots.len());
-        for r in &self.robots {
-            let name = r.get_ref();
-            if name.is_empty() || name.contains(char::is_whitespace) {
-                return Err(at(
-                    r.span(),
-                    LoadErrorKind::Invalid(format!(
-                        "robot name `{name}` must be non-empty and without spaces"
-                    )),
-                ));
-            }
-            if robots.iter().any(|n| n == name) {
-                return Err(at(
-                    r.span(),
-                    LoadErrorKind::Invalid(format!("robot `{name}` is listed twice")),
-                ));
-            }
-            robots.push(name.clone());
-        }
-        if !robots.is_empty() {
-            check_robot_count(&net, &roles, robots.len()).map_err(|kind| {
-                let span = key_span(text, "robots").unwrap_or_else(|| self.robots[0].span());
-                at(span, kind)
-            })?;
-        }
-
+        let (policy, rule_spans) = self.policy(&net, text, &lines, &at)?;
+        let stop = self.stop(&net, text, &at)?;
+        let robots = self.robots(&net, &roles, text, &at)?;
         let map = match &self.map {
             Some(m) => Some(m.get_ref().resolve(&net, m.span(), &at)?),
             None => None,
         };
         if let Some(m) = &map {
-            // Built-in robot actions (`goto L2; measure`) name locations: check them now.
-            for (name, role) in &self.places {
-                let Some(a) = &role.get_ref().action else {
-                    continue;
-                };
-                let Some(text) = a.get_ref().name() else {
-                    continue;
-                };
-                let program = m.program(text).map_err(|e| {
-                    at(
-                        a.span(),
-                        LoadErrorKind::Invalid(format!("place `{}`: {e}", name.get_ref())),
-                    )
-                })?;
-                if program.is_none()
-                    && let Some(p) = net.place_by_name(name.get_ref())
-                {
-                    check_builtin(&net, p, text, a.span(), &at)?;
-                }
-            }
+            self.check_robot_actions(&net, m, &at)?;
         }
-
         let rewards = resolve_rewards(&net, &self.rewards, &at)?;
         let controls = resolve_controls(&net, self.controllable.as_ref(), self.wait, &at)?;
 
@@ -217,6 +73,234 @@ impl PlanFile {
             text: None,
         })
     }
+
+    /// `time_scale` in range, and short enough for every delay of the net in real time.
+    fn check_time_scale(
+        &self,
+        net: &Net,
+        at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+    ) -> Result<(), LoadError> {
+        let Some(ts) = &self.time_scale else {
+            return Ok(());
+        };
+        let v = *ts.get_ref();
+        if !(v.is_finite() && (0.0..=crate::limits::MAX_SECONDS).contains(&v)) {
+            return Err(at(
+                ts.span(),
+                out_of_range("time_scale", "plan", v, TIME_SCALE_EXPECTED),
+            ));
+        }
+        // In real time a rate is a wait on the clock: refuse one that would never end.
+        if let Some((t, rate)) = crate::limits::too_slow_for_real_time(net, v) {
+            return Err(at(
+                ts.span(),
+                LoadErrorKind::Invalid(real_time_wait(
+                    &format!("time_scale = {}", show(v)),
+                    net,
+                    t,
+                    rate,
+                    v,
+                )),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Each place's role, where its action is written, and a warning per action place
+    /// without an output transition.
+    fn roles(
+        &self,
+        net: &Net,
+        text: &str,
+        lines: &crate::io::LineIndex,
+        programs: &mut Programs,
+        at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+    ) -> Result<Roles, LoadError> {
+        let mut roles: Vec<Option<Role>> = vec![None; net.place_count()];
+        let mut action_spans = vec![None; net.place_count()];
+        let mut warnings = Vec::new();
+        for (name, role) in &self.places {
+            let p = net
+                .place_by_name(name.get_ref())
+                .ok_or_else(|| at(name.span(), unknown("place", name.get_ref())))?;
+            roles[p.index()] = Some(resolve_role(
+                net,
+                p,
+                role,
+                at,
+                programs,
+                self.map.is_some(),
+            )?);
+            if let Some(a) = &role.get_ref().action {
+                action_spans[p.index()] = Some(lines.locate(text.as_bytes(), a.span().start));
+            }
+            if matches!(roles[p.index()], Some(Role::Action { .. })) && net.consumers(p).is_empty()
+            {
+                warnings.push(format!(
+                    "place `{}` has an action but no output transition: its agents end Inactive",
+                    name.get_ref()
+                ));
+            }
+        }
+        Ok(Roles {
+            roles,
+            action_spans,
+            warnings,
+        })
+    }
+
+    /// The policy's rules, and where each starts.
+    fn policy(
+        &self,
+        net: &Net,
+        text: &str,
+        lines: &crate::io::LineIndex,
+        at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+    ) -> Result<(Policy, Vec<crate::io::Span>), LoadError> {
+        let mut rules = Vec::with_capacity(self.policy.len());
+        let mut rule_spans = Vec::with_capacity(self.policy.len());
+        for rule in &self.policy {
+            rules.push(resolve_rule(net, rule.get_ref(), at)?);
+            rule_spans.push(lines.locate(text.as_bytes(), rule.span().start));
+        }
+        let policy = Policy::new(net, rules).map_err(|e| {
+            let rule = self.policy[e.rule()].get_ref();
+            let span = policy_error_span(&e, rule).unwrap_or_else(|| self.policy[e.rule()].span());
+            at(span, LoadErrorKind::Invalid(format!("policy {e}")))
+        })?;
+        Ok((policy, rule_spans))
+    }
+
+    /// The `[stop]` section: its predicate (errors at the offending character), time limit
+    /// and firing limit.
+    fn stop(
+        &self,
+        net: &Net,
+        text: &str,
+        at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+    ) -> Result<StopConditions, LoadError> {
+        let mut stop = StopConditions::default();
+        let Some(s) = &self.stop else {
+            return Ok(stop);
+        };
+        if let Some(w) = &s.when {
+            let pred = Predicate::parse(net, w.get_ref()).map_err(|e| {
+                let span = w.span();
+                let start = span.start + string_content_offset(text, span.start);
+                // Columns count characters; the content starts after the opening quote.
+                let byte = w
+                    .get_ref()
+                    .char_indices()
+                    .nth(e.column.saturating_sub(1))
+                    .map_or(w.get_ref().len(), |(i, _)| i);
+                let kind = match (e.kind, e.name) {
+                    (PredicateErrorKind::UnknownPlace, Some(n)) => unknown("place", &n),
+                    _ => LoadErrorKind::Invalid(format!("stop.when: {}", e.message)),
+                };
+                at(start + byte..start + byte, kind)
+            })?;
+            stop.when = Some(pred);
+        }
+        if let Some(t) = &s.time_limit {
+            let v = *t.get_ref();
+            if !(v.is_finite() && v > 0.0) {
+                return Err(at(
+                    t.span(),
+                    out_of_range("time_limit", "stop", v, "must be a finite number > 0"),
+                ));
+            }
+            stop.time_limit = Some(v);
+        }
+        if let Some(n) = &s.max_firings {
+            if *n.get_ref() == 0 {
+                return Err(at(
+                    n.span(),
+                    LoadErrorKind::OutOfRange {
+                        what: "max_firings",
+                        name: "stop".into(),
+                        value: "0".into(),
+                        expected: "must be at least 1 (a run that may not fire at all would do nothing)",
+                    },
+                ));
+            }
+            stop.max_firings = Some(*n.get_ref());
+        }
+        Ok(stop)
+    }
+
+    /// The robots' names: non-empty, without spaces, each once, as many as the initial
+    /// agents.
+    fn robots(
+        &self,
+        net: &Net,
+        roles: &[Option<Role>],
+        text: &str,
+        at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+    ) -> Result<Vec<String>, LoadError> {
+        let mut robots: Vec<String> = Vec::with_capacity(self.robots.len());
+        for r in &self.robots {
+            let name = r.get_ref();
+            if name.is_empty() || name.contains(char::is_whitespace) {
+                return Err(at(
+                    r.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "robot name `{name}` must be non-empty and without spaces"
+                    )),
+                ));
+            }
+            if robots.iter().any(|n| n == name) {
+                return Err(at(
+                    r.span(),
+                    LoadErrorKind::Invalid(format!("robot `{name}` is listed twice")),
+                ));
+            }
+            robots.push(name.clone());
+        }
+        if !robots.is_empty() {
+            check_robot_count(net, roles, robots.len()).map_err(|kind| {
+                let span = key_span(text, "robots").unwrap_or_else(|| self.robots[0].span());
+                at(span, kind)
+            })?;
+        }
+        Ok(robots)
+    }
+
+    /// Built-in robot actions (`goto L2; measure`) name locations of the map: checked once
+    /// the map is read.
+    fn check_robot_actions(
+        &self,
+        net: &Net,
+        map: &crate::world::map::Map,
+        at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+    ) -> Result<(), LoadError> {
+        for (name, role) in &self.places {
+            let Some(a) = &role.get_ref().action else {
+                continue;
+            };
+            let Some(text) = a.get_ref().name() else {
+                continue;
+            };
+            let program = map.program(text).map_err(|e| {
+                at(
+                    a.span(),
+                    LoadErrorKind::Invalid(format!("place `{}`: {e}", name.get_ref())),
+                )
+            })?;
+            if program.is_none()
+                && let Some(p) = net.place_by_name(name.get_ref())
+            {
+                check_builtin(net, p, text, a.span(), at)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The places' roles as [`PlanFile::resolve`] reads them.
+struct Roles {
+    roles: Vec<Option<Role>>,
+    action_spans: Vec<Option<crate::io::Span>>,
+    warnings: Vec<String>,
 }
 
 /// Refuses a `robots` list whose length is not the number of initial agents: every initial

@@ -42,7 +42,7 @@ use std::path::{Path, PathBuf};
 
 use super::{Plan, read_plan_with};
 use crate::io::{LoadError, LoadErrorKind, ReadOptions, Span, read_net};
-use crate::net::{Net, Timing};
+use crate::net::{Net, PlaceId, Timing};
 use rustc_hash::{FxHashMap, FxHashSet};
 
 /// A name in the input and where it is.
@@ -138,7 +138,7 @@ pub struct Imported {
 /// Reads a thesis execution input (JSON with Python-literal values).
 pub fn read_input(path: &Path) -> Result<ThesisInput, LoadError> {
     let bytes =
-        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.to_string())))?;
+        std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.into())))?;
     parse_input(path, &bytes)
 }
 
@@ -177,7 +177,7 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<Imported, LoadError> 
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "net.xml".into());
-    let io_err = |p: &Path, e: std::io::Error| LoadError::file(p, LoadErrorKind::Io(e.to_string()));
+    let io_err = |p: &Path, e: std::io::Error| LoadError::file(p, LoadErrorKind::Io(e.into()));
     std::fs::create_dir_all(&opts.out).map_err(|e| io_err(&opts.out, e))?;
     let functions = input.actions.iter().any(|a| a.action_type.is_none());
     let mut project_warning = None;
@@ -321,41 +321,16 @@ pub fn locate_net(input: &ThesisInput) -> Result<PathBuf, LoadError> {
 /// The plan (TOML text) for `input` over `net`, whose file will be `net_file` beside the
 /// plan; and the warnings of the translation. `project` is the directory of the functions'
 /// modules as `thesis_functions.py` (beside the plan) is given it: relative to the plan's
-/// directory, or absolute.
+/// directory, or absolute. Written in the plan's order: the header, the places' roles
+/// ([`write_roles`]), then the policy ([`policy_rules`], [`write_rule`]).
 pub fn plan_text(
     input: &ThesisInput,
     net: &Net,
     net_file: &str,
     project: &str,
 ) -> Result<(String, Vec<String>), LoadError> {
-    let err = |span: Span, kind| LoadError::at(&input.path, span, kind);
-    let unknown = |what: &'static str, n: &Named| {
-        err(
-            n.span,
-            LoadErrorKind::UnknownNode {
-                what,
-                name: n.name.clone(),
-            },
-        )
-    };
     let mut warnings = Vec::new();
-    let mut order = Vec::with_capacity(input.places.len());
-    let mut listed: FxHashSet<&str> = FxHashSet::default();
-    for p in &input.places {
-        if !listed.insert(&p.name) {
-            return Err(err(
-                p.span,
-                LoadErrorKind::Duplicate {
-                    what: "place in places_tuple",
-                    name: p.name.clone(),
-                },
-            ));
-        }
-        order.push(
-            net.place_by_name(&p.name)
-                .ok_or_else(|| unknown("place", p))?,
-        );
-    }
+    let order = places_tuple(input, net)?;
     let covers_net = order.len() == net.place_count();
 
     let file_label = input
@@ -374,13 +349,70 @@ pub fn plan_text(
             "# full_synchronization = {sync} (gspn always synchronises fully)"
         );
     }
+    write_roles(input, net, project, &mut out, &mut warnings)?;
+    for (e, choose) in policy_rules(input, net, order.len(), &mut warnings)? {
+        if !choose.is_empty() {
+            write_rule(&mut out, input, e, &choose, covers_net);
+        }
+    }
+    Ok((out, warnings))
+}
 
-    // Roles.
+/// An error at `span` of the input file.
+fn input_error(input: &ThesisInput, span: Span, kind: LoadErrorKind) -> LoadError {
+    LoadError::at(&input.path, span, kind)
+}
+
+/// A name of the input that the net does not have.
+fn unknown(input: &ThesisInput, what: &'static str, n: &Named) -> LoadError {
+    input_error(
+        input,
+        n.span,
+        LoadErrorKind::UnknownNode {
+            what,
+            name: n.name.clone(),
+        },
+    )
+}
+
+/// The places of `places_tuple`, each once and each a place of the net, in the order the
+/// policy's keys list their counts.
+fn places_tuple(input: &ThesisInput, net: &Net) -> Result<Vec<PlaceId>, LoadError> {
+    let mut order = Vec::with_capacity(input.places.len());
+    let mut listed: FxHashSet<&str> = FxHashSet::default();
+    for p in &input.places {
+        if !listed.insert(&p.name) {
+            return Err(input_error(
+                input,
+                p.span,
+                LoadErrorKind::Duplicate {
+                    what: "place in places_tuple",
+                    name: p.name.clone(),
+                },
+            ));
+        }
+        order.push(
+            net.place_by_name(&p.name)
+                .ok_or_else(|| unknown(input, "place", p))?,
+        );
+    }
+    Ok(order)
+}
+
+/// The `[places.*]` sections: an action per mapped place (a ROS 2 server or a function of
+/// the thesis's project, run by the `functions` worker), `resource` for the resources.
+fn write_roles(
+    input: &ThesisInput,
+    net: &Net,
+    project: &str,
+    out: &mut String,
+    warnings: &mut Vec<String>,
+) -> Result<(), LoadError> {
     let mut resources: Vec<&Named> = Vec::new();
     let mut resource_names: FxHashSet<&str> = FxHashSet::default();
     for r in &input.resources {
         net.place_by_name(&r.name)
-            .ok_or_else(|| unknown("place", r))?;
+            .ok_or_else(|| unknown(input, "place", r))?;
         if resource_names.insert(&r.name) {
             resources.push(r);
         }
@@ -388,7 +420,7 @@ pub fn plan_text(
     let mut seen: FxHashSet<&str> = FxHashSet::default();
     for a in &input.actions {
         net.place_by_name(&a.place.name)
-            .ok_or_else(|| unknown("place", &a.place))?;
+            .ok_or_else(|| unknown(input, "place", &a.place))?;
         if !seen.insert(&a.place.name) {
             warnings.push(format!(
                 "place `{}` is mapped twice; the first mapping is used",
@@ -432,22 +464,33 @@ pub fn plan_text(
     for r in &resources {
         let _ = writeln!(out, "\n[places.{}]\nrole = \"resource\"", toml_key(&r.name));
     }
+    Ok(())
+}
 
-    // Policy: Python dicts keep the first position of a key and the last value.
+/// The policy's entries with their choices, one per key: Python dicts keep the first
+/// position of a key and the last value.
+#[allow(clippy::type_complexity)]
+fn policy_rules<'i>(
+    input: &'i ThesisInput,
+    net: &Net,
+    places: usize,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<(&'i PolicyEntry, Vec<(String, f64)>)>, LoadError> {
     let mut rules: Vec<(&PolicyEntry, Vec<(String, f64)>)> = Vec::new();
     let mut rule_of: FxHashMap<&[KeyItem], usize> = FxHashMap::default();
     for (n, e) in input.policy.iter().enumerate() {
-        if e.key.len() != order.len() {
-            return Err(err(
+        if e.key.len() != places {
+            return Err(input_error(
+                input,
                 e.span,
                 LoadErrorKind::Invalid(format!(
                     "policy key has {} entries but places_tuple has {} places",
                     e.key.len(),
-                    order.len()
+                    places
                 )),
             ));
         }
-        let choose = resolve_choice(input, net, e, n + 1, &mut warnings)?;
+        let choose = resolve_choice(input, net, e, n + 1, warnings)?;
         if let Some(first) = rule_of.get(e.key.as_slice()).map(|&i| &mut rules[i]) {
             warnings.push(format!(
                 "policy key at {} repeats the key at {}: the later value is used (as in Python)",
@@ -459,49 +502,55 @@ pub fn plan_text(
             rules.push((e, choose));
         }
     }
-    for (e, choose) in rules {
-        if choose.is_empty() {
-            continue;
-        }
-        let exact = covers_net && e.key.iter().all(|k| matches!(k, KeyItem::Count(_)));
-        let key_text: Vec<String> = e
-            .key
-            .iter()
-            .map(|k| match k {
-                KeyItem::Free => "'-'".to_string(),
-                KeyItem::Count(c) => c.to_string(),
-            })
-            .collect();
-        let _ = writeln!(
-            out,
-            "\n# policy_dictionary at line {}: ({})\n[[policy]]",
-            e.span.line,
-            key_text.join(",")
-        );
-        let cells: Vec<String> = e
-            .key
-            .iter()
-            .zip(&input.places)
-            .filter_map(|(k, p)| match k {
-                KeyItem::Count(c) => Some(format!("{} = {c}", toml_key(&p.name))),
-                KeyItem::Free => None,
-            })
-            .collect();
-        if cells.is_empty() {
-            let _ = writeln!(out, "marking = {{}}");
-        } else {
-            let _ = writeln!(out, "marking = {{ {} }}", cells.join(", "));
-        }
-        if !exact {
-            let _ = writeln!(out, "partial = true");
-        }
-        let probs: Vec<String> = choose
-            .iter()
-            .map(|(t, p)| format!("{} = {p:?}", toml_key(t)))
-            .collect();
-        let _ = writeln!(out, "choose = {{ {} }}", probs.join(", "));
+    Ok(rules)
+}
+
+/// One `[[policy]]` rule: the key's counts as its marking (`partial` unless the key gives
+/// every place of the net a count), the choice's probabilities.
+fn write_rule(
+    out: &mut String,
+    input: &ThesisInput,
+    e: &PolicyEntry,
+    choose: &[(String, f64)],
+    covers_net: bool,
+) {
+    let exact = covers_net && e.key.iter().all(|k| matches!(k, KeyItem::Count(_)));
+    let key_text: Vec<String> = e
+        .key
+        .iter()
+        .map(|k| match k {
+            KeyItem::Free => "'-'".to_string(),
+            KeyItem::Count(c) => c.to_string(),
+        })
+        .collect();
+    let _ = writeln!(
+        out,
+        "\n# policy_dictionary at line {}: ({})\n[[policy]]",
+        e.span.line,
+        key_text.join(",")
+    );
+    let cells: Vec<String> = e
+        .key
+        .iter()
+        .zip(&input.places)
+        .filter_map(|(k, p)| match k {
+            KeyItem::Count(c) => Some(format!("{} = {c}", toml_key(&p.name))),
+            KeyItem::Free => None,
+        })
+        .collect();
+    if cells.is_empty() {
+        let _ = writeln!(out, "marking = {{}}");
+    } else {
+        let _ = writeln!(out, "marking = {{ {} }}", cells.join(", "));
     }
-    Ok((out, warnings))
+    if !exact {
+        let _ = writeln!(out, "partial = true");
+    }
+    let probs: Vec<String> = choose
+        .iter()
+        .map(|(t, p)| format!("{} = {p:?}", toml_key(t)))
+        .collect();
+    let _ = writeln!(out, "choose = {{ {} }}", probs.join(", "));
 }
 
 /// The transitions of one entry, checked against the net: unknown names are errors,

@@ -149,9 +149,7 @@ fn server_qos() -> ActionServerQosPolicies {
 
 /// FNV-1a of the robot id, to give each robot its own stream of draws.
 fn id_hash(id: &str) -> u64 {
-    id.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
+    crate::sample::fnv::fnv1a(id.as_bytes())
 }
 
 struct Shared {

@@ -245,12 +245,17 @@ impl CancelToken {
     }
 }
 
-/// Polls a future, turning a panic into `Err(message)` so one agent's panic never takes the
+/// Polls a future, turning a panic into `Err(Panicked)` so one agent's panic never takes the
 /// plan down.
 pub(crate) struct CatchUnwind<F>(pub(crate) F);
 
+/// A panic caught by [`CatchUnwind`]: its message, when the payload was a string.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub(crate) struct Panicked(String);
+
 impl<F: Future + Unpin> Future for CatchUnwind<F> {
-    type Output = Result<F::Output, String>;
+    type Output = Result<F::Output, Panicked>;
 
     fn poll(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Self::Output> {
         let inner = &mut self.0;
@@ -263,7 +268,7 @@ impl<F: Future + Unpin> Future for CatchUnwind<F> {
                     .map(|s| s.to_string())
                     .or_else(|| payload.downcast_ref::<String>().cloned())
                     .unwrap_or_else(|| "panic".to_string());
-                Poll::Ready(Err(msg))
+                Poll::Ready(Err(Panicked(msg)))
             }
         }
     }

@@ -259,157 +259,22 @@ impl RuntimeBuilder {
         self
     }
 
-    /// Checks the configuration and starts the run in the current tokio runtime.
+    /// Checks the configuration and starts the run in the current tokio runtime: the time
+    /// scale ([`check_time`](Self::check_time)), the actions bound by name
+    /// ([`bind_places`](Self::bind_places)), each place's action ([`place_setups`](Self::place_setups)),
+    /// the journal ([`open_journal`](Self::open_journal)), then the supervisor.
     pub fn spawn(mut self) -> Result<RuntimeHandle, RuntimeError> {
-        if tokio::runtime::Handle::try_current().is_err() {
-            return Err(RuntimeError::NoTokio);
-        }
-        let scale = self.time_scale;
-        if !(scale.is_finite() && (0.0..=crate::limits::MAX_SECONDS).contains(&scale)) {
-            return Err(RuntimeError::BadTimeScale(scale));
-        }
-        if let Some((t, rate)) = crate::limits::too_slow_for_real_time(&self.net, scale) {
-            return Err(RuntimeError::DelayTooLong {
-                transition: self.net.transition(t).name.clone(),
-                rate,
-                scale,
-                seconds: scale / rate,
-            });
-        }
+        self.check_time()?;
         let net = Arc::clone(&self.net);
-        for (place, action) in std::mem::take(&mut self.binds) {
-            let p = net
-                .place_by_name(&place)
-                .ok_or_else(|| RuntimeError::UnknownPlace(place.clone()))?;
-            self.roles[p.index()] = Some(Role::Action {
-                name: action,
-                timeout: None,
-                on_failure: FailurePolicy::Stop,
-                robot: None,
-            });
-        }
-        if !self.robots.is_empty()
-            || self
-                .roles
-                .iter()
-                .any(|r| matches!(r, Some(Role::Action { robot: Some(_), .. })))
-        {
-            conservation::check_robot_tokens(&net, &self.roles)?;
-        }
+        self.bind_places(&net)?;
         let warnings = Vec::new();
-        let mut setups = Vec::new();
-        for p in net.place_ids() {
-            if let Some(Role::Action {
-                name,
-                timeout,
-                on_failure,
-                robot,
-            }) = &self.roles[p.index()]
-            {
-                let mut instant = None;
-                let action = match self.actions.get(name) {
-                    Some(a) => Some(Arc::clone(a)),
-                    // Not registered: a built-in (`wait`, `log`, `fire`), when it is one.
-                    None => match Builtin::parse(name, &net, p) {
-                        Some(Ok(b)) => {
-                            instant = b.instant();
-                            Some(Arc::new(b.action()) as Arc<dyn Action>)
-                        }
-                        Some(Err(reason)) => {
-                            return Err(RuntimeError::BadBuiltin {
-                                place: net.place(p).name.clone(),
-                                reason,
-                            });
-                        }
-                        None => None,
-                    },
-                };
-                match action {
-                    Some(action) => setups.push(PlaceSetup {
-                        place: p,
-                        action,
-                        timeout: *timeout,
-                        on_failure: *on_failure,
-                        robot: robot.as_deref().map(Arc::from),
-                        instant,
-                        passive: false,
-                        decides: false,
-                    }),
-                    None => {
-                        let mut known: Vec<String> = self.actions.keys().cloned().collect();
-                        known.sort();
-                        return Err(RuntimeError::UnknownAction {
-                            place: net.place(p).name.clone(),
-                            action: name.clone(),
-                            known,
-                        });
-                    }
-                }
-            }
-        }
-        // Identity: once a run has agents, every place that is not a resource keeps them — a
-        // place without an action is a transparent one (its agents are ready at once).
-        if !setups.is_empty() || !self.robots.is_empty() {
-            let wait = Arc::new(Builtin::Wait(None).action()) as Arc<dyn Action>;
-            for p in net.place_ids() {
-                if self.roles[p.index()].is_none() {
-                    setups.push(PlaceSetup {
-                        place: p,
-                        action: Arc::clone(&wait),
-                        timeout: None,
-                        on_failure: FailurePolicy::Stop,
-                        robot: None,
-                        instant: Some((super::Outcome::Decide, None)),
-                        passive: true,
-                        decides: false,
-                    });
-                }
-            }
-            // Agents are made in place order (the robots' order).
-            setups.sort_by_key(|s| s.place);
-        }
-        for s in &mut setups {
-            s.decides = net
-                .consumers(s.place)
-                .iter()
-                .any(|&t| net.transition(t).is_immediate());
-        }
-        if !self.robots.is_empty() {
-            let agents: u64 = setups
-                .iter()
-                .map(|s| u64::from(net.place(s.place).initial))
-                .sum();
-            if agents != self.robots.len() as u64 {
-                return Err(RuntimeError::RobotCount {
-                    robots: self.robots.len(),
-                    agents,
-                });
-            }
-        }
+        let setups = self.place_setups(&net)?;
         let seed = self.seed.unwrap_or_else(|| {
             std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_nanos() as u64)
         });
-        let journal = match &self.journal {
-            Some(path) => Some(
-                Journal::create(
-                    path,
-                    &net,
-                    RunFacts {
-                        seed,
-                        time_scale: self.time_scale,
-                        file: self.source.as_deref(),
-                        robots: &self.robots,
-                    },
-                )
-                .map_err(|e| RuntimeError::Journal {
-                    path: path.clone(),
-                    reason: e.to_string(),
-                })?,
-            ),
-            None => None,
-        };
+        let journal = self.open_journal(&net, seed)?;
         let journal_tap = journal.as_ref().and_then(Journal::tap);
         let places: Vec<PlaceId> = setups.iter().map(|s| s.place).collect();
         let eng = Engine::new(
@@ -454,6 +319,174 @@ impl RuntimeBuilder {
             warnings,
             seed,
             journal_tap,
+        })
+    }
+
+    /// A tokio runtime to run in, and a time scale that every delay of the net fits.
+    fn check_time(&self) -> Result<(), RuntimeError> {
+        if tokio::runtime::Handle::try_current().is_err() {
+            return Err(RuntimeError::NoTokio);
+        }
+        let scale = self.time_scale;
+        if !(scale.is_finite() && (0.0..=crate::limits::MAX_SECONDS).contains(&scale)) {
+            return Err(RuntimeError::BadTimeScale(scale));
+        }
+        if let Some((t, rate)) = crate::limits::too_slow_for_real_time(&self.net, scale) {
+            return Err(RuntimeError::DelayTooLong {
+                transition: self.net.transition(t).name.clone(),
+                rate,
+                scale,
+                seconds: scale / rate,
+            });
+        }
+        Ok(())
+    }
+
+    /// The actions bound to places by name become the places' roles; with robots, the
+    /// robots' tokens must be conserved.
+    fn bind_places(&mut self, net: &Net) -> Result<(), RuntimeError> {
+        for (place, action) in std::mem::take(&mut self.binds) {
+            let p = net
+                .place_by_name(&place)
+                .ok_or_else(|| RuntimeError::UnknownPlace(place.clone()))?;
+            self.roles[p.index()] = Some(Role::Action {
+                name: action,
+                timeout: None,
+                on_failure: FailurePolicy::Stop,
+                robot: None,
+            });
+        }
+        if !self.robots.is_empty()
+            || self
+                .roles
+                .iter()
+                .any(|r| matches!(r, Some(Role::Action { robot: Some(_), .. })))
+        {
+            conservation::check_robot_tokens(net, &self.roles)?;
+        }
+        Ok(())
+    }
+
+    /// What each place does with its agents: its action (registered, or a built-in), or —
+    /// once a run has agents — a transparent wait for the places without one; one agent per
+    /// robot.
+    fn place_setups(&self, net: &Net) -> Result<Vec<PlaceSetup>, RuntimeError> {
+        let mut setups = Vec::new();
+        for p in net.place_ids() {
+            if let Some(Role::Action {
+                name,
+                timeout,
+                on_failure,
+                robot,
+            }) = &self.roles[p.index()]
+            {
+                let (action, instant) = self.action_of(net, p, name)?;
+                setups.push(PlaceSetup {
+                    place: p,
+                    action,
+                    timeout: *timeout,
+                    on_failure: *on_failure,
+                    robot: robot.as_deref().map(Arc::from),
+                    instant,
+                    passive: false,
+                    decides: false,
+                });
+            }
+        }
+        // Identity: once a run has agents, every place that is not a resource keeps them — a
+        // place without an action is a transparent one (its agents are ready at once).
+        if !setups.is_empty() || !self.robots.is_empty() {
+            let wait = Arc::new(Builtin::Wait(None).action()) as Arc<dyn Action>;
+            for p in net.place_ids() {
+                if self.roles[p.index()].is_none() {
+                    setups.push(PlaceSetup {
+                        place: p,
+                        action: Arc::clone(&wait),
+                        timeout: None,
+                        on_failure: FailurePolicy::Stop,
+                        robot: None,
+                        instant: Some((super::Outcome::Decide, None)),
+                        passive: true,
+                        decides: false,
+                    });
+                }
+            }
+            // Agents are made in place order (the robots' order).
+            setups.sort_by_key(|s| s.place);
+        }
+        for s in &mut setups {
+            s.decides = net
+                .consumers(s.place)
+                .iter()
+                .any(|&t| net.transition(t).is_immediate());
+        }
+        if !self.robots.is_empty() {
+            let agents: u64 = setups
+                .iter()
+                .map(|s| u64::from(net.place(s.place).initial))
+                .sum();
+            if agents != self.robots.len() as u64 {
+                return Err(RuntimeError::RobotCount {
+                    robots: self.robots.len(),
+                    agents,
+                });
+            }
+        }
+        Ok(setups)
+    }
+
+    /// The action named `name` for place `p`: the one registered under that name, else the
+    /// built-in the name spells, with the outcome it has at once when it takes no time.
+    #[allow(clippy::type_complexity)]
+    fn action_of(
+        &self,
+        net: &Net,
+        p: PlaceId,
+        name: &str,
+    ) -> Result<(Arc<dyn Action>, Option<(super::Outcome, Option<Arc<str>>)>), RuntimeError> {
+        if let Some(a) = self.actions.get(name) {
+            return Ok((Arc::clone(a), None));
+        }
+        match Builtin::parse(name, net, p) {
+            Some(Ok(b)) => {
+                let instant = b.instant();
+                Ok((Arc::new(b.action()) as Arc<dyn Action>, instant))
+            }
+            Some(Err(reason)) => Err(RuntimeError::BadBuiltin {
+                place: net.place(p).name.clone(),
+                reason,
+            }),
+            None => {
+                let mut known: Vec<String> = self.actions.keys().cloned().collect();
+                known.sort();
+                Err(RuntimeError::UnknownAction {
+                    place: net.place(p).name.clone(),
+                    action: name.to_string(),
+                    known,
+                })
+            }
+        }
+    }
+
+    /// The run's journal, its header written, when one was asked for.
+    fn open_journal(&self, net: &Net, seed: u64) -> Result<Option<Journal>, RuntimeError> {
+        let Some(path) = &self.journal else {
+            return Ok(None);
+        };
+        Journal::create(
+            path,
+            net,
+            RunFacts {
+                seed,
+                time_scale: self.time_scale,
+                file: self.source.as_deref(),
+                robots: &self.robots,
+            },
+        )
+        .map(Some)
+        .map_err(|e| RuntimeError::Journal {
+            path: path.clone(),
+            reason: e.to_string(),
         })
     }
 }

@@ -35,6 +35,42 @@ pub enum Builtin {
     },
 }
 
+/// Why an action text that starts with a built-in word is not a built-in.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum BuiltinError {
+    /// `wait S` or `fire T after S` with `S` not a number of seconds.
+    #[error(
+        "`{text}`: `{seconds}` is not a number of seconds (finite, ≥ 0, ≤ 315576000: 10 years)"
+    )]
+    Seconds {
+        /// The action's text.
+        text: String,
+        /// The word that should be seconds.
+        seconds: String,
+    },
+    /// `fire` followed by something other than `T` or `T after S`.
+    #[error("`{text}`: expected `fire T` or `fire T after S`")]
+    FireSyntax {
+        /// The action's text.
+        text: String,
+    },
+    /// `fire T` where `T` is not an output transition of the place.
+    #[error(
+        "`{text}`: `{name}` is not an output transition of `{place}` (outputs: {})",
+        outputs.join(", ")
+    )]
+    NotAnOutput {
+        /// The action's text.
+        text: String,
+        /// The transition named.
+        name: String,
+        /// The place.
+        place: String,
+        /// The place's output transitions.
+        outputs: Vec<String>,
+    },
+}
+
 /// The words that start a built-in action.
 pub const BUILTIN_WORDS: [&str; 3] = ["wait", "log", "fire"];
 
@@ -42,16 +78,17 @@ impl Builtin {
     /// The built-in that `text` names for `place`: `None` when `text` does not start with a
     /// built-in word, `Some(Err(why))` when it does but is malformed (a bad number, a
     /// transition that is not an output of the place).
-    pub fn parse(text: &str, net: &Net, place: PlaceId) -> Option<Result<Builtin, String>> {
+    pub fn parse(text: &str, net: &Net, place: PlaceId) -> Option<Result<Builtin, BuiltinError>> {
         let text = text.trim();
         let (word, rest) = text.split_once(char::is_whitespace).unwrap_or((text, ""));
         let rest = rest.trim();
-        let seconds = |s: &str| -> Result<f64, String> {
+        let seconds = |s: &str| -> Result<f64, BuiltinError> {
             match s.parse::<f64>() {
                 Ok(v) if crate::limits::valid_wait(v) => Ok(v),
-                _ => Err(format!(
-                    "`{text}`: `{s}` is not a number of seconds (finite, ≥ 0, ≤ 315576000: 10 years)"
-                )),
+                _ => Err(BuiltinError::Seconds {
+                    text: text.to_string(),
+                    seconds: s.to_string(),
+                }),
             }
         };
         Some(match word {
@@ -64,7 +101,9 @@ impl Builtin {
                 let after = match (parts.next(), parts.next(), parts.next()) {
                     (None, _, _) => Ok(None),
                     (Some("after"), Some(s), None) => seconds(s).map(Some),
-                    _ => Err(format!("`{text}`: expected `fire T` or `fire T after S`")),
+                    _ => Err(BuiltinError::FireSyntax {
+                        text: text.to_string(),
+                    }),
                 };
                 after.and_then(|after| {
                     let outputs = net.consumers(place);
@@ -73,15 +112,15 @@ impl Builtin {
                             transition: t,
                             after,
                         }),
-                        _ => Err(format!(
-                            "`{text}`: `{name}` is not an output transition of `{}` (outputs: {})",
-                            net.place(place).name,
-                            outputs
+                        _ => Err(BuiltinError::NotAnOutput {
+                            text: text.to_string(),
+                            name: name.to_string(),
+                            place: net.place(place).name.clone(),
+                            outputs: outputs
                                 .iter()
-                                .map(|&t| net.transition(t).name.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        )),
+                                .map(|&t| net.transition(t).name.clone())
+                                .collect(),
+                        }),
                     }
                 })
             }

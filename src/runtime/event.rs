@@ -25,6 +25,39 @@ pub struct Event {
     pub kind: EventKind,
 }
 
+impl Event {
+    /// The firing this event records, if it records one: what every replay of a run
+    /// (a journal's frames, a conformance trace) steps through, read in one place.
+    pub fn firing(&self) -> Option<Firing<'_>> {
+        match &self.kind {
+            EventKind::Fired {
+                transition,
+                marking,
+                ..
+            } => Some(Firing {
+                seq: self.seq,
+                time: self.time,
+                transition: *transition,
+                marking,
+            }),
+            _ => None,
+        }
+    }
+}
+
+/// A transition's firing, as [`Event::firing`] reads it from an event.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Firing<'a> {
+    /// The event's sequence number.
+    pub seq: u64,
+    /// Model time.
+    pub time: f64,
+    /// What fired.
+    pub transition: TransitionId,
+    /// The marking after the firing.
+    pub marking: &'a Marking,
+}
+
 /// What happened.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "event", rename_all = "snake_case")]

@@ -7,12 +7,14 @@
 //! the firings, over the run's length — what `run` reports for one run); the estimate is the
 //! mean over runs and the interval `mean ± t₀.₉₇₅(R−1) · s/√R` (Student t).
 //!
-//! Runs are grouped in fixed blocks of consecutive indices; threads take whole blocks and
-//! the blocks are merged in index order, so the result does not depend on the number of
-//! threads — bit for bit.
+//! Runs are grouped in fixed blocks of consecutive indices; rayon's threads take whole
+//! blocks and the blocks are merged in index order, so the result does not depend on the
+//! number of threads — bit for bit.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+
+use rayon::prelude::*;
 
 use super::RunEnd;
 use super::{SimError, Simulator};
@@ -121,7 +123,8 @@ impl<'n> MonteCarlo<'n> {
         self
     }
 
-    /// Threads to use (0 = every available core). Does not change the result.
+    /// Threads to use (0 = rayon's global pool, every available core). Does not change the
+    /// result.
     pub fn threads(mut self, threads: usize) -> Self {
         self.threads = threads;
         self
@@ -146,49 +149,43 @@ impl<'n> MonteCarlo<'n> {
             )));
         }
         let blocks = self.runs.div_ceil(BLOCK);
-        let threads = match self.threads {
-            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-            n => n,
-        }
-        .min(blocks as usize)
-        .max(1);
         // The runs share one copy of the net and the policy.
         let net = Arc::new(self.net.clone());
         let policy = self.policy.map(|p| Arc::new(p.clone()));
-        let next = AtomicU64::new(0);
-        let mut done: Vec<(u64, Result<Acc, SimError>)> = std::thread::scope(|s| {
-            let workers: Vec<_> = (0..threads)
-                .map(|_| {
-                    s.spawn(|| {
-                        let mut out = Vec::new();
-                        loop {
-                            let b = next.fetch_add(1, Ordering::Relaxed);
-                            if b >= blocks {
-                                return out;
-                            }
-                            let r = self.block(
-                                &net,
-                                policy.as_ref(),
-                                b * BLOCK,
-                                ((b + 1) * BLOCK).min(self.runs),
-                            );
-                            let failed = r.is_err();
-                            out.push((b, r));
-                            if failed {
-                                return out;
-                            }
-                        }
-                    })
+        // The lowest block that failed so far: blocks after it are skipped, blocks before it
+        // still run, so the error kept is the first in run order whatever the scheduling.
+        let failed = AtomicU64::new(u64::MAX);
+        let run_blocks = || -> Vec<Option<Result<Acc, SimError>>> {
+            (0..blocks)
+                .into_par_iter()
+                .map(|b| {
+                    if b > failed.load(Ordering::Relaxed) {
+                        return None;
+                    }
+                    let r = self.block(
+                        &net,
+                        policy.as_ref(),
+                        b * BLOCK,
+                        ((b + 1) * BLOCK).min(self.runs),
+                    );
+                    if r.is_err() {
+                        failed.fetch_min(b, Ordering::Relaxed);
+                    }
+                    Some(r)
                 })
-                .collect();
-            workers
-                .into_iter()
-                .flat_map(|w| w.join().unwrap_or_default())
                 .collect()
-        });
-        done.sort_by_key(|(b, _)| *b);
+        };
+        let done = match self.threads {
+            0 => run_blocks(),
+            n => rayon::ThreadPoolBuilder::new()
+                .num_threads(n.min(blocks as usize).max(1))
+                .build()
+                .map_err(|e| SimError::BadArgument(format!("threads: {e}")))?
+                .install(run_blocks),
+        };
+        // `collect` keeps block order: the merge is the same sum in the same order.
         let mut total = Acc::new(self.observations());
-        for (_, r) in done {
+        for r in done.into_iter().map_while(|r| r) {
             total.merge(&r?);
         }
         Ok(total.estimates(self.net.place_count(), self.net.transition_count()))

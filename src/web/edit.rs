@@ -21,19 +21,20 @@
 //! finite number above 0, a weight at least 0, a priority, a number of servers and an arc
 //! multiplicity whole numbers of at least 1.
 
+mod add;
+mod change;
 mod history;
 mod op;
+mod remove;
 pub(crate) mod routes;
 mod state;
 
 pub(crate) use history::History;
-pub(crate) use op::{ArcKindName, Edit, EditError, Kind, NodeRef};
-use op::{arc_owner, describe_timing, kind_name, timing};
+use op::kind_name;
+pub(crate) use op::{ArcKindName, Edit, EditError};
 
 use crate::io::LoadErrorKind;
-use crate::net::{
-    Arc, ArcKind, Net, NetBuilder, Place, PlaceId, Position, Transition, TransitionId,
-};
+use crate::net::{Arc, Net, NetBuilder, Place, PlaceId, Position, Transition, TransitionId};
 
 /// A name the page typed: not empty, no spaces at its ends, at most
 /// [`MAX_NAME_CHARS`](crate::web::limits::MAX_NAME_CHARS) characters.
@@ -222,280 +223,21 @@ pub(crate) fn positioned(net: &Net) -> Net {
 }
 
 /// `net` after `edit`, and a short description of the edit (`add place P4`); the error
-/// when the edit is refused.
+/// when the edit is refused. Each operation applies itself to the net taken apart
+/// ([`add`], [`remove`], [`change`]); the builder then checks the whole.
 pub(crate) fn apply(net: &Net, edit: &Edit) -> Result<(Net, String), EditError> {
     let mut n = Parts::of(net);
     let label = match edit {
-        Edit::AddPlace {
-            name,
-            tokens,
-            capacity,
-            x,
-            y,
-        } => {
-            let name = n.new_name(name, "place")?;
-            let initial = match tokens {
-                Some(k) => k.whole("initial marking", &name, 0)?,
-                None => 0,
-            };
-            let capacity = match capacity {
-                Some(c) => Some(c.whole("capacity", &name, 1)?),
-                None => None,
-            };
-            n.places.push(Place {
-                position: Some(position(&name, *x, *y)?),
-                name: name.clone(),
-                initial,
-                capacity,
-            });
-            format!("add place {name}")
-        }
-        Edit::AddTransition {
-            name,
-            kind,
-            rate,
-            servers,
-            weight,
-            priority,
-            x,
-            y,
-        } => {
-            let name = n.new_name(name, "transition")?;
-            let timing = timing(&name, *kind, None, rate, servers, weight, priority)?;
-            n.transitions.push(Transition {
-                position: Some(position(&name, *x, *y)?),
-                name: name.clone(),
-                timing,
-            });
-            format!("add transition {name}")
-        }
-        Edit::AddArc {
-            from,
-            to,
-            inhibitor,
-            weight,
-        } => {
-            let (kind, place, transition) = match (from, to) {
-                (NodeRef::Place(p), NodeRef::Transition(t)) => {
-                    let kind = if *inhibitor {
-                        ArcKind::Inhibitor
-                    } else {
-                        ArcKind::Input
-                    };
-                    (kind, p, t)
-                }
-                (NodeRef::Transition(t), NodeRef::Place(p)) => {
-                    if *inhibitor {
-                        return Err(EditError::InhibitorFromTransition {
-                            from: t.clone(),
-                            to: p.clone(),
-                        });
-                    }
-                    (ArcKind::Output, p, t)
-                }
-                (NodeRef::Place(a), NodeRef::Place(b)) => {
-                    return Err(EditError::SameKind {
-                        from: a.clone(),
-                        to: b.clone(),
-                        kind: "place",
-                    });
-                }
-                (NodeRef::Transition(a), NodeRef::Transition(b)) => {
-                    return Err(EditError::SameKind {
-                        from: a.clone(),
-                        to: b.clone(),
-                        kind: "transition",
-                    });
-                }
-            };
-            let p = n.place(place)?;
-            let t = n.transition(transition)?;
-            let owner = arc_owner(kind, place, transition);
-            let weight = match weight {
-                Some(w) => w.whole("arc multiplicity", &owner, 1)?,
-                None => 1,
-            };
-            n.arcs.push(Arc {
-                kind,
-                place: PlaceId(p as u32),
-                transition: TransitionId(t as u32),
-                weight,
-                points: Vec::new(),
-            });
-            match kind {
-                ArcKind::Input => format!("add arc {place} → {transition}"),
-                ArcKind::Output => format!("add arc {transition} → {place}"),
-                ArcKind::Inhibitor => format!("add inhibitor arc {place} ⊸ {transition}"),
-            }
-        }
-        Edit::Delete { node } => {
-            let (what, name, arcs) = match node {
-                NodeRef::Place(name) => ("place", name, n.remove(true, n.place(name)?)),
-                NodeRef::Transition(name) => {
-                    ("transition", name, n.remove(false, n.transition(name)?))
-                }
-            };
-            match arcs {
-                0 => format!("delete {what} {name}"),
-                1 => format!("delete {what} {name} and its arc"),
-                k => format!("delete {what} {name} and its {k} arcs"),
-            }
-        }
-        Edit::DeleteArc {
-            place,
-            transition,
-            kind,
-        } => {
-            let found = n.arcs_between(place, transition, *kind)?;
-            for i in found.into_iter().rev() {
-                n.arcs.remove(i);
-            }
-            format!(
-                "delete {} arc {place} – {transition}",
-                kind_name(kind.kind())
-            )
-        }
-        Edit::SetPlace {
-            place,
-            name,
-            tokens,
-            capacity,
-        } => {
-            let i = n.place(place)?;
-            if name.is_none() && tokens.is_none() && capacity.is_none() {
-                return Err(EditError::Nothing);
-            }
-            let mut what = Vec::new();
-            let p = &mut n.places[i];
-            if let Some(new) = name {
-                check_name("place", new)?;
-                what.push(format!("name {new}"));
-                p.name = new.clone();
-            }
-            if let Some(k) = tokens {
-                p.initial = k.whole("initial marking", &p.name, 0)?;
-                what.push(format!("tokens {}", p.initial));
-            }
-            if let Some(c) = capacity {
-                p.capacity = match c {
-                    Some(c) => Some(c.whole("capacity", &p.name, 1)?),
-                    None => None,
-                };
-                what.push(match p.capacity {
-                    Some(c) => format!("capacity {c}"),
-                    None => "unbounded".to_string(),
-                });
-            }
-            format!("change place {place} ({})", what.join(", "))
-        }
-        Edit::SetTransition {
-            transition,
-            name,
-            kind,
-            rate,
-            servers,
-            weight,
-            priority,
-        } => {
-            let i = n.transition(transition)?;
-            let nothing = [rate, servers, weight, priority]
-                .iter()
-                .all(|v| v.is_none());
-            if name.is_none() && kind.is_none() && nothing {
-                return Err(EditError::Nothing);
-            }
-            let t = &mut n.transitions[i];
-            let mut what = Vec::new();
-            if let Some(new) = name {
-                check_name("transition", new)?;
-                what.push(format!("name {new}"));
-                t.name = new.clone();
-            }
-            let current = if t.is_immediate() {
-                Kind::Immediate
-            } else {
-                Kind::Exponential
-            };
-            let kind = kind.unwrap_or(current);
-            if kind != current || !nothing {
-                let before = t.timing;
-                t.timing = timing(
-                    &t.name,
-                    kind,
-                    Some(t.timing),
-                    rate,
-                    servers,
-                    weight,
-                    priority,
-                )?;
-                what.push(describe_timing(before, t.timing));
-            }
-            format!("change transition {transition} ({})", what.join(", "))
-        }
-        Edit::SetArc {
-            place,
-            transition,
-            kind,
-            weight,
-            new_kind,
-        } => {
-            let found = n.arcs_between(place, transition, *kind)?;
-            if weight.is_none() && new_kind.is_none() {
-                return Err(EditError::Nothing);
-            }
-            let mut arc = n.arcs[found[0]].clone();
-            for &i in found.iter().skip(1).rev() {
-                n.arcs.remove(i);
-            }
-            let mut what = Vec::new();
-            if let Some(k) = new_kind
-                && *k != *kind
-            {
-                if *kind == ArcKindName::Output || *k == ArcKindName::Output {
-                    return Err(EditError::KindChange {
-                        from: kind_name(kind.kind()),
-                        to: kind_name(k.kind()),
-                    });
-                }
-                arc.kind = k.kind();
-                what.push(kind_name(arc.kind).to_string());
-            }
-            if let Some(w) = weight {
-                let owner = arc_owner(arc.kind, place, transition);
-                arc.weight = w.whole("arc multiplicity", &owner, 1)?;
-                what.push(format!("multiplicity {}", arc.weight));
-            }
-            n.arcs[found[0]] = arc;
-            format!(
-                "change {} arc {place} – {transition} ({})",
-                kind_name(kind.kind()),
-                what.join(", ")
-            )
-        }
-        Edit::Move {
-            places,
-            transitions,
-        } => {
-            if places.is_empty() && transitions.is_empty() {
-                return Err(EditError::Nothing);
-            }
-            for (name, &[x, y]) in places {
-                let i = n.place(name)?;
-                n.places[i].position = Some(position(name, x, y)?);
-            }
-            for (name, &[x, y]) in transitions {
-                let i = n.transition(name)?;
-                n.transitions[i].position = Some(position(name, x, y)?);
-            }
-            match places.len() + transitions.len() {
-                1 => format!(
-                    "move {}",
-                    places.keys().chain(transitions.keys()).next().expect("one")
-                ),
-                k => format!("move {k} nodes"),
-            }
-        }
-    };
+        Edit::AddPlace(e) => e.apply(&mut n),
+        Edit::AddTransition(e) => e.apply(&mut n),
+        Edit::AddArc(e) => e.apply(&mut n),
+        Edit::Delete(e) => e.apply(&mut n),
+        Edit::DeleteArc(e) => e.apply(&mut n),
+        Edit::SetPlace(e) => e.apply(&mut n),
+        Edit::SetTransition(e) => e.apply(&mut n),
+        Edit::SetArc(e) => e.apply(&mut n),
+        Edit::Move(e) => e.apply(&mut n),
+    }?;
     Ok((n.build()?, label))
 }
 

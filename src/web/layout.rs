@@ -163,253 +163,24 @@ pub fn with_positions(
 }
 
 /// Nodes are places `0..np` then transitions `np..np+nt`; every arc is an edge from its
-/// source to its target (an inhibitor arc from its place).
+/// source to its target (an inhibitor arc from its place). The phases of the module's
+/// method, one function each: [`Slots::new`] (cycles broken, layers, placeholders),
+/// [`Slots::order`] (order within the layers), [`Slots::rows`], [`Bands::fold`] (columns
+/// and bands), [`Slots::route`] (the arcs).
 fn layered(net: &Net) -> Layout {
     let np = net.place_count();
     let n = np + net.transition_count();
-    let edges: Vec<(usize, usize)> = net
-        .arcs()
-        .iter()
-        .map(|a| {
-            let (p, t) = (a.place.index(), np + a.transition.index());
-            match a.kind {
-                ArcKind::Output => (t, p),
-                ArcKind::Input | ArcKind::Inhibitor => (p, t),
-            }
-        })
-        .collect();
-    let marked: Vec<usize> = (0..np).filter(|&i| net.places()[i].initial > 0).collect();
-    let reversed = back_edges(n, &edges, &marked);
-    // The edges of the acyclic graph: back edges turned round.
-    let dag: Vec<(usize, usize)> = edges
-        .iter()
-        .zip(&reversed)
-        .map(|(&(u, v), &r)| if r { (v, u) } else { (u, v) })
-        .collect();
-    let layer = layers(n, &dag);
-
-    let layer_count = layer.iter().map(|&l| l + 1).max().unwrap_or(0);
-
-    // Slots: the nodes, then one placeholder per layer an arc passes through. An arc that was
-    // turned round runs back through the layers it spans, or, when that is shorter, on to the
-    // last layer and round to the first (the bands fold so that these are near each other):
-    // the arc that closes a long cycle.
-    let mut slot_layer: Vec<usize> = layer.clone();
-    let mut chains: Vec<Vec<usize>> = Vec::with_capacity(edges.len());
-    let mut flipped = vec![false; edges.len()];
-    let through =
-        |slot_layer: &mut Vec<usize>, chain: &mut Vec<usize>, ls: std::ops::Range<usize>| {
-            for l in ls {
-                chain.push(slot_layer.len());
-                slot_layer.push(l);
-            }
-        };
-    for (e, &(u, v)) in edges.iter().enumerate() {
-        let (a, b) = (layer[u], layer[v]);
-        let mut chain = Vec::new();
-        if !reversed[e] {
-            chain.push(u);
-            through(&mut slot_layer, &mut chain, a + 1..b);
-            chain.push(v);
-        } else if layer_count - 1 - a + b < a - b - 1 {
-            chain.push(u);
-            through(&mut slot_layer, &mut chain, a + 1..layer_count);
-            through(&mut slot_layer, &mut chain, 0..b);
-            chain.push(v);
-        } else {
-            chain.push(v);
-            through(&mut slot_layer, &mut chain, b + 1..a);
-            chain.push(u);
-            flipped[e] = true;
-        }
-        chains.push(chain);
-    }
-    let slots = slot_layer.len();
-    let mut up: Vec<Vec<usize>> = vec![Vec::new(); slots];
-    let mut down: Vec<Vec<usize>> = vec![Vec::new(); slots];
-    for chain in &chains {
-        for w in chain.windows(2) {
-            down[w[0]].push(w[1]);
-            up[w[1]].push(w[0]);
-        }
-    }
-    let mut layers: Vec<Vec<usize>> = vec![Vec::new(); layer_count];
-    for s in first_seen_order(slots, &down, &marked) {
-        layers[slot_layer[s]].push(s);
-    }
-    order_layers(&mut layers, &up, &down, slots);
-
-    // Rows: each layer keeps its order, nodes at least DY apart, pulled towards the rows of
-    // their neighbours (a few sweeps each way).
-    let mut y = vec![0.0; slots];
-    for nodes in &layers {
-        for (i, &s) in nodes.iter().enumerate() {
-            y[s] = i as f64 * DY;
-        }
-    }
-    for _ in 0..6 {
-        for l in (1..layer_count).chain((0..layer_count.saturating_sub(1)).rev()) {
-            let nodes = &layers[l];
-            let target: Vec<f64> = nodes
-                .iter()
-                .map(|&s| {
-                    let nb: Vec<usize> = up[s].iter().chain(&down[s]).copied().collect();
-                    if nb.is_empty() {
-                        y[s]
-                    } else {
-                        nb.iter().map(|&o| y[o]).sum::<f64>() / nb.len() as f64
-                    }
-                })
-                .collect();
-            for (s, v) in nodes.iter().zip(spaced(&target, DY)) {
-                y[*s] = v;
-            }
-        }
-    }
-
-    // Layers become columns, folded into bands that run left to right, then right to left
-    // (a serpentine: consecutive layers stay neighbours, a cycle closes on itself).
-    let dx = layer_gap(net);
-    let tallest = layers
-        .iter()
-        .map(|nodes| span(nodes, &y))
-        .fold(0.0f64, f64::max)
-        + 2.0 * DY;
-    let per_band = ((ASPECT * layer_count as f64 * tallest / dx).sqrt().ceil() as usize)
-        .max((1080.0 / dx).ceil() as usize)
-        .clamp(1, layer_count.max(1));
-    // An even number of bands ends on the left, where the first layer is.
-    let mut bands = layer_count.div_ceil(per_band).max(1);
-    if bands > 2 && bands % 2 == 1 {
-        bands -= 1;
-    }
-    let per_band = layer_count.div_ceil(bands).max(1);
-    let bands = layer_count.div_ceil(per_band).max(1);
-    let band_of = |l: usize| l / per_band;
-    let column = |l: usize| {
-        let (b, c) = (l / per_band, l % per_band);
-        if b % 2 == 0 { c } else { per_band - 1 - c }
-    };
-    let mut band_top = vec![40.0; bands + 1];
-    for b in 0..bands {
-        let members =
-            &layers[(b * per_band).min(layer_count)..((b + 1) * per_band).min(layer_count)];
-        if members.iter().all(Vec::is_empty) {
-            band_top[b + 1] = band_top[b];
-            continue;
-        }
-        let (lo, hi) = members
-            .iter()
-            .flatten()
-            .fold((f64::MAX, f64::MIN), |(lo, hi), &s| {
-                (lo.min(y[s]), hi.max(y[s]))
-            });
-        for &s in members.iter().flatten() {
-            y[s] += band_top[b] - lo;
-        }
-        band_top[b + 1] = band_top[b] + (hi - lo) + 2.0 * DY;
-    }
-    let pos: Vec<Position> = (0..slots)
+    let slots = Slots::new(net);
+    let layers = slots.order();
+    let mut y = slots.rows(&layers);
+    let bands = Bands::fold(&layers, &mut y, layer_gap(net));
+    let pos: Vec<Position> = (0..slots.layer.len())
         .map(|s| Position {
-            x: 40.0 + column(slot_layer[s]) as f64 * dx,
+            x: 40.0 + bands.column(slots.layer[s]) as f64 * bands.dx,
             y: y[s],
         })
         .collect();
-
-    // Arcs: straight between neighbouring layers on one row; otherwise out along the row,
-    // across in the middle of the gap between the columns (each arc in its own lane), and in
-    // along the other row. Between bands the arc goes round the outside of the end column;
-    // from the last layer to the first, round the outside of the drawing. Two arcs between
-    // the same two slots on one row run side by side.
-    let key = |a: usize, b: usize| (a.min(b), a.max(b));
-    let mut parallel: HashMap<(usize, usize), (usize, usize)> = HashMap::new();
-    for chain in &chains {
-        for w in chain.windows(2) {
-            parallel.entry(key(w[0], w[1])).or_default().0 += 1;
-        }
-    }
-    let wraps = |a: usize, b: usize| slot_layer[b] < slot_layer[a];
-    let turns = |a: usize, b: usize| band_of(slot_layer[a]) != band_of(slot_layer[b]);
-    // Per gap after a layer, the steps that change row there; the last gap also holds the
-    // steps round the outside (lanes counted outwards from the end column).
-    let mut lanes: Vec<Vec<(f64, usize, usize)>> = vec![Vec::new(); layer_count + 1];
-    for (e, chain) in chains.iter().enumerate() {
-        for (k, w) in chain.windows(2).enumerate() {
-            let gap = if wraps(w[0], w[1]) {
-                layer_count
-            } else if (pos[w[0]].y - pos[w[1]].y).abs() > 1e-9 || turns(w[0], w[1]) {
-                slot_layer[w[0]]
-            } else {
-                continue;
-            };
-            lanes[gap].push(((pos[w[0]].y + pos[w[1]].y) / 2.0, e, k));
-        }
-    }
-    let mut lane_x: Vec<Vec<f64>> = chains.iter().map(|c| vec![0.0; c.len() - 1]).collect();
-    for (l, gap) in lanes.iter_mut().enumerate() {
-        gap.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let m = gap.len() as f64;
-        let step = (LANES / m).min(LANE);
-        for (j, &(_, e, k)) in gap.iter().enumerate() {
-            lane_x[e][k] = if l == layer_count {
-                j as f64 * LANE
-            } else {
-                (j as f64 - (m - 1.0) / 2.0) * step
-            };
-        }
-    }
-    let left = 40.0 - dx / 2.0;
-    let right = 40.0 + (per_band - 1) as f64 * dx + dx / 2.0;
-    let bottom = band_top[bands] - DY;
-    let arcs: Vec<Vec<Position>> = chains
-        .iter()
-        .enumerate()
-        .map(|(e, chain)| {
-            let mut pts: Vec<Position> = Vec::new();
-            for (k, w) in chain.windows(2).enumerate() {
-                let (a, b) = (pos[w[0]], pos[w[1]]);
-                if k > 0 {
-                    pts.push(a);
-                }
-                let at = |x: f64, y: f64| Position { x, y };
-                let lane = lane_x[e][k];
-                if wraps(w[0], w[1]) {
-                    if bands % 2 == 0 {
-                        pts.extend([at(left - lane, a.y), at(left - lane, b.y)]);
-                    } else {
-                        let low = bottom + lane;
-                        pts.extend([at(right + lane, a.y), at(right + lane, low)]);
-                        pts.extend([at(left - lane, low), at(left - lane, b.y)]);
-                    }
-                    continue;
-                }
-                let xm = if turns(w[0], w[1]) {
-                    let out = if band_of(slot_layer[w[0]]) % 2 == 0 {
-                        1.0
-                    } else {
-                        -1.0
-                    };
-                    a.x + out * (dx / 2.0 + lane)
-                } else if (a.y - b.y).abs() > 1e-9 {
-                    (a.x + b.x) / 2.0 + lane
-                } else {
-                    let (count, seen) = parallel.get_mut(&key(w[0], w[1])).expect("counted");
-                    if *count > 1 {
-                        let o = (*seen as f64 - (*count - 1) as f64 / 2.0) * 8.0;
-                        *seen += 1;
-                        let d = (b.x - a.x) * 0.3;
-                        pts.extend([at(a.x + d, a.y + o), at(b.x - d, b.y + o)]);
-                    }
-                    continue;
-                };
-                pts.extend([at(xm, a.y), at(xm, b.y)]);
-            }
-            if flipped[e] {
-                pts.reverse();
-            }
-            pts
-        })
-        .collect();
+    let arcs = slots.route(&bands, &pos);
     let mut nodes = pos;
     nodes.truncate(n);
     let transitions = nodes.split_off(np);
@@ -418,6 +189,334 @@ fn layered(net: &Net) -> Layout {
         transitions,
         arcs,
         source: LayoutSource::Layered,
+    }
+}
+
+/// The layered graph: the nodes, then one placeholder per layer an arc passes through.
+struct Slots {
+    /// The layer of each slot.
+    layer: Vec<usize>,
+    /// How many layers.
+    layer_count: usize,
+    /// Per arc, the slots it runs through, in layer order.
+    chains: Vec<Vec<usize>>,
+    /// Per arc, whether its chain runs against the arc (a turned-round arc drawn back).
+    flipped: Vec<bool>,
+    /// Per slot, the slots one layer before it on a chain.
+    up: Vec<Vec<usize>>,
+    /// Per slot, the slots one layer after it on a chain.
+    down: Vec<Vec<usize>>,
+    /// The marked places, where the walks start.
+    marked: Vec<usize>,
+}
+
+impl Slots {
+    /// Cycles broken (the back edges of a depth-first walk from the marked places turned
+    /// round), each node one layer past its furthest predecessor, and a placeholder in each
+    /// layer an arc crosses.
+    fn new(net: &Net) -> Slots {
+        let np = net.place_count();
+        let n = np + net.transition_count();
+        let edges: Vec<(usize, usize)> = net
+            .arcs()
+            .iter()
+            .map(|a| {
+                let (p, t) = (a.place.index(), np + a.transition.index());
+                match a.kind {
+                    ArcKind::Output => (t, p),
+                    ArcKind::Input | ArcKind::Inhibitor => (p, t),
+                }
+            })
+            .collect();
+        let marked: Vec<usize> = (0..np).filter(|&i| net.places()[i].initial > 0).collect();
+        let reversed = back_edges(n, &edges, &marked);
+        // The edges of the acyclic graph: back edges turned round.
+        let dag: Vec<(usize, usize)> = edges
+            .iter()
+            .zip(&reversed)
+            .map(|(&(u, v), &r)| if r { (v, u) } else { (u, v) })
+            .collect();
+        let layer = layers(n, &dag);
+        let layer_count = layer.iter().map(|&l| l + 1).max().unwrap_or(0);
+
+        // An arc that was turned round runs back through the layers it spans, or, when that
+        // is shorter, on to the last layer and round to the first (the bands fold so that
+        // these are near each other): the arc that closes a long cycle.
+        let mut slot_layer: Vec<usize> = layer.clone();
+        let mut chains: Vec<Vec<usize>> = Vec::with_capacity(edges.len());
+        let mut flipped = vec![false; edges.len()];
+        let through =
+            |slot_layer: &mut Vec<usize>, chain: &mut Vec<usize>, ls: std::ops::Range<usize>| {
+                for l in ls {
+                    chain.push(slot_layer.len());
+                    slot_layer.push(l);
+                }
+            };
+        for (e, &(u, v)) in edges.iter().enumerate() {
+            let (a, b) = (layer[u], layer[v]);
+            let mut chain = Vec::new();
+            if !reversed[e] {
+                chain.push(u);
+                through(&mut slot_layer, &mut chain, a + 1..b);
+                chain.push(v);
+            } else if layer_count - 1 - a + b < a - b - 1 {
+                chain.push(u);
+                through(&mut slot_layer, &mut chain, a + 1..layer_count);
+                through(&mut slot_layer, &mut chain, 0..b);
+                chain.push(v);
+            } else {
+                chain.push(v);
+                through(&mut slot_layer, &mut chain, b + 1..a);
+                chain.push(u);
+                flipped[e] = true;
+            }
+            chains.push(chain);
+        }
+        let slots = slot_layer.len();
+        let mut up: Vec<Vec<usize>> = vec![Vec::new(); slots];
+        let mut down: Vec<Vec<usize>> = vec![Vec::new(); slots];
+        for chain in &chains {
+            for w in chain.windows(2) {
+                down[w[0]].push(w[1]);
+                up[w[1]].push(w[0]);
+            }
+        }
+        Slots {
+            layer: slot_layer,
+            layer_count,
+            chains,
+            flipped,
+            up,
+            down,
+            marked,
+        }
+    }
+
+    /// The slots of each layer, ordered by the mean position of their neighbours.
+    fn order(&self) -> Vec<Vec<usize>> {
+        let slots = self.layer.len();
+        let mut layers: Vec<Vec<usize>> = vec![Vec::new(); self.layer_count];
+        for s in first_seen_order(slots, &self.down, &self.marked) {
+            layers[self.layer[s]].push(s);
+        }
+        order_layers(&mut layers, &self.up, &self.down, slots);
+        layers
+    }
+
+    /// Rows: each layer keeps its order, nodes at least DY apart, pulled towards the rows
+    /// of their neighbours (a few sweeps each way).
+    fn rows(&self, layers: &[Vec<usize>]) -> Vec<f64> {
+        let layer_count = self.layer_count;
+        let mut y = vec![0.0; self.layer.len()];
+        for nodes in layers {
+            for (i, &s) in nodes.iter().enumerate() {
+                y[s] = i as f64 * DY;
+            }
+        }
+        for _ in 0..6 {
+            for l in (1..layer_count).chain((0..layer_count.saturating_sub(1)).rev()) {
+                let nodes = &layers[l];
+                let target: Vec<f64> = nodes
+                    .iter()
+                    .map(|&s| {
+                        let nb: Vec<usize> =
+                            self.up[s].iter().chain(&self.down[s]).copied().collect();
+                        if nb.is_empty() {
+                            y[s]
+                        } else {
+                            nb.iter().map(|&o| y[o]).sum::<f64>() / nb.len() as f64
+                        }
+                    })
+                    .collect();
+                for (s, v) in nodes.iter().zip(spaced(&target, DY)) {
+                    y[*s] = v;
+                }
+            }
+        }
+        y
+    }
+
+    /// Arcs: straight between neighbouring layers on one row; otherwise out along the row,
+    /// across in the middle of the gap between the columns (each arc in its own lane), and
+    /// in along the other row. Between bands the arc goes round the outside of the end
+    /// column; from the last layer to the first, round the outside of the drawing. Two arcs
+    /// between the same two slots on one row run side by side.
+    fn route(&self, bands: &Bands, pos: &[Position]) -> Vec<Vec<Position>> {
+        let slot_layer = &self.layer;
+        let dx = bands.dx;
+        let key = |a: usize, b: usize| (a.min(b), a.max(b));
+        let mut parallel: HashMap<(usize, usize), (usize, usize)> = HashMap::new();
+        for chain in &self.chains {
+            for w in chain.windows(2) {
+                parallel.entry(key(w[0], w[1])).or_default().0 += 1;
+            }
+        }
+        let wraps = |a: usize, b: usize| slot_layer[b] < slot_layer[a];
+        let turns =
+            |a: usize, b: usize| bands.band_of(slot_layer[a]) != bands.band_of(slot_layer[b]);
+        let lane_x = self.lanes(pos, &wraps, &turns);
+        let left = 40.0 - dx / 2.0;
+        let right = 40.0 + (bands.per_band - 1) as f64 * dx + dx / 2.0;
+        let bottom = bands.top[bands.count] - DY;
+        self.chains
+            .iter()
+            .enumerate()
+            .map(|(e, chain)| {
+                let mut pts: Vec<Position> = Vec::new();
+                for (k, w) in chain.windows(2).enumerate() {
+                    let (a, b) = (pos[w[0]], pos[w[1]]);
+                    if k > 0 {
+                        pts.push(a);
+                    }
+                    let at = |x: f64, y: f64| Position { x, y };
+                    let lane = lane_x[e][k];
+                    if wraps(w[0], w[1]) {
+                        if bands.count.is_multiple_of(2) {
+                            pts.extend([at(left - lane, a.y), at(left - lane, b.y)]);
+                        } else {
+                            let low = bottom + lane;
+                            pts.extend([at(right + lane, a.y), at(right + lane, low)]);
+                            pts.extend([at(left - lane, low), at(left - lane, b.y)]);
+                        }
+                        continue;
+                    }
+                    let xm = if turns(w[0], w[1]) {
+                        let out = if bands.band_of(slot_layer[w[0]]).is_multiple_of(2) {
+                            1.0
+                        } else {
+                            -1.0
+                        };
+                        a.x + out * (dx / 2.0 + lane)
+                    } else if (a.y - b.y).abs() > 1e-9 {
+                        (a.x + b.x) / 2.0 + lane
+                    } else {
+                        let (count, seen) = parallel.get_mut(&key(w[0], w[1])).expect("counted");
+                        if *count > 1 {
+                            let o = (*seen as f64 - (*count - 1) as f64 / 2.0) * 8.0;
+                            *seen += 1;
+                            let d = (b.x - a.x) * 0.3;
+                            pts.extend([at(a.x + d, a.y + o), at(b.x - d, b.y + o)]);
+                        }
+                        continue;
+                    };
+                    pts.extend([at(xm, a.y), at(xm, b.y)]);
+                }
+                if self.flipped[e] {
+                    pts.reverse();
+                }
+                pts
+            })
+            .collect()
+    }
+
+    /// Per arc and step of its chain, the offset of the lane where it changes row. Per gap
+    /// after a layer, the steps that change row there; the last gap also holds the steps
+    /// round the outside (lanes counted outwards from the end column).
+    fn lanes(
+        &self,
+        pos: &[Position],
+        wraps: &impl Fn(usize, usize) -> bool,
+        turns: &impl Fn(usize, usize) -> bool,
+    ) -> Vec<Vec<f64>> {
+        let layer_count = self.layer_count;
+        let mut lanes: Vec<Vec<(f64, usize, usize)>> = vec![Vec::new(); layer_count + 1];
+        for (e, chain) in self.chains.iter().enumerate() {
+            for (k, w) in chain.windows(2).enumerate() {
+                let gap = if wraps(w[0], w[1]) {
+                    layer_count
+                } else if (pos[w[0]].y - pos[w[1]].y).abs() > 1e-9 || turns(w[0], w[1]) {
+                    self.layer[w[0]]
+                } else {
+                    continue;
+                };
+                lanes[gap].push(((pos[w[0]].y + pos[w[1]].y) / 2.0, e, k));
+            }
+        }
+        let mut lane_x: Vec<Vec<f64>> =
+            self.chains.iter().map(|c| vec![0.0; c.len() - 1]).collect();
+        for (l, gap) in lanes.iter_mut().enumerate() {
+            gap.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let m = gap.len() as f64;
+            let step = (LANES / m).min(LANE);
+            for (j, &(_, e, k)) in gap.iter().enumerate() {
+                lane_x[e][k] = if l == layer_count {
+                    j as f64 * LANE
+                } else {
+                    (j as f64 - (m - 1.0) / 2.0) * step
+                };
+            }
+        }
+        lane_x
+    }
+}
+
+/// Layers become columns, folded into bands that run left to right, then right to left (a
+/// serpentine: consecutive layers stay neighbours, a cycle closes on itself).
+struct Bands {
+    /// Distance between columns.
+    dx: f64,
+    /// Layers per band.
+    per_band: usize,
+    /// How many bands.
+    count: usize,
+    /// The top row of each band, and below the last one.
+    top: Vec<f64>,
+}
+
+impl Bands {
+    /// Folds the layers into bands, moving each band's rows `y` below the one before.
+    fn fold(layers: &[Vec<usize>], y: &mut [f64], dx: f64) -> Bands {
+        let layer_count = layers.len();
+        let tallest = layers
+            .iter()
+            .map(|nodes| span(nodes, y))
+            .fold(0.0f64, f64::max)
+            + 2.0 * DY;
+        let per_band = ((ASPECT * layer_count as f64 * tallest / dx).sqrt().ceil() as usize)
+            .max((1080.0 / dx).ceil() as usize)
+            .clamp(1, layer_count.max(1));
+        // An even number of bands ends on the left, where the first layer is.
+        let mut bands = layer_count.div_ceil(per_band).max(1);
+        if bands > 2 && bands % 2 == 1 {
+            bands -= 1;
+        }
+        let per_band = layer_count.div_ceil(bands).max(1);
+        let bands = layer_count.div_ceil(per_band).max(1);
+        let mut top = vec![40.0; bands + 1];
+        for b in 0..bands {
+            let members =
+                &layers[(b * per_band).min(layer_count)..((b + 1) * per_band).min(layer_count)];
+            if members.iter().all(Vec::is_empty) {
+                top[b + 1] = top[b];
+                continue;
+            }
+            let (lo, hi) = members
+                .iter()
+                .flatten()
+                .fold((f64::MAX, f64::MIN), |(lo, hi), &s| {
+                    (lo.min(y[s]), hi.max(y[s]))
+                });
+            for &s in members.iter().flatten() {
+                y[s] += top[b] - lo;
+            }
+            top[b + 1] = top[b] + (hi - lo) + 2.0 * DY;
+        }
+        Bands {
+            dx,
+            per_band,
+            count: bands,
+            top,
+        }
+    }
+
+    fn band_of(&self, layer: usize) -> usize {
+        layer / self.per_band
+    }
+
+    /// The column of a layer: bands alternate direction.
+    fn column(&self, layer: usize) -> usize {
+        let (b, c) = (layer / self.per_band, layer % self.per_band);
+        if b % 2 == 0 { c } else { self.per_band - 1 - c }
     }
 }
 

@@ -310,6 +310,32 @@ fn monte_carlo_does_not_depend_on_the_thread_count() {
     assert_eq!(one.firings, 37 * 300);
 }
 
+/// Issue 31: the blocks of runs go to rayon's pool; the estimates, rewards included, stay
+/// the same bits on 1, 2 and 4 threads and on the global pool.
+#[test]
+fn monte_carlo_on_rayon_gives_the_same_bits_on_1_2_and_4_threads() {
+    use gspn::analysis::decision::{PlaceMode, RewardSpec};
+    let net = cyc3(Servers::Single);
+    let rewards = [RewardSpec {
+        name: "busy".into(),
+        places: vec![(PlaceId(0), 1.5, PlaceMode::PerToken)],
+        transitions: vec![(TransitionId(1), 0.25)],
+    }];
+    let mc = MonteCarlo::new(&net, Horizon::Until(40.0))
+        .runs(45)
+        .seed(31)
+        .rewards(&rewards);
+    let one = mc.clone().threads(1).run().unwrap();
+    let two = mc.clone().threads(2).run().unwrap();
+    let four = mc.clone().threads(4).run().unwrap();
+    assert_eq!(one, two);
+    assert_eq!(one, four);
+    assert_eq!(one.runs, 45);
+    assert_eq!(one.rewards.len(), 1);
+    // The global pool (threads 0) too.
+    assert_eq!(one, mc.run().unwrap());
+}
+
 #[test]
 fn monte_carlo_refuses_bad_arguments() {
     let net = cyc3(Servers::Single);

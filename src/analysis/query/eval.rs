@@ -266,7 +266,7 @@ fn solve_on(chain: &Ctmc, keep: &[bool], b: &[f64]) -> Result<Vec<f64>, QueryErr
         return Ok(x);
     }
     let sol = crate::analysis::ctmc::lu::solve(states.len(), &triplets, &rhs)
-        .map_err(QueryError::Solve)?;
+        .map_err(|e| QueryError::Solve(e.to_string()))?;
     for (k, &s) in states.iter().enumerate() {
         x[s] = sol[k];
     }

@@ -174,6 +174,9 @@ impl Reader<'_> {
     }
 }
 
+/// Parses `text`: the operator (with a reward structure's name for `R`,
+/// [`Reader::reward_name`]), `=?`, then the bracketed body the operator takes
+/// ([`Reader::probability`], [`Reader::time`], [`Reader::reward`]).
 pub(super) fn parse(net: &Net, rewards: &[RewardSpec], text: &str) -> Result<Query, QueryError> {
     let mut r = Reader {
         chars: text.chars().collect(),
@@ -193,41 +196,7 @@ pub(super) fn parse(net: &Net, rewards: &[RewardSpec], text: &str) -> Result<Que
                 format!("unknown operator `{op}`: write `R{{\"name\"}}=?`"),
             ));
         }
-        r.expect("{", "`{\"name\"}` after R")?;
-        r.skip_space();
-        let name_col = r.column();
-        if !r.eat("\"") {
-            return Err(err(
-                name_col,
-                "expected the reward structure's name in quotes",
-            ));
-        }
-        let start = r.pos;
-        while r.peek().is_some_and(|c| c != '"') {
-            r.pos += 1;
-        }
-        if r.peek().is_none() {
-            return Err(err(name_col, "unclosed `\"`"));
-        }
-        let name: String = r.chars[start..r.pos].iter().collect();
-        r.pos += 1;
-        r.expect("}", "`}`")?;
-        let idx = rewards.iter().position(|s| s.name == name).ok_or_else(|| {
-            let known: Vec<&str> = rewards.iter().map(|s| s.name.as_str()).collect();
-            QueryError::Syntax {
-                column: name_col,
-                name: Some(name.clone()),
-                message: if known.is_empty() {
-                    format!("no reward structure `{name}`: the plan has no `[rewards.NAME]`")
-                } else {
-                    format!(
-                        "no reward structure `{name}` (the plan has {})",
-                        known.join(", ")
-                    )
-                },
-            }
-        })?;
-        reward = Some(idx);
+        reward = Some(r.reward_name(rewards)?);
         suffix = r.word();
     }
     let extreme = match suffix.as_str() {
@@ -256,97 +225,145 @@ pub(super) fn parse(net: &Net, rewards: &[RewardSpec], text: &str) -> Result<Que
     let open_col = r.pos;
     let close = r.closing(open_col)?;
     r.skip_space();
-    let body_col = r.column();
-    let kind = match letter {
-        "P" => {
-            if r.path_op('F') {
-                let bound = r.bound()?;
-                Kind::Until {
-                    safe: None,
-                    goal: r.formula(r.pos, close)?,
-                    bound,
-                }
-            } else if r.path_op('G') {
-                let bound = r.bound()?;
-                Kind::Globally {
-                    phi: r.formula(r.pos, close)?,
-                    bound,
-                }
-            } else if let Some(u) = r.until(r.pos, close) {
-                let safe = r.formula(r.pos, u)?;
-                r.pos = u + 1;
-                let bound = r.bound()?;
-                Kind::Until {
-                    safe: Some(safe),
-                    goal: r.formula(r.pos, close)?,
-                    bound,
-                }
-            } else {
-                return Err(err(
-                    body_col,
-                    "expected a path formula: `F φ`, `F<=t φ`, `G<=t φ` or `φ1 U φ2`",
-                ));
-            }
-        }
-        "T" => {
-            if !r.path_op('F') {
-                return Err(err(body_col, "expected `F φ`: T=? asks the time until φ"));
-            }
-            if r.bound()?.is_some() {
-                return Err(err(body_col + 1, "T=? [F φ] takes no time bound"));
-            }
-            Kind::Time {
-                goal: r.formula(r.pos, close)?,
-            }
-        }
-        "S" => Kind::Steady {
+    let kind = match (letter, reward) {
+        ("P", _) => r.probability(close)?,
+        ("T", _) => r.time(close)?,
+        ("S", _) => Kind::Steady {
             phi: r.formula(r.pos, close)?,
         },
-        _ => {
-            let reward = reward.expect("R parsed its name");
-            let word_col = r.column();
-            let word = r.word();
-            match word.as_str() {
-                "S" | "LRA" => {
-                    r.skip_space();
-                    if r.pos != close {
-                        return Err(err(r.column(), "expected `]` after S"));
-                    }
-                    Kind::RewardSteady { reward }
-                }
-                "C" => {
-                    let Some(bound) = r.bound()? else {
-                        return Err(err(r.column(), "expected `<=t` after C"));
-                    };
-                    r.skip_space();
-                    if r.pos != close {
-                        return Err(err(r.column(), "expected `]` after the time bound"));
-                    }
-                    Kind::RewardCumulative { reward, bound }
-                }
-                "F" => {
-                    if r.bound()?.is_some() {
-                        return Err(err(word_col + 1, "R=? [F φ] takes no time bound"));
-                    }
-                    Kind::RewardReach {
-                        reward,
-                        goal: r.formula(r.pos, close)?,
-                    }
-                }
-                _ => {
-                    return Err(err(
-                        word_col,
-                        "expected `S`, `C<=t` or `F φ` after R{\"name\"}=?",
-                    ));
-                }
-            }
-        }
+        (_, Some(reward)) => r.reward(reward, close)?,
+        _ => unreachable!("R parsed its name"),
     };
     Ok(Query {
         text: text.to_string(),
         kind,
         extreme,
     })
+}
+
+impl Reader<'_> {
+    /// `{"name"}` after `R`: the index of the reward structure it names.
+    fn reward_name(&mut self, rewards: &[RewardSpec]) -> Result<usize, QueryError> {
+        self.expect("{", "`{\"name\"}` after R")?;
+        self.skip_space();
+        let name_col = self.column();
+        if !self.eat("\"") {
+            return Err(err(
+                name_col,
+                "expected the reward structure's name in quotes",
+            ));
+        }
+        let start = self.pos;
+        while self.peek().is_some_and(|c| c != '"') {
+            self.pos += 1;
+        }
+        if self.peek().is_none() {
+            return Err(err(name_col, "unclosed `\"`"));
+        }
+        let name: String = self.chars[start..self.pos].iter().collect();
+        self.pos += 1;
+        self.expect("}", "`}`")?;
+        rewards.iter().position(|s| s.name == name).ok_or_else(|| {
+            let known: Vec<&str> = rewards.iter().map(|s| s.name.as_str()).collect();
+            QueryError::Syntax {
+                column: name_col,
+                name: Some(name.clone()),
+                message: if known.is_empty() {
+                    format!("no reward structure `{name}`: the plan has no `[rewards.NAME]`")
+                } else {
+                    format!(
+                        "no reward structure `{name}` (the plan has {})",
+                        known.join(", ")
+                    )
+                },
+            }
+        })
+    }
+
+    /// The body of `P=? [...]`: `F φ`, `F<=t φ`, `G<=t φ` or `φ1 U φ2`, up to `close`.
+    fn probability(&mut self, close: usize) -> Result<Kind, QueryError> {
+        let body_col = self.column();
+        if self.path_op('F') {
+            let bound = self.bound()?;
+            Ok(Kind::Until {
+                safe: None,
+                goal: self.formula(self.pos, close)?,
+                bound,
+            })
+        } else if self.path_op('G') {
+            let bound = self.bound()?;
+            Ok(Kind::Globally {
+                phi: self.formula(self.pos, close)?,
+                bound,
+            })
+        } else if let Some(u) = self.until(self.pos, close) {
+            let safe = self.formula(self.pos, u)?;
+            self.pos = u + 1;
+            let bound = self.bound()?;
+            Ok(Kind::Until {
+                safe: Some(safe),
+                goal: self.formula(self.pos, close)?,
+                bound,
+            })
+        } else {
+            Err(err(
+                body_col,
+                "expected a path formula: `F φ`, `F<=t φ`, `G<=t φ` or `φ1 U φ2`",
+            ))
+        }
+    }
+
+    /// The body of `T=? [F φ]`.
+    fn time(&mut self, close: usize) -> Result<Kind, QueryError> {
+        let body_col = self.column();
+        if !self.path_op('F') {
+            return Err(err(body_col, "expected `F φ`: T=? asks the time until φ"));
+        }
+        if self.bound()?.is_some() {
+            return Err(err(body_col + 1, "T=? [F φ] takes no time bound"));
+        }
+        Ok(Kind::Time {
+            goal: self.formula(self.pos, close)?,
+        })
+    }
+
+    /// The body of `R{"name"}=? [...]`: `S` (or `LRA`), `C<=t` or `F φ`.
+    fn reward(&mut self, reward: usize, close: usize) -> Result<Kind, QueryError> {
+        let word_col = self.column();
+        let word = self.word();
+        match word.as_str() {
+            "S" | "LRA" => {
+                self.skip_space();
+                if self.pos != close {
+                    return Err(err(self.column(), "expected `]` after S"));
+                }
+                Ok(Kind::RewardSteady { reward })
+            }
+            "C" => {
+                let Some(bound) = self.bound()? else {
+                    return Err(err(self.column(), "expected `<=t` after C"));
+                };
+                self.skip_space();
+                if self.pos != close {
+                    return Err(err(self.column(), "expected `]` after the time bound"));
+                }
+                Ok(Kind::RewardCumulative { reward, bound })
+            }
+            "F" => {
+                if self.bound()?.is_some() {
+                    return Err(err(word_col + 1, "R=? [F φ] takes no time bound"));
+                }
+                Ok(Kind::RewardReach {
+                    reward,
+                    goal: self.formula(self.pos, close)?,
+                })
+            }
+            _ => Err(err(
+                word_col,
+                "expected `S`, `C<=t` or `F φ` after R{\"name\"}=?",
+            )),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -9,7 +9,9 @@ use rustc_hash::FxHashMap;
 use super::scan::{Attr, Kind, Record, Scanned};
 use crate::io::expr::{EvalError, Expr, ExprError};
 use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span};
-use crate::net::{ArcKind, NetBuilder, Place, PlaceId, Position, Servers, Timing, Transition};
+use crate::net::{
+    ArcKind, NetBuilder, Place, PlaceId, Position, Servers, Timing, Transition, TransitionId,
+};
 
 /// How many constants may stand in a chain, each defined by the next (`A = B + 1`,
 /// `B = C * 2`, ...). Each link evaluates an expression up to
@@ -117,13 +119,13 @@ impl Env<'_> {
                 (Some(v), _) => *v,
                 (None, Some(b)) => {
                     let v = self.value(b, name)?;
-                    check_template_type(t, v).map_err(|reason| {
+                    check_template_type(t, v).map_err(|e| {
                         self.error(
                             b.at,
                             LoadErrorKind::Expression {
                                 expr: b.value.to_string(),
                                 name: name.to_string(),
-                                reason,
+                                reason: e.to_string(),
                             },
                         )
                     })?;
@@ -189,14 +191,10 @@ impl Env<'_> {
         attr: &Attr,
         owner: &str,
         what: &'static str,
-        ok: fn(f64) -> bool,
-        expected: &'static str,
+        check: fn(f64) -> Result<f64, &'static str>,
     ) -> Result<f64, LoadError> {
         let v = self.value(attr, owner)?;
-        if ok(v) {
-            return Ok(v);
-        }
-        Err(self.out_of_range(attr, owner, what, v, expected))
+        check(v).map_err(|expected| self.out_of_range(attr, owner, what, v, expected))
     }
 
     fn coord(&self, attr: &Attr, owner: &str, what: &'static str) -> Result<f64, LoadError> {
@@ -232,11 +230,14 @@ fn shown(attr: &Attr, v: f64) -> String {
     }
 }
 
-fn check_template_type(t: &Record, v: f64) -> Result<(), String> {
+/// A template parameter's value that its type refuses: a fraction for an INTEGER.
+#[derive(Debug, thiserror::Error)]
+#[error("{0} is not a whole number, but the parameter is INTEGER")]
+struct NotInteger(f64);
+
+fn check_template_type(t: &Record, v: f64) -> Result<(), NotInteger> {
     if t.get("type").is_some_and(|ty| ty.value == "INTEGER") && v.fract() != 0.0 {
-        return Err(format!(
-            "{v} is not a whole number, but the parameter is INTEGER"
-        ));
+        return Err(NotInteger(v));
     }
     Ok(())
 }
@@ -253,92 +254,19 @@ fn name_of<'r>(env: &Env<'_>, r: &'r Record, what: &str) -> Result<&'r str, Load
     })
 }
 
+/// The page's net, read in the order its checks need: the names of constants, templates
+/// and places ([`Env::new`]), coloured places refused ([`refuse_coloured`]), the template
+/// parameters given from outside ([`Env::set_params`]), then [`places`], [`transitions`]
+/// and [`arc`]s, and the builder's own checks.
 pub(super) fn build(
     path: &Path,
     text: &str,
     scanned: &Scanned<'_>,
     opts: &ReadOptions,
 ) -> Result<Loaded, LoadError> {
-    let records = &scanned.records;
-    let of = |k: Kind| records.iter().filter(move |r| r.kind == k);
-    let mut env = Env {
-        path,
-        text,
-        page: &scanned.page,
-        constants: FxHashMap::default(),
-        templates: FxHashMap::default(),
-        places: FxHashMap::default(),
-        memo: RefCell::default(),
-        visiting: RefCell::default(),
-    };
-    for r in records {
-        let Some(name) = r.get("name").map(|a| a.value.as_ref()) else {
-            continue;
-        };
-        match r.kind {
-            Kind::Constant => {
-                env.constants.insert(name, r);
-            }
-            Kind::Template => {
-                env.templates.insert(name, (r, None));
-            }
-            Kind::Place => {
-                env.places.insert(name, ());
-            }
-            _ => {}
-        }
-    }
-    // Coloured nets first: their markings and multiplicities would fail less clearly later.
-    for r in of(Kind::Place) {
-        if let Some(d) = r.get("domain") {
-            let name = name_of(&env, r, "place")?;
-            return Err(env.error(
-                d.at,
-                LoadErrorKind::Unsupported(format!(
-                    "place `{name}` has colour domain `{}`: coloured (SWN) nets are not \
-                     supported; unfold the net first (GreatSPN's unfolding gives a P/T net)",
-                    d.value
-                )),
-            ));
-        }
-    }
-    for (k, v) in &opts.params {
-        let Some((t, slot)) = env.templates.get_mut(k.as_str()) else {
-            return Err(LoadError::file(
-                path,
-                LoadErrorKind::UnknownNode {
-                    what: "template parameter",
-                    name: k.clone(),
-                },
-            ));
-        };
-        let value = Expr::parse(v)
-            .ok()
-            .and_then(|e| e.eval(&mut |_: &str, _| Err(())).ok())
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| {
-                LoadError::file(
-                    path,
-                    LoadErrorKind::NotANumber {
-                        what: "template parameter",
-                        name: k.clone(),
-                        value: v.clone(),
-                    },
-                )
-            })?;
-        check_template_type(t, value).map_err(|reason| {
-            LoadError::file(
-                path,
-                LoadErrorKind::BadParam {
-                    name: k.clone(),
-                    value: v.clone(),
-                    reason,
-                },
-            )
-        })?;
-        *slot = Some(value);
-    }
-
+    let mut env = Env::new(path, text, scanned);
+    refuse_coloured(&env, &scanned.records)?;
+    env.set_params(opts)?;
     let net_name = if scanned.page.is_empty() {
         path.file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -347,133 +275,14 @@ pub(super) fn build(
         scanned.page.clone()
     };
     let mut b = NetBuilder::new(net_name);
-    let mut place_ids: FxHashMap<&str, PlaceId> = FxHashMap::default();
-    let duplicate = |at: usize, what: &'static str, name: &str| {
-        let name = name.to_string();
-        env.error(at, LoadErrorKind::Duplicate { what, name })
+    let ids = Ids {
+        places: places(&env, &mut b, &scanned.records)?,
+        transitions: FxHashMap::default(),
     };
-    for r in of(Kind::Place) {
-        let name = name_of(&env, r, "place")?;
-        let initial = match r.get("marking") {
-            Some(m) => env.whole(m, name, "initial marking", 0)?,
-            None => 0,
-        };
-        let position = env.position(r, name)?;
-        if place_ids.contains_key(name) {
-            return Err(duplicate(r.at, "place", name));
-        }
-        let id = b.add_place(Place {
-            name: name.to_string(),
-            initial,
-            capacity: None,
-            position,
-        });
-        place_ids.insert(name, id);
-    }
-    let mut trans_ids = FxHashMap::default();
-    let mut transition_at = Vec::new();
-    for r in of(Kind::Transition) {
-        let name = name_of(&env, r, "transition")?;
-        if let Some(g) = r.get("guard").filter(|g| g.value.trim() != "True") {
-            return Err(env.error(
-                g.at,
-                LoadErrorKind::Unsupported(format!(
-                    "transition `{name}` has guard `{}`: guards belong to coloured nets, \
-                     which are not supported",
-                    g.value
-                )),
-            ));
-        }
-        let timing = timing(&env, r, name)?;
-        if trans_ids.contains_key(name) {
-            return Err(duplicate(r.at, "transition", name));
-        }
-        let position = env.position(r, name)?;
-        let id = b.add_transition(Transition {
-            name: name.to_string(),
-            timing,
-            position,
-        });
-        trans_ids.insert(name, id);
-        transition_at.push(r.at);
-    }
-    for r in of(Kind::Arc) {
-        let get = |key: &str| {
-            r.get(key).ok_or_else(|| {
-                env.error(
-                    r.at,
-                    LoadErrorKind::Missing {
-                        what: format!("attribute `{key}` of <arc>"),
-                        name: None,
-                    },
-                )
-            })
-        };
-        // The editor writes `kind`/`mult`; files of its v100 format spell them
-        // `type`/`multiplicity` (Storm reads both).
-        let kind_attr = match r.get("kind").or_else(|| r.get("type")) {
-            Some(a) => a,
-            None => get("kind")?,
-        };
-        let (head, tail) = (get("head")?, get("tail")?);
-        let kind = match kind_attr.value.to_ascii_uppercase().as_str() {
-            "INPUT" => ArcKind::Input,
-            "OUTPUT" => ArcKind::Output,
-            "INHIBITOR" => ArcKind::Inhibitor,
-            other => {
-                return Err(env.error(
-                    kind_attr.at,
-                    LoadErrorKind::Invalid(format!(
-                        "arc kind `{other}`: expected INPUT, OUTPUT or INHIBITOR"
-                    )),
-                ));
-            }
-        };
-        let (p_attr, t_attr) = match kind {
-            ArcKind::Output => (head, tail),
-            _ => (tail, head),
-        };
-        let owner = format!("{} → {}", tail.value, head.value);
-        // An endpoint that names nothing, or a node of the other kind.
-        let missing = |attr: &Attr, what: &'static str| {
-            let name = attr.value.as_ref();
-            let other_kind = match what {
-                "place" => trans_ids.contains_key(name),
-                _ => place_ids.contains_key(name),
-            };
-            let kind = if other_kind {
-                LoadErrorKind::Invalid(format!(
-                    "{} arc {owner}: `{}` is not a {what}",
-                    kind_attr.value, attr.value
-                ))
-            } else {
-                LoadErrorKind::UnknownNode {
-                    what,
-                    name: attr.value.to_string(),
-                }
-            };
-            env.error(attr.at, kind)
-        };
-        let p = *place_ids
-            .get(p_attr.value.as_ref())
-            .ok_or_else(|| missing(p_attr, "place"))?;
-        let t = *trans_ids
-            .get(t_attr.value.as_ref())
-            .ok_or_else(|| missing(t_attr, "transition"))?;
-        let weight = match r.get("mult").or_else(|| r.get("multiplicity")) {
-            Some(m) => env.whole(m, &owner, "arc multiplicity", 1)?,
-            None => 1,
-        };
-        let points = r
-            .points
-            .iter()
-            .map(|(x, y)| {
-                Ok(Position {
-                    x: env.coord(x, &owner, "x coordinate")?,
-                    y: env.coord(y, &owner, "y coordinate")?,
-                })
-            })
-            .collect::<Result<Vec<_>, LoadError>>()?;
+    let (transitions, transition_at) = transitions(&env, &mut b, &scanned.records)?;
+    let ids = Ids { transitions, ..ids };
+    for r in scanned.records.iter().filter(|r| r.kind == Kind::Arc) {
+        let (kind, p, t, weight, points) = arc(&env, r, &ids)?;
         b.arc(kind, p, t, weight, points);
     }
     let net = b
@@ -496,6 +305,265 @@ pub(super) fn build(
     })
 }
 
+impl<'a> Env<'a> {
+    /// The page's constants, template parameters and place names, indexed by name.
+    fn new(path: &'a Path, text: &'a str, scanned: &'a Scanned<'a>) -> Env<'a> {
+        let mut env = Env {
+            path,
+            text,
+            page: &scanned.page,
+            constants: FxHashMap::default(),
+            templates: FxHashMap::default(),
+            places: FxHashMap::default(),
+            memo: RefCell::default(),
+            visiting: RefCell::default(),
+        };
+        for r in &scanned.records {
+            let Some(name) = r.get("name").map(|a| a.value.as_ref()) else {
+                continue;
+            };
+            match r.kind {
+                Kind::Constant => {
+                    env.constants.insert(name, r);
+                }
+                Kind::Template => {
+                    env.templates.insert(name, (r, None));
+                }
+                Kind::Place => {
+                    env.places.insert(name, ());
+                }
+                _ => {}
+            }
+        }
+        env
+    }
+
+    /// The template parameters given from outside (a plan's `[params]`, `--param`): each
+    /// must name a template of the page and be a number its type accepts.
+    fn set_params(&mut self, opts: &ReadOptions) -> Result<(), LoadError> {
+        let path = self.path;
+        for (k, v) in &opts.params {
+            let Some((t, slot)) = self.templates.get_mut(k.as_str()) else {
+                return Err(LoadError::file(
+                    path,
+                    LoadErrorKind::UnknownNode {
+                        what: "template parameter",
+                        name: k.clone(),
+                    },
+                ));
+            };
+            let value = Expr::parse(v)
+                .ok()
+                .and_then(|e| e.eval(&mut |_: &str, _| Err(())).ok())
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    LoadError::file(
+                        path,
+                        LoadErrorKind::NotANumber {
+                            what: "template parameter",
+                            name: k.clone(),
+                            value: v.clone(),
+                        },
+                    )
+                })?;
+            check_template_type(t, value).map_err(|e| {
+                LoadError::file(
+                    path,
+                    LoadErrorKind::BadParam {
+                        name: k.clone(),
+                        value: v.clone(),
+                        reason: e.to_string(),
+                    },
+                )
+            })?;
+            *slot = Some(value);
+        }
+        Ok(())
+    }
+}
+
+/// Coloured nets first: their markings and multiplicities would fail less clearly later.
+fn refuse_coloured(env: &Env<'_>, records: &[Record<'_>]) -> Result<(), LoadError> {
+    for r in records.iter().filter(|r| r.kind == Kind::Place) {
+        if let Some(d) = r.get("domain") {
+            let name = name_of(env, r, "place")?;
+            return Err(env.error(
+                d.at,
+                LoadErrorKind::Unsupported(format!(
+                    "place `{name}` has colour domain `{}`: coloured (SWN) nets are not \
+                     supported; unfold the net first (GreatSPN's unfolding gives a P/T net)",
+                    d.value
+                )),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The ids of the places and transitions added, by name.
+struct Ids<'a> {
+    places: FxHashMap<&'a str, PlaceId>,
+    transitions: FxHashMap<&'a str, TransitionId>,
+}
+
+fn duplicate(env: &Env<'_>, at: usize, what: &'static str, name: &str) -> LoadError {
+    let name = name.to_string();
+    env.error(at, LoadErrorKind::Duplicate { what, name })
+}
+
+/// Adds the page's places.
+fn places<'r>(
+    env: &Env<'_>,
+    b: &mut NetBuilder,
+    records: &'r [Record<'r>],
+) -> Result<FxHashMap<&'r str, PlaceId>, LoadError> {
+    let mut ids: FxHashMap<&str, PlaceId> = FxHashMap::default();
+    for r in records.iter().filter(|r| r.kind == Kind::Place) {
+        let name = name_of(env, r, "place")?;
+        let initial = match r.get("marking") {
+            Some(m) => env.whole(m, name, "initial marking", 0)?,
+            None => 0,
+        };
+        let position = env.position(r, name)?;
+        if ids.contains_key(name) {
+            return Err(duplicate(env, r.at, "place", name));
+        }
+        let id = b.add_place(Place {
+            name: name.to_string(),
+            initial,
+            capacity: None,
+            position,
+        });
+        ids.insert(name, id);
+    }
+    Ok(ids)
+}
+
+/// Adds the page's transitions; their ids, and where each starts in the file.
+#[allow(clippy::type_complexity)]
+fn transitions<'r>(
+    env: &Env<'_>,
+    b: &mut NetBuilder,
+    records: &'r [Record<'r>],
+) -> Result<(FxHashMap<&'r str, TransitionId>, Vec<usize>), LoadError> {
+    let mut ids = FxHashMap::default();
+    let mut at = Vec::new();
+    for r in records.iter().filter(|r| r.kind == Kind::Transition) {
+        let name = name_of(env, r, "transition")?;
+        if let Some(g) = r.get("guard").filter(|g| g.value.trim() != "True") {
+            return Err(env.error(
+                g.at,
+                LoadErrorKind::Unsupported(format!(
+                    "transition `{name}` has guard `{}`: guards belong to coloured nets, \
+                     which are not supported",
+                    g.value
+                )),
+            ));
+        }
+        let timing = timing(env, r, name)?;
+        if ids.contains_key(name) {
+            return Err(duplicate(env, r.at, "transition", name));
+        }
+        let position = env.position(r, name)?;
+        let id = b.add_transition(Transition {
+            name: name.to_string(),
+            timing,
+            position,
+        });
+        ids.insert(name, id);
+        at.push(r.at);
+    }
+    Ok((ids, at))
+}
+
+/// An arc record: its kind, place, transition, multiplicity and bend points.
+#[allow(clippy::type_complexity)]
+fn arc(
+    env: &Env<'_>,
+    r: &Record<'_>,
+    ids: &Ids<'_>,
+) -> Result<(ArcKind, PlaceId, TransitionId, u32, Vec<Position>), LoadError> {
+    let get = |key: &str| {
+        r.get(key).ok_or_else(|| {
+            env.error(
+                r.at,
+                LoadErrorKind::Missing {
+                    what: format!("attribute `{key}` of <arc>"),
+                    name: None,
+                },
+            )
+        })
+    };
+    // The editor writes `kind`/`mult`; files of its v100 format spell them
+    // `type`/`multiplicity` (Storm reads both).
+    let kind_attr = match r.get("kind").or_else(|| r.get("type")) {
+        Some(a) => a,
+        None => get("kind")?,
+    };
+    let (head, tail) = (get("head")?, get("tail")?);
+    let kind = match kind_attr.value.to_ascii_uppercase().as_str() {
+        "INPUT" => ArcKind::Input,
+        "OUTPUT" => ArcKind::Output,
+        "INHIBITOR" => ArcKind::Inhibitor,
+        other => {
+            return Err(env.error(
+                kind_attr.at,
+                LoadErrorKind::Invalid(format!(
+                    "arc kind `{other}`: expected INPUT, OUTPUT or INHIBITOR"
+                )),
+            ));
+        }
+    };
+    let (p_attr, t_attr) = match kind {
+        ArcKind::Output => (head, tail),
+        _ => (tail, head),
+    };
+    let owner = format!("{} → {}", tail.value, head.value);
+    // An endpoint that names nothing, or a node of the other kind.
+    let missing = |attr: &Attr, what: &'static str| {
+        let name = attr.value.as_ref();
+        let other_kind = match what {
+            "place" => ids.transitions.contains_key(name),
+            _ => ids.places.contains_key(name),
+        };
+        let kind = if other_kind {
+            LoadErrorKind::Invalid(format!(
+                "{} arc {owner}: `{}` is not a {what}",
+                kind_attr.value, attr.value
+            ))
+        } else {
+            LoadErrorKind::UnknownNode {
+                what,
+                name: attr.value.to_string(),
+            }
+        };
+        env.error(attr.at, kind)
+    };
+    let p = *ids
+        .places
+        .get(p_attr.value.as_ref())
+        .ok_or_else(|| missing(p_attr, "place"))?;
+    let t = *ids
+        .transitions
+        .get(t_attr.value.as_ref())
+        .ok_or_else(|| missing(t_attr, "transition"))?;
+    let weight = match r.get("mult").or_else(|| r.get("multiplicity")) {
+        Some(m) => env.whole(m, &owner, "arc multiplicity", 1)?,
+        None => 1,
+    };
+    let points = r
+        .points
+        .iter()
+        .map(|(x, y)| {
+            Ok(Position {
+                x: env.coord(x, &owner, "x coordinate")?,
+                y: env.coord(y, &owner, "y coordinate")?,
+            })
+        })
+        .collect::<Result<Vec<_>, LoadError>>()?;
+    Ok((kind, p, t, weight, points))
+}
+
 fn timing(env: &Env<'_>, r: &Record, name: &str) -> Result<Timing, LoadError> {
     let ty = r.get("type").map_or("EXP", |a| a.value.as_ref());
     let unsupported = |what: &str| {
@@ -510,13 +578,7 @@ fn timing(env: &Env<'_>, r: &Record, name: &str) -> Result<Timing, LoadError> {
     match ty {
         "EXP" => {
             let rate = match r.get("delay").or_else(|| r.get("rate")) {
-                Some(d) => env.real(
-                    d,
-                    name,
-                    "rate",
-                    |v| v.is_finite() && v > 0.0,
-                    "must be a finite number > 0",
-                )?,
+                Some(d) => env.real(d, name, "rate", Timing::rate)?,
                 None => 1.0,
             };
             let servers = match r.get("nservers") {
@@ -534,13 +596,7 @@ fn timing(env: &Env<'_>, r: &Record, name: &str) -> Result<Timing, LoadError> {
         }
         "IMM" => {
             let weight = match r.get("weight") {
-                Some(w) => env.real(
-                    w,
-                    name,
-                    "weight",
-                    |v| v.is_finite() && v >= 0.0,
-                    "must be a finite number ≥ 0",
-                )?,
+                Some(w) => env.real(w, name, "weight", Timing::weight)?,
                 None => 1.0,
             };
             let priority = match r.get("priority") {

@@ -91,27 +91,29 @@ enum Ctx {
     Other,
 }
 
+/// Reads the elements of `text` that make the selected page ([`Scan::open`] for each
+/// element as it opens), then checks the file as a whole ([`Scan::finish`]).
 pub(super) fn scan<'a>(
     path: &Path,
     text: &'a str,
     opts: &ReadOptions,
 ) -> Result<Scanned<'a>, LoadError> {
-    let base = text.as_ptr() as usize;
-    let err = |at: usize, kind: LoadErrorKind| {
-        LoadError::at(path, Span::locate(text.as_bytes(), at), kind)
+    let mut scan = Scan {
+        path,
+        text,
+        base: text.as_ptr() as usize,
+        opts,
+        stack: Vec::new(),
+        pages: Vec::new(),
+        chosen: None,
+        records: Vec::new(),
+        project_at: None,
     };
     let mut reader = Reader::from_str(text);
-    // Open elements: what each is, and where it starts (its name is read back from there
-    // only for the truncated-file message).
-    let mut stack: Vec<(Ctx, usize)> = Vec::new();
-    let mut pages = Vec::new();
-    let mut chosen: Option<(String, usize)> = None;
-    let mut records = Vec::new();
-    let mut project_at = None;
     loop {
         let at = reader.buffer_position() as usize;
         let event = reader.read_event().map_err(|e| {
-            err(
+            scan.err(
                 reader.error_position() as usize,
                 LoadErrorKind::Xml(e.to_string()),
             )
@@ -120,22 +122,60 @@ pub(super) fn scan<'a>(
             Event::Start(e) => (e, false),
             Event::Empty(e) => (e, true),
             Event::End(_) => {
-                stack.pop();
+                scan.stack.pop();
                 continue;
             }
             Event::Eof => break,
             _ => continue,
         };
+        let ctx = scan.open(&e, at)?;
+        if !empty {
+            scan.stack.push((ctx, at));
+        }
+    }
+    scan.finish()
+}
+
+/// The scanner's state while it reads.
+struct Scan<'a, 'p> {
+    path: &'p Path,
+    text: &'a str,
+    /// The address of `text`, to turn a borrowed attribute into an offset.
+    base: usize,
+    opts: &'p ReadOptions,
+    /// Open elements: what each is, and where it starts (its name is read back from there
+    /// only for the truncated-file message).
+    stack: Vec<(Ctx, usize)>,
+    pages: Vec<String>,
+    /// The page being read, and where it starts.
+    chosen: Option<(String, usize)>,
+    records: Vec<Record<'a>>,
+    project_at: Option<usize>,
+}
+
+impl<'a> Scan<'a, '_> {
+    fn err(&self, at: usize, kind: LoadErrorKind) -> LoadError {
+        LoadError::at(self.path, Span::locate(self.text.as_bytes(), at), kind)
+    }
+
+    /// The attributes of `e` worth keeping.
+    fn keep(&self, e: &BytesStart<'_>) -> Result<Vec<Attr<'a>>, LoadError> {
+        keep(e, self.base, self.text, &|at, kind| self.err(at, kind))
+    }
+
+    /// Element `e`, opening at `at`: what it is in its parent, and the record it adds when
+    /// it is a node or an arc of the selected page (or a point of such an arc).
+    fn open(&mut self, e: &BytesStart<'_>, at: usize) -> Result<Ctx, LoadError> {
         let local = e.local_name();
         let name: &str = local.as_ref();
-        let parent = stack.last().map(|s| s.0);
-        let ctx = match (parent, name) {
+        let parent = self.stack.last().map(|s| s.0);
+        Ok(match (parent, name) {
             (None, "project") => {
-                project_at = Some(at);
+                self.project_at = Some(at);
                 Ctx::Project
             }
             (None, other) => {
-                return Err(err(
+                return Err(self.err(
                     at,
                     LoadErrorKind::Invalid(format!(
                         "not a GreatSPN project: the root element is `<{other}>`, expected `<project>`"
@@ -143,17 +183,17 @@ pub(super) fn scan<'a>(
                 ));
             }
             (Some(Ctx::Project), "gspn") => {
-                let attrs = keep(&e, base, text, &err)?;
+                let attrs = self.keep(e)?;
                 let page = attrs
                     .iter()
                     .find(|a| a.key == "name")
                     .map(|a| a.value.to_string())
                     .unwrap_or_default();
-                pages.push(page.clone());
-                let this =
-                    chosen.is_none() && opts.page.as_ref().is_none_or(|wanted| *wanted == page);
+                self.pages.push(page.clone());
+                let this = self.chosen.is_none()
+                    && self.opts.page.as_ref().is_none_or(|wanted| *wanted == page);
                 if this {
-                    chosen = Some((page, at));
+                    self.chosen = Some((page, at));
                 }
                 Ctx::Page(this)
             }
@@ -168,29 +208,31 @@ pub(super) fn scan<'a>(
                     _ => None,
                 };
                 if let Some(kind) = kind {
-                    records.push(Record {
+                    let attrs = self.keep(e)?;
+                    self.records.push(Record {
                         kind,
                         at,
-                        attrs: keep(&e, base, text, &err)?,
+                        attrs,
                         points: Vec::new(),
                     });
                 }
                 Ctx::Other
             }
             (Some(Ctx::Edges(true)), "arc") => {
-                records.push(Record {
+                let attrs = self.keep(e)?;
+                self.records.push(Record {
                     kind: Kind::Arc,
                     at,
-                    attrs: keep(&e, base, text, &err)?,
+                    attrs,
                     points: Vec::new(),
                 });
                 Ctx::Arc
             }
             (Some(Ctx::Arc), "point") => {
-                let attrs = keep(&e, base, text, &err)?;
+                let attrs = self.keep(e)?;
                 let coord = |k: &str| {
                     attrs.iter().find(|a| a.key == k).cloned().ok_or_else(|| {
-                        err(
+                        self.err(
                             at,
                             LoadErrorKind::Missing {
                                 what: format!("attribute `{k}` of <point>"),
@@ -200,69 +242,73 @@ pub(super) fn scan<'a>(
                     })
                 };
                 let p = (coord("x")?, coord("y")?);
-                if let Some(r) = records.last_mut() {
+                if let Some(r) = self.records.last_mut() {
                     r.points.push(p);
                 }
                 Ctx::Other
             }
             _ => Ctx::Other,
-        };
-        if !empty {
-            stack.push((ctx, at));
-        }
+        })
     }
-    if let Some(&(_, open_at)) = stack.last() {
-        let open: String = text[open_at..]
-            .trim_start_matches('<')
-            .chars()
-            .take_while(|c| !c.is_whitespace() && !matches!(c, '>' | '/'))
-            .collect();
-        return Err(err(
-            text.len(),
-            LoadErrorKind::Xml(format!(
-                "unexpected end of file: `<{open}>` is not closed (truncated file?)"
-            )),
-        ));
-    }
-    let Some(project_at) = project_at else {
-        return Err(LoadError::file(
-            path,
-            LoadErrorKind::Invalid("no `<project>` element: not a GreatSPN project".into()),
-        ));
-    };
-    let Some((page, page_at)) = chosen else {
-        if let Some(wanted) = &opts.page {
-            let list = pages
-                .iter()
-                .map(|p| format!("`{p}`"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            return Err(err(
-                project_at,
-                LoadErrorKind::Invalid(format!(
-                    "page `{wanted}` does not exist; this file has {}: {list}",
-                    if pages.len() == 1 {
-                        "one page"
-                    } else {
-                        "pages"
-                    }
+
+    /// The file read to its end: every element closed, a project, and the page asked for
+    /// (or a first one).
+    fn finish(mut self) -> Result<Scanned<'a>, LoadError> {
+        let text = self.text;
+        if let Some(&(_, open_at)) = self.stack.last() {
+            let open: String = text[open_at..]
+                .trim_start_matches('<')
+                .chars()
+                .take_while(|c| !c.is_whitespace() && !matches!(c, '>' | '/'))
+                .collect();
+            return Err(self.err(
+                text.len(),
+                LoadErrorKind::Xml(format!(
+                    "unexpected end of file: `<{open}>` is not closed (truncated file?)"
                 )),
             ));
         }
-        return Err(err(
-            project_at,
-            LoadErrorKind::Missing {
-                what: "a `<gspn>` page".into(),
-                name: None,
-            },
-        ));
-    };
-    Ok(Scanned {
-        page,
-        page_at,
-        pages,
-        records,
-    })
+        let Some(project_at) = self.project_at else {
+            return Err(LoadError::file(
+                self.path,
+                LoadErrorKind::Invalid("no `<project>` element: not a GreatSPN project".into()),
+            ));
+        };
+        let Some((page, page_at)) = self.chosen.take() else {
+            if let Some(wanted) = &self.opts.page {
+                let pages = &self.pages;
+                let list = pages
+                    .iter()
+                    .map(|p| format!("`{p}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                return Err(self.err(
+                    project_at,
+                    LoadErrorKind::Invalid(format!(
+                        "page `{wanted}` does not exist; this file has {}: {list}",
+                        if pages.len() == 1 {
+                            "one page"
+                        } else {
+                            "pages"
+                        }
+                    )),
+                ));
+            }
+            return Err(self.err(
+                project_at,
+                LoadErrorKind::Missing {
+                    what: "a `<gspn>` page".into(),
+                    name: None,
+                },
+            ));
+        };
+        Ok(Scanned {
+            page,
+            page_at,
+            pages: self.pages,
+            records: self.records,
+        })
+    }
 }
 
 /// The attributes of `e` that [`KEYS`] lists, unescaped, with their offsets in `text`.

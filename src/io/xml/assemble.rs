@@ -28,7 +28,9 @@ struct PendingNode {
     at: usize,
 }
 
-/// Reads a PIPE or PNML net from `bytes`.
+/// Reads a PIPE or PNML net from `bytes`: the records as they close ([`Nodes::node`],
+/// [`Nodes::arc`]), then the names made unique and checked, and the arcs whose ends came
+/// later resolved.
 pub(crate) fn read(
     path: &Path,
     bytes: &[u8],
@@ -38,17 +40,8 @@ pub(crate) fn read(
     let text = to_utf8(path, bytes)?;
     let mut x = XmlStream::new(path, &text);
     let mut warnings = Vec::new();
-    let mut ids: FxHashMap<String, NodeRef> = FxHashMap::default();
-    let mut places: Vec<(PendingNode, Place)> = Vec::new();
-    let mut transitions: Vec<(PendingNode, Transition)> = Vec::new();
-    // Arcs whose ends are known when they close are resolved at once (a few bytes each);
-    // the others wait for the end of the file.
-    let mut arcs: Vec<Resolved> = Vec::new();
-    let mut deferred: Vec<ArcRecord> = Vec::new();
-    let mut arc_ids: FxHashSet<String> = FxHashSet::default();
-    let mut dup_arc_ids = 0usize;
+    let mut nodes = Nodes::default();
     let mut vip = false;
-
     let doc = collect(
         &mut x,
         |x, doc| {
@@ -58,73 +51,9 @@ pub(crate) fn read(
             }
             Ok(())
         },
-        |x, rec| {
-            match rec {
-                Record::Node(n) => {
-                    let id = n.id.clone().ok_or_else(|| {
-                        x.error(
-                            n.at,
-                            LoadErrorKind::Missing {
-                                what: format!("attribute `id` of a {}", kind_name(n.kind)),
-                                name: n.name.as_ref().map(|v| v.text.clone()),
-                            },
-                        )
-                    })?;
-                    if id.text.is_empty() {
-                        return Err(x.error(
-                            id.at,
-                            LoadErrorKind::Missing {
-                                what: format!("the id of a {}", kind_name(n.kind)),
-                                name: None,
-                            },
-                        ));
-                    }
-                    let pending = PendingNode {
-                        id: id.text.clone(),
-                        name: n
-                            .name
-                            .as_ref()
-                            .map(|v| v.text.clone())
-                            .filter(|s| !s.is_empty()),
-                        at: id.at,
-                    };
-                    let label = pending.name.clone().unwrap_or_else(|| id.text.clone());
-                    let r = match n.kind {
-                        RecordKind::Place => {
-                            let p = place(x, &n, &label)?;
-                            places.push((pending, p));
-                            NodeRef::Place(places.len() as u32 - 1)
-                        }
-                        RecordKind::Transition => {
-                            let t = transition(x, &n, &label)?;
-                            transitions.push((pending, t));
-                            NodeRef::Transition(transitions.len() as u32 - 1)
-                        }
-                    };
-                    if ids.insert(id.text.clone(), r).is_some() {
-                        return Err(x.error(
-                            id.at,
-                            LoadErrorKind::Duplicate {
-                                what: "id",
-                                name: id.text,
-                            },
-                        ));
-                    }
-                }
-                Record::Arc(a) => {
-                    if let Some(id) = &a.id
-                        && !id.text.is_empty()
-                        && !arc_ids.insert(id.text.clone())
-                    {
-                        dup_arc_ids += 1;
-                    }
-                    match resolve_arc(x, &ids, &a, false)? {
-                        Some(r) => arcs.push(r),
-                        None => deferred.push(a),
-                    }
-                }
-            }
-            Ok(())
+        |x, rec| match rec {
+            Record::Node(n) => nodes.node(x, n),
+            Record::Arc(a) => nodes.arc(x, a),
         },
     )?;
 
@@ -134,15 +63,24 @@ pub(crate) fn read(
             doc.extra_nets
         ));
     }
-    if dup_arc_ids > 0 {
+    if nodes.dup_arc_ids > 0 {
         warnings.push(format!(
-            "{dup_arc_ids} arc id(s) repeat an earlier arc's id (arc ids are not used)"
+            "{} arc id(s) repeat an earlier arc's id (arc ids are not used)",
+            nodes.dup_arc_ids
         ));
     }
     if vip {
         warnings.push("VipTool dialect (VIPschema.xsd): read as a P/T net".into());
     }
 
+    let Nodes {
+        ids,
+        mut places,
+        mut transitions,
+        mut arcs,
+        deferred,
+        ..
+    } = nodes;
     let mut b = NetBuilder::new(net_name(path, &doc.net_name, &doc.net_id));
     let place_names = unique_names(&mut places, "place", &mut warnings);
     let transition_names = unique_names(&mut transitions, "transition", &mut warnings);
@@ -177,6 +115,92 @@ pub(crate) fn read(
         warnings,
         transition_at: Span::locate_all(&text, transition_at),
     })
+}
+
+/// The nodes and arcs read so far.
+#[derive(Default)]
+struct Nodes {
+    ids: FxHashMap<String, NodeRef>,
+    places: Vec<(PendingNode, Place)>,
+    transitions: Vec<(PendingNode, Transition)>,
+    /// Arcs whose ends were known when they closed, resolved at once (a few bytes each).
+    arcs: Vec<Resolved>,
+    /// The others: they wait for the end of the file.
+    deferred: Vec<ArcRecord>,
+    arc_ids: FxHashSet<String>,
+    dup_arc_ids: usize,
+}
+
+impl Nodes {
+    /// A place or a transition: its id (present, not empty, not seen before) and its
+    /// values checked.
+    fn node(&mut self, x: &XmlStream<'_>, n: NodeRecord) -> Result<(), LoadError> {
+        let id = n.id.clone().ok_or_else(|| {
+            x.error(
+                n.at,
+                LoadErrorKind::Missing {
+                    what: format!("attribute `id` of a {}", kind_name(n.kind)),
+                    name: n.name.as_ref().map(|v| v.text.clone()),
+                },
+            )
+        })?;
+        if id.text.is_empty() {
+            return Err(x.error(
+                id.at,
+                LoadErrorKind::Missing {
+                    what: format!("the id of a {}", kind_name(n.kind)),
+                    name: None,
+                },
+            ));
+        }
+        let pending = PendingNode {
+            id: id.text.clone(),
+            name: n
+                .name
+                .as_ref()
+                .map(|v| v.text.clone())
+                .filter(|s| !s.is_empty()),
+            at: id.at,
+        };
+        let label = pending.name.clone().unwrap_or_else(|| id.text.clone());
+        let r = match n.kind {
+            RecordKind::Place => {
+                let p = place(x, &n, &label)?;
+                self.places.push((pending, p));
+                NodeRef::Place(self.places.len() as u32 - 1)
+            }
+            RecordKind::Transition => {
+                let t = transition(x, &n, &label)?;
+                self.transitions.push((pending, t));
+                NodeRef::Transition(self.transitions.len() as u32 - 1)
+            }
+        };
+        if self.ids.insert(id.text.clone(), r).is_some() {
+            return Err(x.error(
+                id.at,
+                LoadErrorKind::Duplicate {
+                    what: "id",
+                    name: id.text,
+                },
+            ));
+        }
+        Ok(())
+    }
+
+    /// An arc: resolved now when both ends are known, else at the end of the file.
+    fn arc(&mut self, x: &XmlStream<'_>, a: ArcRecord) -> Result<(), LoadError> {
+        if let Some(id) = &a.id
+            && !id.text.is_empty()
+            && !self.arc_ids.insert(id.text.clone())
+        {
+            self.dup_arc_ids += 1;
+        }
+        match resolve_arc(x, &self.ids, &a, false)? {
+            Some(r) => self.arcs.push(r),
+            None => self.deferred.push(a),
+        }
+        Ok(())
+    }
 }
 
 fn kind_name(k: RecordKind) -> &'static str {
@@ -313,7 +337,7 @@ fn transition(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Transitio
     };
     let timing = if timed {
         let rate = match &n.rate {
-            Some(v) => real(x, v, Of("rate", name), true)?,
+            Some(v) => real(x, v, Of("rate", name), Timing::rate)?,
             None => 1.0,
         };
         let infinite = match &n.infinite_server {
@@ -331,7 +355,7 @@ fn transition(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Transitio
         Timing::Exponential { rate, servers }
     } else {
         let weight = match &n.rate {
-            Some(v) => real(x, v, Of("weight", name), false)?,
+            Some(v) => real(x, v, Of("weight", name), Timing::weight)?,
             None => 1.0,
         };
         let priority = match &n.priority {
@@ -525,19 +549,15 @@ fn count(x: &XmlStream<'_>, v: &Value, of: Of<'_>, min: u32) -> Result<u32, Load
     Ok(n as u32)
 }
 
-/// A finite real: `> 0` when `positive`, else `≥ 0`.
-fn real(x: &XmlStream<'_>, v: &Value, of: Of<'_>, positive: bool) -> Result<f64, LoadError> {
+/// A number that passes `check` ([`Timing::rate`], [`Timing::weight`]).
+fn real(
+    x: &XmlStream<'_>,
+    v: &Value,
+    of: Of<'_>,
+    check: fn(f64) -> Result<f64, &'static str>,
+) -> Result<f64, LoadError> {
     let f: f64 = v.text.parse().map_err(|_| of.not_a_number(x, v))?;
-    let ok = f.is_finite() && if positive { f > 0.0 } else { f >= 0.0 };
-    if !ok {
-        let expected = if positive {
-            "must be a finite number > 0"
-        } else {
-            "must be a finite number ≥ 0"
-        };
-        return Err(of.out_of_range(x, v, &v.text, expected));
-    }
-    Ok(f)
+    check(f).map_err(|expected| of.out_of_range(x, v, &v.text, expected))
 }
 
 fn boolean(x: &XmlStream<'_>, v: &Value, of: Of<'_>) -> Result<bool, LoadError> {

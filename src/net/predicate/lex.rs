@@ -37,6 +37,7 @@ fn is_name_char(c: char) -> bool {
 
 /// Splits `text` into tokens. With `prism`, PRISM's and Storm's single-character `=`, `&`
 /// and `|` are read as `==`, `&&` and `||` (a query's state formulas are written that way).
+/// Each token is an [`operator`], a [`quoted`] name, a [`number`] or a bare name.
 pub(super) fn lex(text: &str, prism: bool) -> Result<Vec<Tok>, PredicateError> {
     let chars: Vec<char> = text.chars().collect();
     let mut out = Vec::new();
@@ -48,115 +49,105 @@ pub(super) fn lex(text: &str, prism: bool) -> Result<Vec<Tok>, PredicateError> {
             i += 1;
             continue;
         }
-        let two: String = chars[i..(i + 2).min(chars.len())].iter().collect();
-        let op2 = ["&&", "||", "<=", ">=", "==", "!="]
-            .into_iter()
-            .find(|o| *o == two);
-        if let Some(op) = op2 {
-            out.push(Tok {
-                kind: TokKind::Op(op),
-                column,
-            });
-            i += 2;
-            continue;
-        }
-        let kind = match c {
-            '(' => Some(TokKind::LParen),
-            ')' => Some(TokKind::RParen),
-            '<' => Some(TokKind::Op("<")),
-            '>' => Some(TokKind::Op(">")),
-            '!' => Some(TokKind::Op("!")),
-            '+' => Some(TokKind::Op("+")),
-            '-' => Some(TokKind::Op("-")),
-            '*' => Some(TokKind::Op("*")),
-            _ => None,
-        };
-        if let Some(kind) = kind {
-            out.push(Tok { kind, column });
-            i += 1;
-            continue;
-        }
-        if prism && (c == '=' || c == '&' || c == '|') {
-            let op = match c {
-                '=' => "==",
-                '&' => "&&",
-                _ => "||",
-            };
-            out.push(Tok {
-                kind: TokKind::Op(op),
-                column,
-            });
-            i += 1;
-            continue;
-        }
-        if c == '=' || c == '&' || c == '|' {
+        let (kind, next) = if let Some((kind, len)) = operator(&chars, i, prism)? {
+            (kind, i + len)
+        } else if c == '`' {
+            quoted(&chars, i)?
+        } else if c.is_ascii_digit() {
+            number(&chars, i)?
+        } else if is_name_char(c) {
+            let end = i + chars[i..].iter().take_while(|&&d| is_name_char(d)).count();
+            (TokKind::Name(chars[i..end].iter().collect()), end)
+        } else {
             return Err(PredicateError::new(
                 column,
+                format!("unexpected character `{c}` (quote unusual place names with backticks)"),
+            ));
+        };
+        out.push(Tok { kind, column });
+        i = next;
+    }
+    Ok(out)
+}
+
+/// The operator or parenthesis at `i`, and how many characters it takes; `None` when
+/// there is none there.
+fn operator(
+    chars: &[char],
+    i: usize,
+    prism: bool,
+) -> Result<Option<(TokKind, usize)>, PredicateError> {
+    let c = chars[i];
+    let two: String = chars[i..(i + 2).min(chars.len())].iter().collect();
+    if let Some(op) = ["&&", "||", "<=", ">=", "==", "!="]
+        .into_iter()
+        .find(|o| *o == two)
+    {
+        return Ok(Some((TokKind::Op(op), 2)));
+    }
+    let kind = match c {
+        '(' => TokKind::LParen,
+        ')' => TokKind::RParen,
+        '<' => TokKind::Op("<"),
+        '>' => TokKind::Op(">"),
+        '!' => TokKind::Op("!"),
+        '+' => TokKind::Op("+"),
+        '-' => TokKind::Op("-"),
+        '*' => TokKind::Op("*"),
+        '=' | '&' | '|' if prism => TokKind::Op(match c {
+            '=' => "==",
+            '&' => "&&",
+            _ => "||",
+        }),
+        '=' | '&' | '|' => {
+            return Err(PredicateError::new(
+                i + 1,
                 format!("`{c}` alone is not an operator (did you mean `{c}{c}`?)"),
             ));
         }
-        if c == '`' {
-            let start = i + 1;
-            let end = chars[start..]
-                .iter()
-                .position(|&d| d == '`')
-                .map(|k| start + k)
-                .ok_or_else(|| PredicateError::new(column, "unclosed backtick".into()))?;
-            let name: String = chars[start..end].iter().collect();
-            if name.is_empty() {
-                return Err(PredicateError::new(column, "empty place name ``".into()));
-            }
-            out.push(Tok {
-                kind: TokKind::Name(name),
-                column,
-            });
-            i = end + 1;
-            continue;
-        }
-        if c.is_ascii_digit() {
-            let start = i;
-            while i < chars.len() && chars[i].is_ascii_digit() {
-                i += 1;
-            }
-            if i < chars.len() && is_name_char(chars[i]) {
-                let word: String = chars[start..]
-                    .iter()
-                    .take_while(|&&d| is_name_char(d))
-                    .collect();
-                return Err(PredicateError {
-                    column,
-                    name: Some(word.clone()),
-                    kind: PredicateErrorKind::Syntax,
-                    message: format!(
-                        "`{word}` starts with a digit: quote the place name with backticks"
-                    ),
-                });
-            }
-            let digits: String = chars[start..i].iter().collect();
-            let v = digits.parse::<i64>().map_err(|_| {
-                PredicateError::new(column, format!("`{digits}` is too large an integer"))
-            })?;
-            out.push(Tok {
-                kind: TokKind::Int(v),
-                column,
-            });
-            continue;
-        }
-        if is_name_char(c) {
-            let start = i;
-            while i < chars.len() && is_name_char(chars[i]) {
-                i += 1;
-            }
-            out.push(Tok {
-                kind: TokKind::Name(chars[start..i].iter().collect()),
-                column,
-            });
-            continue;
-        }
-        return Err(PredicateError::new(
-            column,
-            format!("unexpected character `{c}` (quote unusual place names with backticks)"),
-        ));
+        _ => return Ok(None),
+    };
+    Ok(Some((kind, 1)))
+}
+
+/// A place name in backticks opening at `i`, and where the token ends.
+fn quoted(chars: &[char], i: usize) -> Result<(TokKind, usize), PredicateError> {
+    let start = i + 1;
+    let end = chars[start..]
+        .iter()
+        .position(|&d| d == '`')
+        .map(|k| start + k)
+        .ok_or_else(|| PredicateError::new(i + 1, "unclosed backtick".into()))?;
+    let name: String = chars[start..end].iter().collect();
+    if name.is_empty() {
+        return Err(PredicateError::new(i + 1, "empty place name ``".into()));
     }
-    Ok(out)
+    Ok((TokKind::Name(name), end + 1))
+}
+
+/// An integer starting at `i` (a word that starts with a digit is refused), and where the
+/// token ends.
+fn number(chars: &[char], start: usize) -> Result<(TokKind, usize), PredicateError> {
+    let column = start + 1;
+    let mut i = start;
+    while i < chars.len() && chars[i].is_ascii_digit() {
+        i += 1;
+    }
+    if i < chars.len() && is_name_char(chars[i]) {
+        let word: String = chars[start..]
+            .iter()
+            .take_while(|&&d| is_name_char(d))
+            .collect();
+        return Err(PredicateError {
+            column,
+            name: Some(word.clone()),
+            kind: PredicateErrorKind::Syntax,
+            message: format!("`{word}` starts with a digit: quote the place name with backticks"),
+        });
+    }
+    let digits: String = chars[start..i].iter().collect();
+    let v = digits
+        .parse::<i64>()
+        .map_err(|_| PredicateError::new(column, format!("`{digits}` is too large an integer")))?;
+    Ok((TokKind::Int(v), i))
 }

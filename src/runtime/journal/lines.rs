@@ -17,15 +17,28 @@ pub enum Entry {
     Record(Record),
 }
 
+/// Why a journal line is not an entry of a run of the net ([`JournalError::BadLine`] holds
+/// its text, beside the line number).
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum LineError {
+    /// Not the JSON of an event or a record.
+    #[error("{0}")]
+    Json(#[from] serde_json::Error),
+    /// A fired transition's id past the net's transitions.
+    #[error("`transition` is not a transition id of this net")]
+    Transition,
+    /// A marking of another length than the net's places.
+    #[error("`marking` is not a marking of this net")]
+    Marking,
+}
+
 /// Reads `line` (not the header) as an [`Entry`] of a run of `net`: a fired transition must
-/// be one of its transitions and its marking one of its markings. The reason, when not.
-pub(crate) fn entry(line: &str, net: &Net) -> Result<Entry, String> {
+/// be one of its transitions and its marking one of its markings.
+pub(crate) fn entry(line: &str, net: &Net) -> Result<Entry, LineError> {
     if line.starts_with("{\"record\"") {
-        return serde_json::from_str(line)
-            .map(Entry::Record)
-            .map_err(|e| e.to_string());
+        return Ok(Entry::Record(serde_json::from_str(line)?));
     }
-    let e: Event = serde_json::from_str(line).map_err(|e| e.to_string())?;
+    let e: Event = serde_json::from_str(line)?;
     if let EventKind::Fired {
         transition,
         marking,
@@ -33,10 +46,10 @@ pub(crate) fn entry(line: &str, net: &Net) -> Result<Entry, String> {
     } = &e.kind
     {
         if transition.index() >= net.transition_count() {
-            return Err("`transition` is not a transition id of this net".into());
+            return Err(LineError::Transition);
         }
         if marking.len() != net.place_count() {
-            return Err("`marking` is not a marking of this net".into());
+            return Err(LineError::Marking);
         }
     }
     Ok(Entry::Event(e))
@@ -215,7 +228,7 @@ impl<R: BufRead> Iterator for JournalReader<R> {
                     }
                     return Some(Err(JournalError::BadLine {
                         line: self.line,
-                        reason,
+                        reason: reason.to_string(),
                     }));
                 }
             }

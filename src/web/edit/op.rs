@@ -2,9 +2,11 @@
 //! ([`Num`], checked as the GreatSPN reader checks them), why an edit is refused
 //! ([`EditError`]), and a transition's timing from an edit's fields.
 
-use std::collections::BTreeMap;
-
 use serde::{Deserialize, Deserializer};
+
+use super::add::{AddArc, AddPlace, AddTransition};
+use super::change::{Move, SetArc, SetPlace, SetTransition};
+use super::remove::{Delete, DeleteArc};
 
 use crate::io::LoadErrorKind;
 use crate::net::{ArcKind, NetError, Servers, Timing};
@@ -62,84 +64,34 @@ impl ArcKindName {
 }
 
 /// `Some(value)` for a field that is present, `null` included (`capacity: null` = unbounded).
-fn present<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Option<Num>>, D::Error> {
+pub(super) fn present<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Option<Num>>, D::Error> {
     Option::<Num>::deserialize(d).map(Some)
 }
 
-/// One change of the net, as the page sends it (see the [editor module](super) for the table).
+/// One change of the net, as the page sends it (see the [editor module](super) for the
+/// table): one command struct per operation, each with its own `apply`, as mini-redis's
+/// `Command` delegates to `Get`, `Set`, …
 #[derive(Clone, Debug, Deserialize, PartialEq)]
-#[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "op", rename_all = "snake_case")]
 pub(crate) enum Edit {
-    /// A new place at `(x, y)`.
-    AddPlace {
-        name: Option<String>,
-        tokens: Option<Num>,
-        capacity: Option<Num>,
-        x: f64,
-        y: f64,
-    },
-    /// A new transition at `(x, y)`.
-    AddTransition {
-        name: Option<String>,
-        kind: Kind,
-        rate: Option<Num>,
-        servers: Option<Num>,
-        weight: Option<Num>,
-        priority: Option<Num>,
-        x: f64,
-        y: f64,
-    },
-    /// A new arc: place → transition (input, or inhibitor with `inhibitor`) or
-    /// transition → place (output).
-    AddArc {
-        from: NodeRef,
-        to: NodeRef,
-        #[serde(default)]
-        inhibitor: bool,
-        weight: Option<Num>,
-    },
-    /// A node and every arc that touches it.
-    Delete { node: NodeRef },
-    /// The arcs of `kind` between `place` and `transition`.
-    DeleteArc {
-        place: String,
-        transition: String,
-        kind: ArcKindName,
-    },
-    /// A place's name, initial tokens or capacity.
-    SetPlace {
-        place: String,
-        name: Option<String>,
-        tokens: Option<Num>,
-        #[serde(default, deserialize_with = "present")]
-        capacity: Option<Option<Num>>,
-    },
-    /// A transition's name, kind and parameters.
-    SetTransition {
-        transition: String,
-        name: Option<String>,
-        kind: Option<Kind>,
-        rate: Option<Num>,
-        servers: Option<Num>,
-        weight: Option<Num>,
-        priority: Option<Num>,
-    },
-    /// The multiplicity or the kind of the arcs of `kind` between `place` and
-    /// `transition` (parallel arcs become one).
-    SetArc {
-        place: String,
-        transition: String,
-        kind: ArcKindName,
-        weight: Option<Num>,
-        new_kind: Option<ArcKindName>,
-    },
-    /// New positions, in the file's units.
-    Move {
-        #[serde(default)]
-        places: BTreeMap<String, [f64; 2]>,
-        #[serde(default)]
-        transitions: BTreeMap<String, [f64; 2]>,
-    },
+    /// A new place.
+    AddPlace(AddPlace),
+    /// A new transition.
+    AddTransition(AddTransition),
+    /// A new arc.
+    AddArc(AddArc),
+    /// A node and its arcs gone.
+    Delete(Delete),
+    /// Arcs gone.
+    DeleteArc(DeleteArc),
+    /// A place changed.
+    SetPlace(SetPlace),
+    /// A transition changed.
+    SetTransition(SetTransition),
+    /// Arcs changed.
+    SetArc(SetArc),
+    /// Nodes moved.
+    Move(Move),
 }
 
 /// Why an edit was refused (the net is left as it was).
@@ -324,28 +276,12 @@ impl Num {
 
     pub(super) fn rate(&self, name: &str) -> Result<f64, EditError> {
         let v = self.value("rate", name)?;
-        if v.is_finite() && v > 0.0 {
-            return Ok(v);
-        }
-        Err(out_of_range(
-            "rate",
-            name,
-            self.shown(v),
-            "must be a finite number > 0",
-        ))
+        Timing::rate(v).map_err(|expected| out_of_range("rate", name, self.shown(v), expected))
     }
 
     pub(super) fn weight(&self, name: &str) -> Result<f64, EditError> {
         let v = self.value("weight", name)?;
-        if v.is_finite() && v >= 0.0 {
-            return Ok(v);
-        }
-        Err(out_of_range(
-            "weight",
-            name,
-            self.shown(v),
-            "must be a finite number ≥ 0",
-        ))
+        Timing::weight(v).map_err(|expected| out_of_range("weight", name, self.shown(v), expected))
     }
 
     /// `single`, `infinite`, or a number of servers k ≥ 1 (1 is single).

@@ -13,12 +13,12 @@ fn edit(v: serde_json::Value) -> Edit {
 fn operations_read_from_the_pages_json() {
     assert_eq!(
         edit(serde_json::json!({"op": "set_place", "place": "P1", "capacity": null})),
-        Edit::SetPlace {
+        Edit::SetPlace(change::SetPlace {
             place: "P1".into(),
             name: None,
             tokens: None,
             capacity: Some(None),
-        }
+        })
     );
     let e = serde_json::from_value::<Edit>(
         serde_json::json!({"op": "set_place", "place": "P1", "tokns": 3}),
