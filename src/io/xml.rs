@@ -1,7 +1,9 @@
 //! Streaming XML with positions: a thin layer over quick-xml that yields start tags, end
 //! tags and text with their byte offsets, so every element, attribute and value can be
 //! located ([`Span::locate`]) when it turns out to be wrong. No DOM is built: the net
-//! readers ([`super::pipe`], [`super::pnml`]) keep only the records they need.
+//! readers ([`super::pipe`], [`super::pnml`], [`super::pnpro`]) keep only the records they
+//! need. The one layer over quick-xml: its checks (one root, a depth limit, end tags that
+//! match, a truncated file named by the element left open) hold for every format.
 //!
 //! Malformed or truncated XML becomes [`LoadErrorKind::Xml`] at the position quick-xml
 //! stopped at (or at the end of the file, naming the element left open).
@@ -48,6 +50,12 @@ pub(crate) struct Tag<'a> {
 }
 
 impl<'a> Tag<'a> {
+    /// The tag as quick-xml read it, borrowed from the text (the PNPRO scanner takes its
+    /// attributes from it without copying).
+    pub(crate) fn start(&self) -> &BytesStart<'a> {
+        &self.start
+    }
+
     /// The local name (`pnml:place` → `place`).
     pub(crate) fn name(&self) -> &str {
         let raw = self.start.name().into_inner();

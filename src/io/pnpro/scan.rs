@@ -1,12 +1,12 @@
-//! Streams a `.PNPRO` file through quick-xml and keeps, for the selected `<gspn>` page only,
+//! Streams a `.PNPRO` file through the XML layer ([`XmlStream`]) and keeps, for the selected `<gspn>` page only,
 //! the few attributes the net needs (with their byte offsets, for error positions).
 
 use std::borrow::Cow;
 use std::path::Path;
 
-use quick_xml::Reader;
-use quick_xml::events::{BytesStart, Event};
+use quick_xml::events::BytesStart;
 
+use crate::io::xml::{XmlEvent, XmlStream};
 use crate::io::{LoadError, LoadErrorKind, ReadOptions, Span};
 
 /// What a kept element is.
@@ -92,7 +92,8 @@ enum Ctx {
 }
 
 /// Reads the elements of `text` that make the selected page ([`Scan::open`] for each
-/// element as it opens), then checks the file as a whole ([`Scan::finish`]).
+/// element as it opens) through the XML layer the other readers use ([`XmlStream`]: it
+/// refuses malformed and truncated files), then checks the project ([`Scan::finish`]).
 pub(super) fn scan<'a>(
     path: &Path,
     text: &'a str,
@@ -109,28 +110,17 @@ pub(super) fn scan<'a>(
         records: Vec::new(),
         project_at: None,
     };
-    let mut reader = Reader::from_str(text);
-    loop {
-        let at = reader.buffer_position() as usize;
-        let event = reader.read_event().map_err(|e| {
-            scan.err(
-                reader.error_position() as usize,
-                LoadErrorKind::Xml(e.to_string()),
-            )
-        })?;
-        let (e, empty) = match event {
-            Event::Start(e) => (e, false),
-            Event::Empty(e) => (e, true),
-            Event::End(_) => {
-                scan.stack.pop();
-                continue;
+    let mut x = XmlStream::new(path, text.as_bytes());
+    while let Some(event) = x.next()? {
+        match event {
+            XmlEvent::Start(tag) => {
+                let ctx = scan.open(tag.start(), tag.at)?;
+                scan.stack.push((ctx, tag.at));
             }
-            Event::Eof => break,
-            _ => continue,
-        };
-        let ctx = scan.open(&e, at)?;
-        if !empty {
-            scan.stack.push((ctx, at));
+            XmlEvent::End => {
+                scan.stack.pop();
+            }
+            XmlEvent::Text(..) => {}
         }
     }
     scan.finish()
@@ -143,8 +133,7 @@ struct Scan<'a, 'p> {
     /// The address of `text`, to turn a borrowed attribute into an offset.
     base: usize,
     opts: &'p ReadOptions,
-    /// Open elements: what each is, and where it starts (its name is read back from there
-    /// only for the truncated-file message).
+    /// Open elements: what each is, and where it starts.
     stack: Vec<(Ctx, usize)>,
     pages: Vec<String>,
     /// The page being read, and where it starts.
@@ -251,23 +240,9 @@ impl<'a> Scan<'a, '_> {
         })
     }
 
-    /// The file read to its end: every element closed, a project, and the page asked for
-    /// (or a first one).
+    /// The file read to its end (every element closed: [`XmlStream`] saw to it): a project,
+    /// and the page asked for (or a first one).
     fn finish(mut self) -> Result<Scanned<'a>, LoadError> {
-        let text = self.text;
-        if let Some(&(_, open_at)) = self.stack.last() {
-            let open: String = text[open_at..]
-                .trim_start_matches('<')
-                .chars()
-                .take_while(|c| !c.is_whitespace() && !matches!(c, '>' | '/'))
-                .collect();
-            return Err(self.err(
-                text.len(),
-                LoadErrorKind::Xml(format!(
-                    "unexpected end of file: `<{open}>` is not closed (truncated file?)"
-                )),
-            ));
-        }
         let Some(project_at) = self.project_at else {
             return Err(LoadError::file(
                 self.path,

@@ -1,9 +1,10 @@
 //! Unit tests of plan resolution: names, positions, roles, policy, ROS 2 keys.
 
 use super::*;
-use crate::net::{NetBuilder, Servers};
+use crate::net::{NetBuilder, PlaceId, Servers};
 use crate::ros2::DEFAULT_SERVER;
 use crate::ros2::settings::ServiceMapping;
+use crate::runtime::FailurePolicy;
 
 /// P1 -T1-> P2 -t2|t3-> P3|P1 ; P3 -T4-> P1. Names with `:` as in the thesis.
 fn net() -> Net {
