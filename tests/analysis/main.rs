@@ -16,6 +16,7 @@ mod steady_state_from_columns;
 mod steady_state_random_nets;
 mod storm_cross_check;
 mod synthesis_intervals_hold;
+mod synthesis_random_models;
 mod synthesised_policy;
 mod thesis_reference;
 mod vanishing_elimination;

@@ -7,6 +7,7 @@ use gspn::analysis::decision::{
     Controls, DecisionModel, Objective, PlaceMode, RewardSpec, Rewards, Solution, SolveOptions,
     solve,
 };
+use gspn::analysis::query::{Query, extreme};
 use gspn::net::predicate::Predicate;
 use gspn::net::{Net, NetBuilder, Servers};
 
@@ -165,4 +166,25 @@ fn reach_both_robots_upper_bound_converges() {
             if max { "reach-max" } else { "reach-min" },
         );
     }
+}
+
+#[test]
+fn pmax_and_pmin_queries_ask_the_synthesis_engine_two_routes() {
+    // `Pmax=?`/`Pmin=?` on a net with controllable transitions: the same optimum as
+    // `synthesize`'s reach objectives, (5/6)² and (2/3)²; `=?` has no policy to ask.
+    let net = two_routes();
+    let controls = Controls::zero_weight(&net);
+    let ask = |text: &str| {
+        let q = Query::parse(&net, &[], text).unwrap();
+        extreme::evaluate(&net, &controls, &[], &q, &Default::default())
+    };
+    let pmax = ask("Pmax=? [F Goal>=2]").unwrap();
+    let pmin = ask("Pmin=? [F `Goal` = 2]").unwrap();
+    assert!((pmax - 25.0 / 36.0).abs() < 1e-9, "{pmax}");
+    assert!((pmin - 4.0 / 9.0).abs() < 1e-9, "{pmin}");
+    let err = ask("Pmax=? [F<=1 Goal>=2]").unwrap_err().to_string();
+    assert!(
+        err.contains("a time bound is not computed for max/min"),
+        "{err}"
+    );
 }

@@ -91,3 +91,59 @@ fn ergodic_reference_nets_get_their_steady_state_and_throughputs() {
     }
     assert!(checked >= 9, "checked {checked} nets");
 }
+
+/// Issue 27, part 3: loops of vanishing markings above the dense solver's size go through the
+/// sparse LU and keep exact answers. N tokens circle a ring of four places through immediate
+/// transitions (`examples/gen_vanishing_ring.rs`), so every distribution of the tokens still
+/// on the ring is one loop of vanishing markings (N = 12: loops of up to C(15, 3) = 455); at
+/// `r3` a token leaves with probability 0.5 / (0.5 + 1.5) = 1/4 at each pass, whatever else is
+/// enabled, and `back` (rate 1, the one tangible marking) returns all N. Per return: N
+/// leaves, 4N passes through `r3` (3N of them `step3`), so 4N firings of `step0`..`step2`.
+#[test]
+fn a_ring_of_vanishing_loops_up_to_455_markings_has_exact_throughputs() {
+    use gspn::net::{NetBuilder, Servers};
+    let n = 12u32;
+    let mut b = NetBuilder::new("vanishing_ring");
+    let r = [
+        b.place("r0", n),
+        b.place("r1", 0),
+        b.place("r2", 0),
+        b.place("r3", 0),
+    ];
+    let mut steps = Vec::new();
+    for (i, w) in [1.0, 2.0, 3.0, 1.5].into_iter().enumerate() {
+        let t = b.immediate(format!("step{i}"), w, 1);
+        b.moves(r[i], t, r[(i + 1) % 4]);
+        steps.push(t);
+    }
+    let out = b.place("out", 0);
+    let leave = b.immediate("leave", 0.5, 1);
+    b.moves(r[3], leave, out);
+    let back = b.exponential("back", 1.0, Servers::Single);
+    b.input(out, back, n);
+    b.output(back, r[0], n);
+    let net = b.build().unwrap();
+    let ss = StateSpace::build(&net, &Options::default()).unwrap();
+    // Every distribution of 1..=N tokens on the ring: C(N+4, 4) − 1 vanishing markings.
+    assert_eq!((ss.tangible_count(), ss.vanishing_count()), (1, 1819));
+    let mut throughput = vec![0.0f64; net.transition_count()];
+    for f in ss.immediate_flows() {
+        let rate = net.exp_rate(&ss.marking(f.state as usize), f.transition);
+        throughput[f.immediate.index()] += rate * f.expected;
+    }
+    let n = f64::from(n);
+    for (t, want) in [
+        (steps[0], 4.0 * n),
+        (steps[1], 4.0 * n),
+        (steps[2], 4.0 * n),
+        (steps[3], 3.0 * n),
+        (leave, n),
+    ] {
+        let got = throughput[t.index()];
+        assert!(
+            (got - want).abs() < 1e-9 * want,
+            "{}: {got}, want {want}",
+            net.transition(t).name
+        );
+    }
+}

@@ -165,6 +165,54 @@ fn prism_export_writes_the_chain() {
     assert!(lab.contains("0: 0"));
 }
 
+/// Issue 27: `--export-prism` writes each of the plan's reward structures as a PRISM state
+/// reward file, impulses folded in at their firing rates. On cyc3 (tangible markings (2,0,0),
+/// (1,0,1), (0,0,2); T3 fires at rate 2 while P3 is marked) with 1 per token in P1 and 3 per
+/// firing of T3: 2, 1 + 2·3 = 7 and 0 + 2·3 = 6.
+#[test]
+fn prism_export_writes_a_reward_file_per_reward_structure() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("plan.toml");
+    std::fs::write(
+        &plan,
+        format!(
+            "net = {:?}\n\n[rewards.work]\nper_token = {{ P1 = 1.0 }}\ntransitions = {{ T3 = 3.0 }}\n",
+            fixture("greatspn/cyc3/cyc3_ss.PNPRO")
+        ),
+    )
+    .unwrap();
+    let prefix = dir.path().join("cyc3");
+    let (code, _, err) = analyze(&[
+        plan.to_str().unwrap(),
+        "--export-prism",
+        prefix.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let sta = std::fs::read_to_string(dir.path().join("cyc3.sta")).unwrap();
+    let srew = std::fs::read_to_string(dir.path().join("cyc3.work.srew")).unwrap();
+    let mut lines = srew.lines();
+    assert_eq!(lines.next(), Some("3 3"), "{srew}");
+    let reward: std::collections::HashMap<&str, f64> = lines
+        .map(|l| {
+            let (s, r) = l.split_once(' ').unwrap();
+            (s, r.parse().unwrap())
+        })
+        .collect();
+    let mut seen = 0;
+    for line in sta.lines().skip(1) {
+        let (s, marking) = line.split_once(':').unwrap();
+        let want = match marking {
+            "(2,0,0)" => 2.0,
+            "(1,0,1)" => 7.0,
+            "(0,0,2)" => 6.0,
+            other => panic!("unexpected tangible marking {other}"),
+        };
+        assert!((reward[s] - want).abs() < 1e-12, "{s} {marking}: {srew}");
+        seen += 1;
+    }
+    assert_eq!(seen, 3);
+}
+
 /// Issue 30, snag 8: two edge counts, each named for what it is. On Eratosthenes-PT-010
 /// the labelled count (one per marking and fired transition) is the fixture oracle's
 /// `TRANSITIONS 120`; `t6.2` and `t6.3` both remove `p6`, so the distinct successor

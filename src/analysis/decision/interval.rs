@@ -30,10 +30,16 @@ impl Equations {
         let mut exits = vec![u32::MAX; self.groups.members.len()];
         let mut spare_exits = exits.clone();
         let mut iterations = 0;
+        // A value at 0 has no relative precision: the bounds meet there only to within the
+        // rounding of sums of the problem's size (the starts'), which is where they stop.
+        let start = initial_value(model, &lo)
+            .abs()
+            .max(initial_value(model, &up).abs());
+        let rounding = 64.0 * f64::EPSILON * start;
         loop {
             let (lower, upper) = (initial_value(model, &lo), initial_value(model, &up));
             let scale = lower.abs().max(upper.abs());
-            if upper - lower <= opts.precision * scale || upper - lower <= 1e-300 {
+            if upper - lower <= opts.precision * scale || upper - lower <= rounding.max(1e-300) {
                 self.finish_policy(model, r, &lo, &mut policy, &exits);
                 let values = lo.iter().zip(&up).map(|(a, b)| (a + b) / 2.0).collect();
                 return Ok(Solution {
@@ -138,6 +144,7 @@ fn upper_start(
         // One value for the whole component: the best way out, a loop that earns nothing
         // repeated at no cost.
         let mut best = 0.0f64;
+        let mut earns_inside = false;
         for &v in comp {
             for c in model.choices(states[v as usize]) {
                 let (mut p_in, mut out) = (0.0, 0.0);
@@ -151,16 +158,23 @@ fn upper_start(
                 let f = eq.scale[c];
                 let gain = r[c] + f * out;
                 if f * p_in >= 1.0 - 1e-12 {
-                    if r[c] > 0.0 {
-                        return Err(DecisionError::Unsupported(
-                            "a loop of instant steps earns a reward at no cost of time: the discounted value has no bound"
-                                .into(),
-                        ));
-                    }
+                    earns_inside |= r[c] > 0.0;
                     continue;
                 }
                 best = best.max(gain / (1.0 - f * p_in));
             }
+        }
+        if earns_inside {
+            // A choice that earns and stays in the component: the one value above does not
+            // bound it. Values per state instead, checked; none where a loop earns for ever.
+            let members: Vec<usize> = comp.iter().map(|&v| states[v as usize]).collect();
+            if !component_bound(model, eq, r, &members, &mut d) {
+                return Err(DecisionError::Unsupported(
+                    "a loop of instant steps earns a reward at no cost of time: the discounted value has no bound"
+                        .into(),
+                ));
+            }
+            continue;
         }
         for &v in comp {
             d[states[v as usize]] = best;
@@ -183,4 +197,60 @@ fn upper_start(
     // A little above the bound: the check `T(U₀) ≤ U₀` must survive rounding.
     let c_max = c_max * (1.0 + 1e-9);
     Ok((0..n).map(|s| c_max + d[s] * (1.0 + 1e-9)).collect())
+}
+
+/// Per-state bounds `d` on a strongly connected set of undiscounted states, for rewards
+/// `r ≥ 0`, where a choice that earns stays inside (so no single value bounds the set):
+/// Gauss–Seidel value iteration of `d = max_c (r_c + ε + f_c·Σ p·d + w_c·d)` from 0 (the
+/// states below already in `d`, discounted ones 0). The ε added to every step makes the
+/// fixed point a strict super-solution, so once the sweeps change `d` by less than ε/4 the
+/// iterate passes the check `max_c (r_c + f_c·Σ p·d + w_c·d) ≤ d`, which is then verified.
+/// `false` when the values do not settle (a loop that earns for ever, or one of zero
+/// reward that ε makes grow) or the check fails.
+fn component_bound(
+    model: &DecisionModel,
+    eq: &Equations,
+    r: &[f64],
+    members: &[usize],
+    d: &mut [f64],
+) -> bool {
+    const SWEEPS: usize = 10_000;
+    let scale = members
+        .iter()
+        .flat_map(|&s| model.choices(s))
+        .map(|c| r[c])
+        .fold(0.0f64, f64::max);
+    let eps = 1e-9 * scale.max(f64::MIN_POSITIVE);
+    let step = |d: &[f64], s: usize, extra: f64| {
+        model
+            .choices(s)
+            .map(|c| {
+                let sum: f64 = model.branches(c).map(|(t, p)| p * d[t as usize]).sum();
+                r[c] + extra + eq.scale[c] * sum + eq.stay[c] * d[s]
+            })
+            .fold(0.0f64, f64::max)
+    };
+    for &s in members {
+        d[s] = 0.0;
+    }
+    let mut settled = false;
+    for _ in 0..SWEEPS {
+        let mut change = 0.0f64;
+        for &s in members.iter().rev() {
+            let v = step(d, s, eps);
+            change = change.max(v - d[s]);
+            d[s] = v;
+        }
+        if !members.iter().all(|&s| d[s].is_finite()) {
+            return false;
+        }
+        if change <= eps / 4.0 {
+            settled = true;
+            break;
+        }
+    }
+    settled
+        && members
+            .iter()
+            .all(|&s| step(d, s, 0.0) <= d[s] + super::solve::ROUNDING * d[s].abs())
 }

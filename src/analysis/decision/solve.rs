@@ -26,7 +26,7 @@ use super::{DecisionError, DecisionModel, Kind, Objective, Rewards};
 
 /// Relative slack of the bound checks: floating-point sums of probabilities are off by a
 /// few ulps.
-const ROUNDING: f64 = 16.0 * f64::EPSILON;
+pub(super) const ROUNDING: f64 = 16.0 * f64::EPSILON;
 
 /// How to solve.
 #[derive(Clone, Debug)]
@@ -219,6 +219,12 @@ pub fn solve(
                 }
             }
             let (lo, up) = discount_start(model, &eq, &r)?;
+            // A loop of instant steps that time never leaves (a Zeno end component) earns
+            // nothing (`discount_start` refuses one that earns): a policy may stay there
+            // for ever, worth 0, which the equations `x = x` do not say. Each maximal one
+            // becomes one state whose value is the best of its exits and staying.
+            eq.groups = Quotient::new(model, |s| model.kind(s) == Kind::Instant, |c| r[c] == 0.0);
+            eq.idle = Some(0.0);
             eq.solve_interval(model, &r, lo, up, opts)
         }
         Objective::DiscountedPerStep { gamma, .. } => {
@@ -374,8 +380,13 @@ pub(super) struct Equations {
     pub(super) scale: Vec<f64>,
     /// Per choice: weight on the state's own value (uniformisation self-loop).
     pub(super) stay: Vec<f64>,
-    /// End components solved as one state each (reach-max, total-min).
+    /// End components solved as one state each (reach-max, total-min, instant loops under a
+    /// continuous discount).
     pub(super) groups: Quotient,
+    /// What staying in a group for ever is worth, where that is an option: `None` where it
+    /// is not (a total-min minimiser must leave), `Some(0.0)` where it earns nothing more
+    /// (a loop of instant steps under a continuous discount).
+    pub(super) idle: Option<f64>,
 }
 
 impl Equations {
@@ -387,6 +398,7 @@ impl Equations {
             scale: vec![1.0; model.choice_count()],
             stay: vec![0.0; model.choice_count()],
             groups: Quotient::default(),
+            idle: None,
         }
     }
 
@@ -468,11 +480,18 @@ impl Equations {
         delta
     }
 
-    /// A group's value from `x`: its best exit; no exit is worth 0 (a reach objective's
-    /// missed goal).
+    /// A group's value from `x`: its best exit, or staying where that is an option and
+    /// better (`u32::MAX`: no exit taken); no exit is worth 0 (a reach objective's missed
+    /// goal).
     fn group_update(&self, model: &DecisionModel, r: &[f64], x: &[f64], g: usize) -> (f64, u32) {
-        self.groups
-            .update(model, r, x, g, |a, b| self.better(a, b), 0.0)
+        let (v, c) = self
+            .groups
+            .update(model, r, x, g, |a, b| self.better(a, b), f64::NAN);
+        match self.idle {
+            Some(idle) if v.is_nan() || self.better(idle, v) => (idle, u32::MAX),
+            _ if v.is_nan() => (0.0, u32::MAX),
+            _ => (v, c),
+        }
     }
 
     /// One Bellman step of every state from `x` (Jacobi), groups included.
