@@ -10,7 +10,8 @@
 # - iproute2 (`ip`): tests/ros2/netns.rs puts the supervisor and robots in network
 #   namespaces.
 # - python3 + venv: a venv at target/venv-ros2 with the PyPI packages cyclonedds==11.0.1
-#   (tests/ros2/interop.rs, tests/ros2/python_robot.rs) and stormpy==2.0.0 (Storm, for
+#   (tests/ros2/interop.rs, tests/ros2/python_robot.rs), mcap==1.6.0 and
+#   mcap-ros2-support==0.6.0 (tests/ros2/runs_recorded_to_mcap.rs) and stormpy==2.0.0 (Storm, for
 #   tests/analysis/storm_cross_check.rs and the docs' Storm snippet; an x86_64 manylinux
 #   wheel for CPython 3.11).
 # - the Python package (python/, docs/python.md): built by pip (maturin) into a venv at
@@ -59,7 +60,7 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 # pip answers "already satisfied" without the network when the versions are there.
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
-    cyclonedds==11.0.1 stormpy==2.0.0
+    cyclonedds==11.0.1 stormpy==2.0.0 mcap==1.6.0 mcap-ros2-support==0.6.0
 
 echo "== cargo test --all-features $*"
 cargo test --all-features "$@"

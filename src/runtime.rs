@@ -253,12 +253,12 @@ pub enum RuntimeError {
         known: Vec<String>,
     },
     /// The journal file could not be created.
-    #[error("journal {path}: {reason}")]
+    #[error("journal {path}: {source}")]
     Journal {
         /// The file.
         path: PathBuf,
-        /// Why.
-        reason: String,
+        /// Why, as the system said it.
+        source: std::io::Error,
     },
 }
 

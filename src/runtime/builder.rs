@@ -486,7 +486,7 @@ impl RuntimeBuilder {
         .map(Some)
         .map_err(|e| RuntimeError::Journal {
             path: path.clone(),
-            reason: e.to_string(),
+            source: e,
         })
     }
 }

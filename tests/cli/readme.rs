@@ -60,6 +60,7 @@ fn ci_runs_the_readme_test_command_which_sets_up_and_runs_the_suite() {
         "target/venv-ros2",
         "cyclonedds==11.0.1",
         "stormpy==2.0.0",
+        "mcap==1.6.0 mcap-ros2-support==0.6.0",
         "./python pytest matplotlib",
     ] {
         assert!(script.contains(needed), "test.sh must install {needed}");
