@@ -45,7 +45,7 @@
 
 mod absorbing;
 mod eval;
-pub(crate) mod extreme;
+pub mod extreme;
 mod parse;
 
 use thiserror::Error;

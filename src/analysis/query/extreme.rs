@@ -16,7 +16,7 @@ use crate::net::Net;
 
 /// The optimum of `query` (which has `max` or `min`) over the policies of `controls`, with
 /// the reward structures `rewards` (those given to [`Query::parse`]).
-pub(crate) fn evaluate(
+pub fn evaluate(
     net: &Net,
     controls: &Controls,
     rewards: &[RewardSpec],
