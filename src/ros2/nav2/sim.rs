@@ -440,13 +440,19 @@ impl Navigator for Nav2Navigator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::ReadOptions;
+    use crate::world::map::Location;
 
     #[test]
     fn a_goal_pose_means_the_location_within_half_a_metre() {
-        let path = std::path::Path::new("plans/temperature-patrol/plan.toml");
-        let plan = crate::plan::read_plan(path, &ReadOptions::default()).unwrap();
-        let map = plan.map.unwrap();
+        // Two locations 4 m apart, built here: the ROS side reads no plan file.
+        let at_xy = |name: &str, x: f64, y: f64| Location {
+            name: name.into(),
+            x,
+            y,
+            queue_dir: [1.0, 0.0],
+            places: vec![],
+        };
+        let map = Map::bare(vec![at_xy("L1", 1.0, 1.0), at_xy("L2", 5.0, 1.0)]);
         let l2 = map.location("L2").unwrap();
         let (x, y) = (map.locations[l2].x, map.locations[l2].y);
         let at = |dx: f64| location_at(&map, &PoseStamped::on_map(x + dx, y, 0.0));
