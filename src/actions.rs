@@ -16,9 +16,9 @@ use crate::net::PlaceId;
 use crate::runtime::ActionContext;
 
 mod backend;
-pub mod command;
+pub(crate) mod command;
 mod group;
-pub mod worker;
+pub(crate) mod worker;
 
 pub use backend::ProgramActions;
 pub use command::{CommandAction, CommandSpec};

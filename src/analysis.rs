@@ -55,4 +55,4 @@ pub mod report;
 pub mod scc;
 pub mod state_space;
 pub mod under_policy;
-pub mod vanishing;
+pub(crate) mod vanishing;

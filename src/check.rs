@@ -31,7 +31,7 @@
 //! ```
 
 pub mod endless;
-pub mod structure;
+pub(crate) mod structure;
 
 use serde::Serialize;
 

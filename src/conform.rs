@@ -35,7 +35,7 @@ mod fit;
 pub mod holding;
 mod monitor;
 mod observe;
-pub mod stats;
+pub(crate) mod stats;
 
 pub use compare::{Report, Row, RowKind, Verdict, compare};
 pub use fit::{Fitted, fit};
@@ -59,6 +59,7 @@ pub const ALPHA: f64 = 0.05;
 
 /// Why conformance cannot be checked.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ConformError {
     /// The run has no time span to observe.
     #[error("the run lasts no time (end {0}): nothing to observe")]

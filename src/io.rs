@@ -229,6 +229,7 @@ impl std::error::Error for LoadError {}
 
 /// What was wrong with a file.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum LoadErrorKind {
     /// The file could not be read (or written), with the system's error as its source.
     #[error("cannot read: {0}")]

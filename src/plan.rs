@@ -37,11 +37,11 @@
 //! - [`ros2`]: the `[ros2]` table and the `server` keys of `ros2` places.
 //! - [`thesis`]: `plan-runner import-thesis`, the thesis framework's inputs → a plan.
 
-pub mod file;
-pub mod map;
-pub mod programs;
+pub(crate) mod file;
+pub(crate) mod map;
+pub(crate) mod programs;
 pub mod resolve;
-pub mod rewards;
+pub(crate) mod rewards;
 pub mod ros2;
 pub mod thesis;
 

@@ -96,6 +96,7 @@ impl Rule {
 /// Why a set of rules is not a policy for a net. `rule` is the index of the offending rule;
 /// messages number rules from 1, in file order, as `check` and the plan's comments do.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum PolicyError {
     /// An exact pattern with the wrong number of places.
     #[error("rule {}: the marking has {got} places, the net {expected}", .rule + 1)]

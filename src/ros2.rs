@@ -8,9 +8,18 @@
 //!   and marking ([`firings`]).
 //! - [`robot`]: the robot's side (`plan-runner robot`): serves ExecPlace for the plan's
 //!   `ros2` places with net-timed local actions.
-//! - [`heartbeat`]: robots' heartbeats and the supervisor's [`heartbeat::RobotWatch`], which
-//!   turns a silent robot into a failed action.
+//! - [`presence`]: whether a robot is there, from DDS discovery of its ExecPlace server
+//!   (any ROS 2 node can be a robot) and its heartbeat when it sends one; a robot lost
+//!   fails its actions.
+//! - [`heartbeat`]: the optional heartbeats of `plan-runner robot` and the supervisor, and
+//!   [`heartbeat::RobotWatch`] that follows them.
+//! - [`bag`]: a run's journal exported as MCAP (ROS 2 messages, CDR), for `ros2 bag play`
+//!   and Foxglove.
 //! - [`rosout`]: the ROS 2 layer's warnings and errors on `/rosout` when asked.
+//! - [`nav2`]: Nav2's `NavigateToPose` for `ros2` places with `server = "navigate_to_pose"`
+//!   (real Nav2 robots) and for `goto` on simulated robots (`run --robots N --ros2`), which
+//!   the world serves, with the robots' poses on `/<robot>/pose`.
+//! - [`names`]: `--ros-args` and the names of topics and actions under the run's namespace.
 //! - [`config`]: domain, networks (loopback by default), timings.
 //! - [`settings`]: what a plan tells the backend ([`Ros2Settings`]); compiled without the
 //!   feature too, so plans read the same everywhere.
@@ -22,6 +31,8 @@ pub mod settings;
 #[cfg(feature = "ros2")]
 pub mod backend;
 #[cfg(feature = "ros2")]
+pub mod bag;
+#[cfg(feature = "ros2")]
 pub mod config;
 #[cfg(feature = "ros2")]
 pub mod firings;
@@ -29,6 +40,12 @@ pub mod firings;
 pub mod heartbeat;
 #[cfg(feature = "ros2")]
 pub mod msgs;
+#[cfg(feature = "ros2")]
+pub mod names;
+#[cfg(feature = "ros2")]
+pub mod nav2;
+#[cfg(feature = "ros2")]
+pub mod presence;
 #[cfg(feature = "ros2")]
 pub mod remote_place;
 #[cfg(feature = "ros2")]
@@ -40,7 +57,7 @@ pub mod rosout;
 pub use backend::Ros2Backend;
 #[cfg(feature = "ros2")]
 pub use config::DdsConfig;
-pub use settings::{DEFAULT_SERVER, ROS2_ACTION, Ros2Settings};
+pub use settings::{DEFAULT_SERVER, NAV2_SERVER, ROS2_ACTION, Ros2Settings};
 
 /// What went wrong in the ROS 2 backend.
 #[cfg(feature = "ros2")]

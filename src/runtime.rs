@@ -63,26 +63,26 @@
 //! # }
 //! ```
 
-pub mod action;
-pub mod agent;
+pub(crate) mod action;
+pub(crate) mod agent;
 mod backend;
 mod builder;
-pub mod builtin;
+pub(crate) mod builtin;
 mod by_name;
 mod clock;
 mod conservation;
 mod engine;
-pub mod event;
+pub(crate) mod event;
 mod handle;
 mod id;
 pub mod journal;
-pub mod place;
-pub mod reward;
+pub(crate) mod place;
+pub(crate) mod reward;
 mod role;
 mod sink;
 mod snapshot;
 mod stop;
-pub mod supervisor;
+pub(crate) mod supervisor;
 
 use std::path::PathBuf;
 
@@ -183,6 +183,7 @@ impl std::fmt::Display for StopReason {
 
 /// Why a run could not start.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RuntimeError {
     /// `spawn` was called outside a tokio runtime.
     #[error("the runtime must be spawned inside a tokio runtime")]

@@ -69,6 +69,7 @@ pub const DEFAULT_MAX_IMMEDIATE: u64 = 1_000_000;
 
 /// Why a run cannot go on.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SimError {
     /// Immediate transitions kept firing without time passing: a vanishing loop the net
     /// never leaves (a *timeless trap*).

@@ -85,7 +85,7 @@ mod edit;
 mod greatspn;
 mod guard;
 pub mod layout;
-pub mod limits;
+pub(crate) mod limits;
 mod live;
 mod replay;
 mod report;

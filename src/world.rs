@@ -48,24 +48,24 @@ pub mod map;
 pub mod program;
 
 #[cfg(feature = "sim")]
-pub mod action;
+pub(crate) mod action;
 #[cfg(feature = "sim")]
 mod actor;
 #[cfg(feature = "sim")]
-pub mod backend;
+pub(crate) mod backend;
 #[cfg(feature = "sim")]
 pub mod fleet;
 #[cfg(feature = "sim")]
-pub mod metrics;
+pub(crate) mod metrics;
 #[cfg(feature = "sim")]
-pub mod queue;
+pub(crate) mod queue;
 #[cfg(feature = "sim")]
 pub mod room;
 #[cfg(feature = "sim")]
-pub mod view;
+pub(crate) mod view;
 
 #[cfg(feature = "sim")]
-pub use action::SimAction;
+pub use action::{Navigator, SimAction};
 #[cfg(feature = "sim")]
 pub use actor::{GotoError, RobotStart, World, WorldHandle};
 #[cfg(feature = "sim")]

@@ -4,7 +4,8 @@
 //! N×N between every pair of participants (`docs/zenoh.md`).
 //!
 //! - [`keys`]: key expressions and liveliness tokens in rmw_zenoh's format.
-//! - [`wire`]: CDR payloads, attachments, ROS 2 type hashes.
+//! - [`type_hash`]: ROS 2 type hashes, from the interfaces' own definitions.
+//! - [`wire`]: CDR payloads and attachments.
 //! - [`action`]: the request and response messages of the ExecPlace action's services.
 //! - [`presence`]: who is there, from liveliness tokens (a token gone for `lost_after` →
 //!   lost).
@@ -22,6 +23,7 @@ pub mod presence;
 pub mod remote_place;
 pub mod robot;
 pub mod supervisor;
+pub mod type_hash;
 pub mod wire;
 
 use std::time::Duration;
@@ -38,6 +40,12 @@ pub enum ZenohError {
     /// Robots (or subscribers) did not show up in time.
     #[error("{0}")]
     Startup(String),
+    /// The plan asks for what the Zenoh transport does not do.
+    #[error("{0}")]
+    Unsupported(String),
+    /// A type hash could not be computed (a bug in the interfaces' definitions).
+    #[error(transparent)]
+    Type(#[from] type_hash::TypeError),
 }
 
 impl ZenohError {

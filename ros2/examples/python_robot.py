@@ -13,9 +13,11 @@ It speaks the DDS topics a ROS 2 action server uses, for the action /R/<server>:
   rt/R/<server>/_action/feedback, rt/R/<server>/_action/status
 
 with the request ids in a 16-byte header before each request and reply, as ROS 2's
-rmw_cyclonedds_cpp writes them (the plan's `[ros2] service_mapping = "cyclone"`). It
-publishes its heartbeat on rt/gspn/heartbeat (or the supervisor reports it lost) and leaves
-when the supervisor says on rt/gspn/run that the run is over.
+rmw_cyclonedds_cpp writes them (the plan's `[ros2] service_mapping = "cyclone"`). Types are
+gspn_msgs interfaces v2 (tests/ros2/interfaces.rs checks them against the .msg files). It
+publishes a gspn heartbeat on rt/gspn/heartbeat unless `--heartbeat 0` (then the supervisor
+watches it through DDS discovery, as any ROS 2 action server), and leaves when the supervisor
+says on rt/gspn/run that the run is over.
 
 Its action: every goal takes --delay seconds, then succeeds with an empty transition ("let
 the supervisor decide": the policy, or the net's race). A cancel request ends the goal as
@@ -42,6 +44,9 @@ from cyclonedds.util import duration
 
 # action_msgs/msg/GoalStatus values.
 SUCCEEDED, CANCELED, EXECUTING = 4, 5, 2
+# gspn_msgs/action/ExecPlace result outcomes and gspn_msgs/msg/RunState states (v2).
+FIRE, DECIDE, FAILED, CANCELLED = 0, 1, 2, 3
+RUN_OVER = 2
 
 
 @dataclass
@@ -73,15 +78,58 @@ class GoalStatusArray(IdlStruct, typename="action_msgs::msg::dds_::GoalStatusArr
 
 
 @dataclass
+class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
+    stamp: Time
+    frame_id: str
+
+
+@dataclass
+class Point(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
+    x: float64
+    y: float64
+    z: float64
+
+
+@dataclass
+class Quaternion(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
+    x: float64
+    y: float64
+    z: float64
+    w: float64
+
+
+@dataclass
+class Pose(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
+    position: Point
+    orientation: Quaternion
+
+
+@dataclass
+class PoseStamped(IdlStruct, typename="geometry_msgs::msg::dds_::PoseStamped_"):
+    header: Header
+    pose: Pose
+
+
+@dataclass
+class KeyValue(IdlStruct, typename="diagnostic_msgs::msg::dds_::KeyValue_"):
+    key: str
+    value: str
+
+
+@dataclass
 class Goal(IdlStruct, typename="gspn_msgs::action::dds_::ExecPlace_Goal_"):
     place: str
-    agent: str
+    agent: uint64
+    has_target: bool
+    target: PoseStamped
+    args: sequence[KeyValue]
 
 
 @dataclass
 class Result(IdlStruct, typename="gspn_msgs::action::dds_::ExecPlace_Result_"):
+    outcome: uint8
     transition: str
-    outcome: str
+    message: str
 
 
 @dataclass
@@ -164,7 +212,7 @@ class Heartbeat(IdlStruct, typename="gspn_msgs::msg::dds_::Heartbeat_"):
 
 @dataclass
 class RunState(IdlStruct, typename="gspn_msgs::msg::dds_::RunState_"):
-    state: str
+    state: uint8
     stopped: str
     firings: uint64
 
@@ -195,8 +243,8 @@ class GoalState:
 class ExecPlaceServer:
     """The ExecPlace action at /<robot>/<server>."""
 
-    def __init__(self, dp, robot: str, server: str, delay: float):
-        base = f"{robot}/{server}/_action"
+    def __init__(self, dp, robot: str, server: str, delay: float, namespace: str = ""):
+        base = f"{namespace}/{robot}/{server}/_action".lstrip("/")
         self.delay = delay
         self.goals = {}  # bytes(uuid) -> GoalState
 
@@ -230,10 +278,10 @@ class ExecPlaceServer:
         )
 
     def answer_results(self, g: GoalState):
-        result = Result(
-            transition="",
-            outcome="decide" if g.status == SUCCEEDED else "cancelled",
-        )
+        if g.status == SUCCEEDED:
+            result = Result(outcome=DECIDE, transition="", message="done")
+        else:
+            result = Result(outcome=CANCELLED, transition="", message="cancelled")
         for h in g.result_requests:
             self.result_rr.write(GetResultReply(*h, status=g.status, result=result))
         g.result_requests = []
@@ -250,7 +298,12 @@ class ExecPlaceServer:
             g = GoalState(info, r.goal, time.monotonic() + self.delay)
             self.goals[bytes(r.goal_id.uuid)] = g
             self.served += 1
-            log(f"goal {r.goal.place} agent {r.goal.agent}: started")
+            where = ""
+            if r.goal.has_target:
+                pos = r.goal.target.pose.position
+                where = f" target ({pos.x:g}, {pos.y:g}) in {r.goal.target.header.frame_id}"
+            extra = "".join(f" {a.key}={a.value}" for a in r.goal.args)
+            log(f"goal {r.goal.place} agent {r.goal.agent}: started{where}{extra}")
             self.goal_rr.write(
                 SendGoalReply(r.client, r.seq_high, r.seq_low, accepted=True, stamp=info.stamp)
             )
@@ -263,7 +316,7 @@ class ExecPlaceServer:
             if g is None:
                 # Unknown goal: ROS 2 answers UNKNOWN (0) at once.
                 self.result_rr.write(
-                    GetResultReply(*header, status=0, result=Result("", "unknown goal"))
+                    GetResultReply(*header, status=0, result=Result(FAILED, "", "unknown goal"))
                 )
                 continue
             g.result_requests.append(header)
@@ -322,7 +375,18 @@ def main() -> int:
     ap.add_argument("--domain", type=int, default=0, help="the DDS domain id")
     ap.add_argument("--server", action="append", help="ExecPlace servers (default exec_place)")
     ap.add_argument("--delay", type=float, default=0.05, help="seconds each goal takes")
-    ap.add_argument("--heartbeat", type=float, default=0.1, help="seconds between heartbeats")
+    ap.add_argument(
+        "--namespace",
+        default="",
+        help="the run's namespace, as the supervisor's --ros-args -r __ns:=/NS (default: none)",
+    )
+    ap.add_argument(
+        "--heartbeat",
+        type=float,
+        default=0.1,
+        help="seconds between gspn heartbeats; 0 = none (the supervisor then watches the "
+        "action server through DDS discovery)",
+    )
     args = ap.parse_args()
     ROBOT = args.id
     stop = []
@@ -330,22 +394,27 @@ def main() -> int:
     signal.signal(signal.SIGINT, lambda *_: stop.append("SIGINT"))
 
     dp = DomainParticipant(args.domain)
-    servers = [ExecPlaceServer(dp, args.id, s, args.delay) for s in args.server or ["exec_place"]]
-    beat = DataWriter(dp, Topic(dp, "rt/gspn/heartbeat", Heartbeat), qos=HEARTBEAT)
-    run = DataReader(dp, Topic(dp, "rt/gspn/run", RunState), qos=RUN)
+    ns = args.namespace.rstrip("/")
+    servers = [
+        ExecPlaceServer(dp, args.id, s, args.delay, ns) for s in args.server or ["exec_place"]
+    ]
+    beat = None
+    if args.heartbeat > 0:
+        beat = DataWriter(dp, Topic(dp, f"rt{ns}/gspn/heartbeat", Heartbeat), qos=HEARTBEAT)
+    run = DataReader(dp, Topic(dp, f"rt{ns}/gspn/run", RunState), qos=RUN)
     log(f"serving {', '.join(args.server or ['exec_place'])} on domain {args.domain}")
 
     seq, next_beat, over = 0, 0.0, None
     while not stop and over is None:
         t = time.monotonic()
-        if t >= next_beat:
+        if beat is not None and t >= next_beat:
             beat.write(Heartbeat(robot=args.id, seq=seq))
             seq, next_beat = seq + 1, t + args.heartbeat
         busy = False
         for s in servers:
             busy |= s.step()
         for r in run.take(N=8):
-            if isinstance(r, RunState) and r.state == "over":
+            if isinstance(r, RunState) and r.state == RUN_OVER:
                 over = f"{r.stopped} after {r.firings} firings"
         if not busy:
             time.sleep(0.002)

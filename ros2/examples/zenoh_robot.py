@@ -20,9 +20,10 @@ declares its node's liveliness token, `@ros2_lv/<domain>/<zid>/0/0/NN/%/%R/gspn_
 supervisor counts the robot ready when it sees it. It leaves when the supervisor says on
 `/gspn/run` that the run is over.
 
-Its action: every goal takes --delay seconds, then succeeds with an empty transition ("let
+Its action: every goal takes --delay seconds, then succeeds with outcome DECIDE ("let
 the supervisor decide": the policy, or the net's race). A cancel request ends the goal as
-CANCELED. Each goal is logged on stderr (`goal PLACE agent A: started`, `... succeeded`);
+CANCELED. Each goal is logged on stderr (`goal PLACE agent A: started`, its target and
+args when the plan gives the place some, `... succeeded`);
 the last line says how many goals it served.
 """
 
@@ -39,6 +40,9 @@ from zenoh.ext import Int64, UInt8, z_deserialize, z_serialize
 # action_msgs/msg/GoalStatus values; action_msgs/srv/CancelGoal return codes.
 EXECUTING, SUCCEEDED, CANCELED = 2, 4, 5
 CANCEL_NONE, CANCEL_UNKNOWN_GOAL = 0, 2
+# gspn_msgs/action/ExecPlace result outcomes; gspn_msgs/msg/RunState states.
+FIRE, DECIDE, FAILED, OUTCOME_CANCELLED = 0, 1, 2, 3
+RUN_OVER = 2
 CDR_LE = b"\x00\x01\x00\x00"
 
 
@@ -68,6 +72,25 @@ class Cdr:
         n = self.read("I", 4)
         s = self.raw(n)
         return s[:-1].decode()
+
+    def header(self) -> str:
+        """std_msgs/Header: the stamp (skipped), then the frame id."""
+        self.read("i", 4), self.read("I", 4)
+        return self.string()
+
+    def goal(self):
+        """gspn_msgs/action/ExecPlace goal: place, agent, has_target, target
+        (geometry_msgs/PoseStamped), args (diagnostic_msgs/KeyValue[])."""
+        place, agent = self.string(), self.read("Q", 8)
+        has_target = self.read("?", 1)
+        frame = self.header()
+        pose = [self.read("d", 8) for _ in range(7)]  # position xyz, orientation xyzw
+        args = {}
+        for _ in range(self.read("I", 4)):
+            k = self.string()
+            args[k] = self.string()
+        target = (pose[0], pose[1], frame) if has_target else None
+        return place, agent, target, args
 
     # -- writing
     def _pad(self, n: int):
@@ -99,7 +122,7 @@ def body(payload) -> Cdr:
 
 
 class Goal:
-    def __init__(self, goal_id: bytes, place: str, agent: str, ends: float):
+    def __init__(self, goal_id: bytes, place: str, agent: int, ends: float):
         self.goal_id, self.place, self.agent, self.ends = goal_id, place, agent, ends
         self.status = EXECUTING
         self.stamp = time.time_ns()
@@ -129,11 +152,17 @@ class ExecPlaceServer:
         query.reply(query.key_expr, CDR_LE + bytes(cdr.buf), attachment=att)
         query.drop()
 
+    @staticmethod
+    def result(status: int, outcome: int, message: str) -> Cdr:
+        """status (int8), then ExecPlace_Result {outcome (uint8), transition, message}."""
+        return Cdr().put("b", 1, status).put("B", 1, outcome).put_string("").put_string(message)
+
     def answer(self, g: Goal):
-        outcome = "decide" if g.status == SUCCEEDED else "cancelled"
         for q in g.waiting:
-            # status (int8), then ExecPlace_Result {transition, outcome}.
-            self.reply(q, Cdr().put("b", 1, g.status).put_string("").put_string(outcome))
+            if g.status == SUCCEEDED:
+                self.reply(q, self.result(g.status, DECIDE, "python robot"))
+            else:
+                self.reply(q, self.result(g.status, OUTCOME_CANCELLED, "cancelled"))
         g.waiting = []
 
     def step(self) -> bool:
@@ -143,11 +172,15 @@ class ExecPlaceServer:
             busy = True
             c = body(q.payload)
             goal_id = c.raw(16)
-            place, agent = c.string(), c.string()
+            place, agent, target, args = c.goal()
             g = Goal(goal_id, place, agent, time.monotonic() + self.delay)
             self.goals[goal_id] = g
             self.served += 1
             log(f"goal {place} agent {agent}: started")
+            if target or args:
+                where = f"target ({target[0]:g}, {target[1]:g}) in {target[2]}" if target else "no target"
+                kv = " ".join(f"{k}={v}" for k, v in sorted(args.items()))
+                log(f"goal {place} agent {agent}: {where}, args {kv}")
             # accepted (bool), stamp (builtin_interfaces/Time).
             self.reply(q, Cdr().put("?", 1, True).put_time(g.stamp))
         while (q := self.get_result.try_recv()) is not None:
@@ -156,7 +189,7 @@ class ExecPlaceServer:
             g = self.goals.get(goal_id)
             if g is None:
                 # Unknown goal: ROS 2 answers UNKNOWN (0) at once.
-                self.reply(q, Cdr().put("b", 1, 0).put_string("").put_string("unknown goal"))
+                self.reply(q, self.result(0, FAILED, "unknown goal"))
                 continue
             g.waiting.append(q)
             if g.status != EXECUTING:
@@ -234,10 +267,10 @@ def main() -> int:
             for s in servers:
                 busy |= s.step()
             while (sample := run.try_recv()) is not None:
-                # gspn_msgs/RunState: state, stopped (strings), firings (uint64).
+                # gspn_msgs/RunState: state (uint8), stopped (string), firings (uint64).
                 c = body(sample.payload)
-                state, stopped, firings = c.string(), c.string(), c.read("Q", 8)
-                if state == "over":
+                state, stopped, firings = c.read("B", 1), c.string(), c.read("Q", 8)
+                if state == RUN_OVER:
                     why = f"the supervisor's run is over ({stopped} after {firings} firings)"
             if not busy:
                 time.sleep(0.002)

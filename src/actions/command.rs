@@ -215,7 +215,7 @@ fn failure(program: &str, status: std::process::ExitStatus, tail: &VecDeque<Stri
 }
 
 /// The prefix of a stdout line that answers for the program, whatever it prints after it.
-pub const ANSWER_PREFIX: &str = "gspn: ";
+pub(crate) const ANSWER_PREFIX: &str = "gspn: ";
 
 /// A program's answer: the last `gspn: ` line (`tagged`), else the last stdout line.
 #[derive(Debug, Default)]

@@ -31,16 +31,20 @@ pub use transient::poisson_weights;
 
 /// A CTMC over states `0..n`: off-diagonal rates in compressed sparse rows. The diagonal is
 /// implied (minus the row's sum). Self-loops are not stored (they do not change π).
+///
+/// The fields are the crate's: every rate is > 0 and each row's columns are sorted, which
+/// the solvers rely on, so a chain is made only by [`Ctmc::from_triplets`] (or derived from
+/// one) and read through [`Ctmc::states`], [`Ctmc::row`] and [`Ctmc::exit_rate`].
 #[derive(Clone, Debug, Default)]
 pub struct Ctmc {
     /// Number of states.
-    pub n: usize,
+    pub(crate) n: usize,
     /// Row `i`'s entries are `cols[row_ptr[i]..row_ptr[i+1]]` / `rates[..]`.
-    pub row_ptr: Vec<usize>,
+    pub(crate) row_ptr: Vec<usize>,
     /// Target state of each entry.
-    pub cols: Vec<u32>,
+    pub(crate) cols: Vec<u32>,
     /// Rate of each entry (> 0).
-    pub rates: Vec<f64>,
+    pub(crate) rates: Vec<f64>,
 }
 
 impl Ctmc {
@@ -72,6 +76,11 @@ impl Ctmc {
             cols,
             rates,
         }
+    }
+
+    /// Number of states.
+    pub fn states(&self) -> usize {
+        self.n
     }
 
     /// Total outgoing rate of state `i`.

@@ -10,7 +10,7 @@
 //! 95% ones `simulate --runs` prints, here over the batches of one run instead of
 //! independent runs.
 
-pub use crate::stats::{
+pub(crate) use crate::stats::{
     BatchMeans, Estimate, Z975, erfc, estimate, gamma_q, ratio_estimate, student_t_two_sided,
     t_quantile_975,
 };
@@ -21,7 +21,7 @@ use crate::stats::{beta_i, gamma_p, kolmogorov_q};
 /// Two-sided p-value of `predicted` against batch means `est` with `df` degrees of freedom
 /// (the t statistic `(mean − predicted) / (half_width / t₀.₉₇₅)`); a zero-width interval gives
 /// 1 when it holds the prediction (to 1e-12 relative) and 0 otherwise.
-pub fn t_test(est: &Estimate, predicted: f64, df: u64) -> f64 {
+pub(crate) fn t_test(est: &Estimate, predicted: f64, df: u64) -> f64 {
     let se = est.half_width / t_quantile_975(df);
     let d = est.mean - predicted;
     if se.is_nan() || se <= 0.0 {
@@ -36,7 +36,7 @@ pub fn t_test(est: &Estimate, predicted: f64, df: u64) -> f64 {
 
 /// The 95% score interval of a Poisson rate from `n` events over exposure `e`: the `λ` with
 /// `(n − λe)² ≤ z²·λe` (what [`rate_test`] accepts).
-pub fn rate_interval(n: u64, e: f64) -> (f64, f64) {
+pub(crate) fn rate_interval(n: u64, e: f64) -> (f64, f64) {
     let (n, z2) = (n as f64, Z975 * Z975);
     let root = Z975 * (4.0 * n + z2).sqrt();
     (
@@ -47,7 +47,7 @@ pub fn rate_interval(n: u64, e: f64) -> (f64, f64) {
 
 /// Two-sided p-value of rate `lambda` given `n` events over exposure `e` (score test: the
 /// counting process minus `λ·exposure` is a martingale of variance `λ·exposure`).
-pub fn rate_test(n: u64, e: f64, lambda: f64) -> f64 {
+pub(crate) fn rate_test(n: u64, e: f64, lambda: f64) -> f64 {
     let mu = lambda * e;
     if mu <= 0.0 {
         return if n == 0 { 1.0 } else { 0.0 };
@@ -59,7 +59,7 @@ pub fn rate_test(n: u64, e: f64, lambda: f64) -> f64 {
 /// Mean and variance of an exponential of rate `rate` conditioned on being at most `c`
 /// (`c` = ∞: `1/rate` and `1/rate²`): `1/λ − c·q/(1 − q)` and `1/λ² − c²·q/(1 − q)²` with
 /// `q = e^(−λc)`, by their series for small `λc` (where the closed forms cancel).
-pub fn truncated_exponential(rate: f64, c: f64) -> (f64, f64) {
+pub(crate) fn truncated_exponential(rate: f64, c: f64) -> (f64, f64) {
     let a = rate * c;
     if a.is_infinite() {
         return (1.0 / rate, 1.0 / (rate * rate));
@@ -87,7 +87,7 @@ pub fn truncated_exponential(rate: f64, c: f64) -> (f64, f64) {
 /// the gamma distribution with the sum's exact mean and variance — exactly the
 /// `Gamma(n, 1/rate)` of `n` exponential stays when no horizon cuts (each `≫ 1/rate`).
 /// Stays with horizon 0 say nothing and are left out; `None` when none is left.
-pub fn stays_mean_test(stays: &[(f64, f64)], rate: f64) -> Option<f64> {
+pub(crate) fn stays_mean_test(stays: &[(f64, f64)], rate: f64) -> Option<f64> {
     let (mut sum, mut mean, mut var) = (0.0, 0.0, 0.0);
     for &(x, c) in stays.iter().filter(|s| s.1 > 0.0) {
         let (m, v) = truncated_exponential(rate, c);
@@ -109,7 +109,7 @@ pub fn stays_mean_test(stays: &[(f64, f64)], rate: f64) -> Option<f64> {
 /// (see [`stays_mean_test`]), and the `u`s are tested against the uniform. Returns Stephens'
 /// modified statistic `D·(√n + 0.12 + 0.11/√n)` and its p-value from Kolmogorov's
 /// distribution; `None` for fewer than 2 stays.
-pub fn stays_ks_test(stays: &[(f64, f64)], rate: f64) -> Option<(f64, f64)> {
+pub(crate) fn stays_ks_test(stays: &[(f64, f64)], rate: f64) -> Option<(f64, f64)> {
     let cdf = |x: f64| -(-rate * x).exp_m1();
     let mut us: Vec<f64> = stays
         .iter()
@@ -147,7 +147,7 @@ const LILLIEFORS_EXP: [(f64, f64); 5] = [
 /// p-value, interpolated in `ln p` between the tabulated points (extrapolated beyond them,
 /// capped at 1: approximate outside 0.01–0.15, exact at the 0.05 decision). `None` for fewer
 /// than 2 values or a zero mean.
-pub fn ks_exponential(xs: &[f64]) -> Option<(f64, f64)> {
+pub(crate) fn ks_exponential(xs: &[f64]) -> Option<(f64, f64)> {
     let n = xs.len();
     if n < 2 {
         return None;
@@ -185,7 +185,7 @@ fn lilliefors_p(x: f64) -> f64 {
 /// Pearson's chi-square test of counts against probabilities: the p-value (chi-square with
 /// `k − 1` degrees of freedom over the cells of positive probability). A count where the
 /// probability is 0 gives 0; one cell gives 1 when nothing fell elsewhere.
-pub fn chi_square(counts: &[u64], probs: &[f64]) -> f64 {
+pub(crate) fn chi_square(counts: &[u64], probs: &[f64]) -> f64 {
     let total: u64 = counts.iter().sum();
     if total == 0 {
         return 1.0;
@@ -214,7 +214,7 @@ pub fn chi_square(counts: &[u64], probs: &[f64]) -> f64 {
 /// groups, or no degree of freedom within them, give 1. Without spread within the groups the
 /// p-value is 0 when their means differ and 1 when they do not (a sum of squares below
 /// `10⁻²⁰·Σx²`, rounding in the times it was computed from, counts as none).
-pub fn anova_p(groups: &[&[f64]]) -> f64 {
+pub(crate) fn anova_p(groups: &[&[f64]]) -> f64 {
     let groups: Vec<&[f64]> = groups.iter().copied().filter(|g| !g.is_empty()).collect();
     let n: usize = groups.iter().map(|g| g.len()).sum();
     let k = groups.len();

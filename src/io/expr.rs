@@ -192,6 +192,7 @@ impl std::error::Error for ExprError {}
 
 /// Why evaluation failed: in the expression itself, or in resolving a name.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum EvalError<E> {
     /// Division by zero, a function outside its domain...
     At(ExprError),

@@ -9,6 +9,7 @@ use super::{
 /// Why a net could not be built. Readers check the same things earlier, with the file
 /// position; these errors are the last line for nets built in code.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum NetError {
     /// Two places or two transitions share a name (names must be unique per kind).
     #[error("duplicate {kind} name `{name}`")]

@@ -245,6 +245,7 @@ pub struct PredicateError {
 
 /// The kinds of [`PredicateError`], for callers that report them in their own words.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum PredicateErrorKind {
     /// A name that is no place of the net ([`PredicateError::name`] holds it).
     UnknownPlace,

@@ -129,6 +129,14 @@ pub struct PlaceFile {
     /// `/<robot>/<server>` (default `"exec_place"`).
     #[schemars(with = "Option<String>")]
     pub server: Option<Spanned<String>>,
+    /// With `action = "ros2"`: the target pose sent in the ExecPlace goal (frame `map`):
+    /// `[x, y]` or `[x, y, yaw]` (metres, radians).
+    #[schemars(with = "Option<Vec<f64>>")]
+    pub target: Option<Spanned<Vec<f64>>>,
+    /// With `action = "ros2"`: text arguments sent in the ExecPlace goal
+    /// (`diagnostic_msgs/KeyValue` pairs).
+    #[schemars(with = "Option<BTreeMap<String, String>>")]
+    pub args: Option<Spanned<BTreeMap<String, String>>>,
 }
 
 /// One policy rule.

@@ -13,7 +13,9 @@ use super::file::PlaceFile;
 use super::resolve::out_of_range;
 use crate::io::{LoadError, LoadErrorKind};
 use crate::net::Net;
-use crate::ros2::settings::{DEFAULT_SERVER, ROS2_ACTION, Ros2Settings, ServiceMapping, Transport};
+use crate::ros2::settings::{
+    DEFAULT_SERVER, NAV2_SERVER, PlaceArgs, ROS2_ACTION, Ros2Settings, ServiceMapping, Transport,
+};
 
 /// The `[ros2]` table: how the ROS 2 backend joins DDS and watches robots.
 #[derive(Debug, Deserialize, JsonSchema)]
@@ -25,7 +27,8 @@ pub struct Ros2File {
     /// Local IP addresses DDS may use (default `["127.0.0.1"]`: loopback only).
     #[schemars(with = "Option<Vec<String>>")]
     pub networks: Option<Vec<Spanned<String>>>,
-    /// Seconds between a robot's heartbeats (default 0.1).
+    /// Seconds between a `plan-runner robot`'s heartbeats (default 0.1; 0: none, the
+    /// supervisor then sees robots through DDS discovery alone).
     #[schemars(with = "Option<f64>", range(min = 0.0))]
     pub heartbeat: Option<Spanned<f64>>,
     /// Seconds without a heartbeat after which a robot is lost (default 1.0).
@@ -52,7 +55,7 @@ pub struct Ros2File {
     pub zenoh: Option<String>,
 }
 
-/// The `[ros2]` table and the `server` keys of the places.
+/// The `[ros2]` table and the `server`, `target` and `args` keys of the places.
 pub(super) fn resolve_ros2(
     net: &Net,
     file: Option<&Ros2File>,
@@ -118,7 +121,14 @@ pub(super) fn resolve_ros2(
         ] {
             if let Some(v) = v {
                 let x = *v.get_ref();
-                if !crate::limits::valid_seconds(x) {
+                // `heartbeat = 0`: robots send none (the supervisor sees them through
+                // discovery).
+                let valid = if key == "heartbeat" {
+                    crate::limits::valid_wait(x)
+                } else {
+                    crate::limits::valid_seconds(x)
+                };
+                if !valid {
                     return Err(at(
                         v.span(),
                         out_of_range(key, "ros2", x, crate::limits::SECONDS_EXPECTED),
@@ -159,10 +169,87 @@ pub(super) fn resolve_ros2(
             }
             None => DEFAULT_SERVER.to_string(),
         };
+        let args = place_args(name.get_ref(), f, is_ros2, at)?;
+        if let Some(srv) = &f.server
+            && srv.get_ref() == NAV2_SERVER
+            && args.target.is_none()
+        {
+            return Err(at(
+                srv.span(),
+                LoadErrorKind::Invalid(format!(
+                    "place `{}`: server \"{NAV2_SERVER}\" sends Nav2 goals: it needs a `target = [x, y]` or `[x, y, yaw]` (frame map)",
+                    name.get_ref()
+                )),
+            ));
+        }
+        if let Some(srv) = &f.server
+            && srv.get_ref() == NAV2_SERVER
+            && s.transport == Transport::Zenoh
+        {
+            return Err(at(
+                srv.span(),
+                LoadErrorKind::Invalid(format!(
+                    "place `{}`: server \"{NAV2_SERVER}\" sends Nav2 goals over DDS only, and the plan says transport = \"zenoh\"",
+                    name.get_ref()
+                )),
+            ));
+        }
         if is_ros2 && let Some(p) = net.place_by_name(name.get_ref()) {
             s.servers.push((p, server));
+            if args != PlaceArgs::default() {
+                s.args.push((p, args));
+            }
         }
     }
     s.servers.sort_by_key(|&(p, _)| p);
+    s.args.sort_by_key(|&(p, _)| p);
     Ok(s)
+}
+
+/// The `target` and `args` keys of place `name`: for `ros2` places only; a target is
+/// `[x, y]` or `[x, y, yaw]` of finite numbers.
+fn place_args(
+    name: &str,
+    f: &PlaceFile,
+    is_ros2: bool,
+    at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+) -> Result<PlaceArgs, LoadError> {
+    let only_ros2 = |key: &str, span: Range<usize>| {
+        at(
+            span,
+            LoadErrorKind::Invalid(format!(
+                "place `{name}`: `{key}` applies to places with action = \"{ROS2_ACTION}\" only"
+            )),
+        )
+    };
+    let mut out = PlaceArgs::default();
+    if let Some(t) = &f.target {
+        if !is_ros2 {
+            return Err(only_ros2("target", t.span()));
+        }
+        let v = t.get_ref();
+        out.target = match v[..] {
+            [x, y] if x.is_finite() && y.is_finite() => Some([x, y, 0.0]),
+            [x, y, yaw] if v.iter().all(|c| c.is_finite()) => Some([x, y, yaw]),
+            _ => {
+                return Err(at(
+                    t.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "place `{name}`: target must be [x, y] or [x, y, yaw] (finite numbers)"
+                    )),
+                ));
+            }
+        };
+    }
+    if let Some(a) = &f.args {
+        if !is_ros2 {
+            return Err(only_ros2("args", a.span()));
+        }
+        out.args = a
+            .get_ref()
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+    }
+    Ok(out)
 }

@@ -2,9 +2,10 @@
 //!
 //! ```text
 //! connect   node `/gspn/supervisor`, its own heartbeat (robots leave when it stops), the
-//!           robots' heartbeat watch, /gspn/firings + /gspn/marking
+//!           robots' heartbeat watch (optional for robots), /gspn/firings + /gspn/marking
 //!           publishers, one ExecPlace client per (robot, server); waits (≤ startup) for
-//!           every robot's heartbeat and server and for the wanted firing subscribers
+//!           every robot's servers and for the wanted firing subscribers, then follows
+//!           each robot's presence (discovery and heartbeat: `presence`)
 //! attach    registers the `ros2` action (RemotePlaces) on the runtime builder
 //!           then says the run is `running` on /gspn/run
 //! publish   a task that publishes every firing and the marking from the run's events
@@ -18,19 +19,17 @@ use std::time::Duration;
 
 use ros2_client::action::ActionClientQosPolicies;
 use ros2_client::qos::{Durability, History};
-use ros2_client::{Name, Node, QosProfile};
+use ros2_client::{Node, QosProfile};
 use tokio::task::JoinHandle;
 
 use super::Ros2Error;
 use super::config::DdsConfig;
 use super::firings::{FiringPublisher, Published, RunStatePublisher};
-use super::heartbeat::{self, RobotWatch};
-use super::msgs::{
-    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RUN_OVER, RUN_RUNNING, RunState,
-    exec_place_type,
-};
-use super::remote_place::{RemotePlaces, RobotLink};
-use super::settings::{ROS2_ACTION, Ros2Settings};
+use super::heartbeat::{self, Liveness, RobotWatch};
+use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, exec_place_type};
+use super::presence::{Presence, ServerCounter};
+use super::remote_place::{Nav2Link, RemotePlaces, RobotLink};
+use super::settings::{NAV2_SERVER, ROS2_ACTION, Ros2Settings};
 use crate::net::Net;
 use crate::runtime::{Events, RuntimeBuilder};
 
@@ -43,7 +42,10 @@ pub struct Ros2Backend {
     publisher: Arc<FiringPublisher>,
     task: Option<JoinHandle<Published>>,
     places: RemotePlaces,
+    /// The robots' heartbeats (for [`Ros2Backend::presence`], and to know at the end which
+    /// robots listen for the end of the run).
     watch: RobotWatch,
+    presence: Presence,
     run_state: RunStatePublisher,
     /// The `/rosout` forwarder, when asked.
     rosout: Option<super::rosout::Forwarder>,
@@ -76,8 +78,9 @@ fn client_qos() -> ActionClientQosPolicies {
 
 impl Ros2Backend {
     /// Joins DDS and links to every robot of `robots` for the `ros2` places of `settings`
-    /// (places of `net`); waits (at most `cfg.startup`) until each robot's heartbeat and
-    /// servers are seen and `/gspn/firings` has at least `subscribers` matched subscriptions.
+    /// (places of `net`); waits (at most `cfg.startup`) until each robot's servers are
+    /// matched (any ROS 2 node serving ExecPlace is a robot; heartbeats are optional) and
+    /// `/gspn/firings` has at least `subscribers` matched subscriptions.
     pub async fn connect(
         net: &Net,
         settings: &Ros2Settings,
@@ -102,13 +105,26 @@ impl Ros2Backend {
         let watch = RobotWatch::start(&mut node, robots, cfg.lost_after)?;
         let publisher = FiringPublisher::new(&mut node, Arc::new(net.clone()))?;
         let run_state = RunStatePublisher::new(&mut node)?;
-        let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
+        // Nav2 places go to the robots' own Nav2 (`navigate_to_pose`), the rest to ExecPlace.
+        let mut servers: Vec<&str> = settings
+            .servers
+            .iter()
+            .map(|(_, s)| s.as_str())
+            .filter(|&s| s != NAV2_SERVER)
+            .collect();
         servers.sort_unstable();
         servers.dedup();
+        let mut nav2_clients = Vec::new();
+        if settings.servers.iter().any(|(_, s)| s == NAV2_SERVER) {
+            for robot in robots {
+                let client = super::nav2::client(&mut node, cfg, robot)?;
+                nav2_clients.push((robot.clone(), Arc::new(client)));
+            }
+        }
         let mut clients = Vec::new();
         for robot in robots {
             for &server in &servers {
-                let name = Name::new(&format!("/{robot}"), server).map_err(Ros2Error::dds)?;
+                let name = super::names::action(&node, robot, server)?;
                 let client = node
                     .create_action_client::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
                         cfg.service_mapping,
@@ -117,38 +133,74 @@ impl Ros2Backend {
                         client_qos(),
                     )
                     .map_err(Ros2Error::dds)?;
-                let live = watch
-                    .liveness(robot)
-                    .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))?;
-                clients.push((robot.clone(), server.to_string(), client, live));
+                clients.push((robot.clone(), server.to_string(), client));
             }
         }
+        // A robot is there when its ExecPlace servers are: heartbeats are optional.
         let startup = cfg.startup;
-        watch.all_alive(startup).await.map_err(|missing| {
-            Ros2Error::Startup(format!(
-                "no heartbeat from robot(s) {} within {startup:?} (domain {}): are `plan-runner robot` processes running?",
+        let deadline = tokio::time::Instant::now() + startup;
+        let mut missing = Vec::new();
+        for (robot, server, c) in &clients {
+            let found = RobotLink::wait_for_server(c, &node);
+            if tokio::time::timeout_at(deadline, found).await.is_err() {
+                missing.push(format!("/{robot}/{server}"));
+            }
+        }
+        for (robot, c) in &nav2_clients {
+            let found = super::nav2::wait_for_server(c, &node);
+            if tokio::time::timeout_at(deadline, found).await.is_err() {
+                missing.push(format!("/{robot}/{NAV2_SERVER} (Nav2)"));
+            }
+        }
+        if !missing.is_empty() {
+            return Err(Ros2Error::Startup(format!(
+                "no ExecPlace server at {} within {startup:?} (domain {}): are the robots running (`plan-runner robot`, or any ROS 2 node serving gspn_msgs/action/ExecPlace)?",
                 missing.join(", "),
                 cfg.domain_id
-            ))
-        })?;
-        let servers_ready = async {
-            for (_, _, c, _) in &clients {
-                RobotLink::wait_for_server(c, &node).await;
-            }
-        };
-        tokio::time::timeout(startup, servers_ready)
-            .await
-            .map_err(|_| {
-                Ros2Error::Startup(format!(
-                    "robots answer heartbeats but their ExecPlace servers were not matched within {startup:?}"
-                ))
-            })?;
-        let links: Vec<_> = clients
-            .into_iter()
-            .map(|(robot, server, client, live)| {
-                (server, Arc::new(RobotLink::new(robot, client, live)))
-            })
-            .collect();
+            )));
+        }
+        let presence = Presence::start(
+            robots
+                .iter()
+                .map(|r| {
+                    let heartbeat = watch
+                        .liveness(r)
+                        .unwrap_or_else(|| tokio::sync::watch::channel(Liveness::Unknown).1);
+                    let mut counters: Vec<ServerCounter> = clients
+                        .iter()
+                        .filter(|(robot, _, _)| robot == r)
+                        .map(|(_, _, c)| {
+                            Box::new(c.goal_client().server_counter(&node)) as ServerCounter
+                        })
+                        .collect();
+                    counters.extend(nav2_clients.iter().filter(|(robot, _)| robot == r).map(
+                        |(_, c)| Box::new(c.goal_client().server_counter(&node)) as ServerCounter,
+                    ));
+                    (r.clone(), heartbeat, counters)
+                })
+                .collect(),
+            (cfg.lost_after / 4).max(Duration::from_millis(10)),
+        );
+        let mut links = Vec::new();
+        for (robot, server, client) in clients {
+            let live = presence
+                .liveness(&robot)
+                .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))?;
+            links.push((server, Arc::new(RobotLink::new(robot, client, live))));
+        }
+        let mut nav2 = HashMap::new();
+        for (robot, client) in nav2_clients {
+            let live = presence
+                .liveness(&robot)
+                .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))?;
+            nav2.insert(
+                robot,
+                Nav2Link {
+                    client,
+                    liveness: live,
+                },
+            );
+        }
         let subs = async {
             while publisher.firing_subscribers(&node) < subscribers {
                 tokio::time::sleep(Duration::from_millis(20)).await;
@@ -163,7 +215,7 @@ impl Ros2Backend {
         let servers: HashMap<_, _> = settings.servers.iter().cloned().collect();
         run_state
             .publish(RunState {
-                state: RUN_RUNNING.into(),
+                state: RunState::RUNNING,
                 stopped: String::new(),
                 firings: 0,
             })
@@ -175,8 +227,14 @@ impl Ros2Backend {
             beat,
             publisher: Arc::new(publisher),
             task: None,
-            places: RemotePlaces::new(servers, links),
+            places: RemotePlaces::new(
+                servers,
+                settings.args.iter().cloned().collect(),
+                links,
+                nav2,
+            ),
             watch,
+            presence,
             rosout,
         })
     }
@@ -195,9 +253,9 @@ impl Ros2Backend {
         }
     }
 
-    /// The heartbeat watch.
-    pub fn watch(&self) -> &RobotWatch {
-        &self.watch
+    /// The robots' presence (discovery of their servers, and their heartbeats).
+    pub fn presence(&self) -> &Presence {
+        &self.presence
     }
 
     /// The node, for extra entities.
@@ -224,8 +282,19 @@ impl Ros2Backend {
                 "not every subscriber acknowledged every firing within {linger:?} (--ros2-linger)"
             );
         }
+        // Robots that send heartbeats are gspn robots, which listen for the end of the run.
+        // A run of a few firings can end before discovery has matched their readers with
+        // the run-state writer (the supervisor starts once the robots' servers are
+        // discovered, not their readers): wait for them, so the transient-local end of the
+        // run reaches every one before this process exits.
+        let listeners = self.watch.alive_count();
+        if !self.run_state.matched(&self.node, listeners, linger).await {
+            tracing::warn!(
+                "not every robot's reader of the run state was matched within {linger:?} (--ros2-linger)"
+            );
+        }
         let over = RunState {
-            state: RUN_OVER.into(),
+            state: RunState::OVER,
             stopped: stopped.to_string(),
             firings: published.firings,
         };

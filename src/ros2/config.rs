@@ -46,6 +46,11 @@ pub struct DdsConfig {
     /// Whether the process's node publishes the ROS 2 layer's warnings and errors on
     /// `/rosout` ([`super::rosout`]).
     pub rosout: bool,
+    /// The run's namespace (`""` = the root; `--ros-args -r __ns:=/fleet_a`): every node,
+    /// topic and action of the run is under it ([`super::names`]).
+    pub namespace: String,
+    /// The node's name instead of the process's own (`--ros-args -r __node:=NAME`).
+    pub node_name: Option<String>,
 }
 
 impl Default for DdsConfig {
@@ -59,6 +64,8 @@ impl Default for DdsConfig {
             startup: Duration::from_secs(30),
             service_mapping: ServiceMapping::Enhanced,
             rosout: false,
+            namespace: String::new(),
+            node_name: None,
         }
     }
 }
@@ -179,13 +186,63 @@ impl DdsConfig {
         Context::from_domain_participant(dp).map_err(|e| ConfigError::Dds(format!("{e:?}")))
     }
 
-    /// A node named `name` in namespace `/gspn`, in a new context (robot `robot`'s, see
-    /// [`DdsConfig::context`]).
+    /// A node named `name` (or [`DdsConfig::node_name`]) in namespace `<namespace>/gspn`,
+    /// in a new context (robot `robot`'s, see [`DdsConfig::context`]).
     pub fn node(&self, name: &str, robot: Option<&str>) -> Result<ros2_client::Node, ConfigError> {
         let ctx = self.context(robot)?;
-        let name = NodeName::new("/gspn", name).map_err(|e| ConfigError::Dds(format!("{e:?}")))?;
+        let name = self.node_name.as_deref().unwrap_or(name);
+        let ns = super::names::node_namespace(&self.namespace);
+        let name = NodeName::new(&ns, name).map_err(|e| ConfigError::Dds(format!("{e:?}")))?;
         ctx.new_node(name, NodeOptions::new().enable_rosout(false))
             .map_err(|e| ConfigError::Dds(format!("{e:?}")))
+    }
+}
+
+impl DdsConfig {
+    /// Applies `--ros-args`: the namespace, the node's name, and `-p` parameters, which
+    /// override the plan's `[ros2]` keys of the same names (`domain_id`, `heartbeat`,
+    /// `lost_after`, `startup`, `service_mapping`, `rosout`).
+    pub fn apply_ros_args(&mut self, a: &super::names::RosArgs) -> Result<(), String> {
+        if let Some(ns) = &a.namespace {
+            self.namespace.clone_from(ns);
+        }
+        if let Some(n) = &a.node {
+            self.node_name = Some(n.clone());
+        }
+        for (k, v) in &a.params {
+            let bad = |why: &str| format!("--ros-args: -p `{k}:={v}`: {why}");
+            let seconds = || {
+                v.parse::<f64>()
+                    .ok()
+                    .filter(|&x| crate::limits::valid_seconds(x))
+                    .map(crate::limits::duration)
+                    .ok_or_else(|| bad(crate::limits::SECONDS_EXPECTED))
+            };
+            match k.as_str() {
+                "domain_id" => self.domain_id = parse_domain(v).map_err(bad)?,
+                // 0: no heartbeat (robots are seen through discovery).
+                "heartbeat" if v.parse::<f64>() == Ok(0.0) => self.heartbeat = Duration::ZERO,
+                "heartbeat" => self.heartbeat = seconds()?,
+                "lost_after" => self.lost_after = seconds()?,
+                "startup" => self.startup = seconds()?,
+                "rosout" => {
+                    self.rosout = v.parse().map_err(|_| bad("expected true or false"))?;
+                }
+                "service_mapping" => {
+                    self.service_mapping = match v.as_str() {
+                        "enhanced" => ServiceMapping::Enhanced,
+                        "cyclone" => ServiceMapping::Cyclone,
+                        _ => return Err(bad("expected enhanced or cyclone")),
+                    };
+                }
+                _ => {
+                    return Err(bad(
+                        "unknown parameter (domain_id, heartbeat, lost_after, startup, service_mapping, rosout)",
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 }
 

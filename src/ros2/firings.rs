@@ -1,20 +1,20 @@
 //! The supervisor's publications: every firing on `/gspn/firings` (reliable, keep-all), the
 //! current marking on `/gspn/marking` (reliable, transient-local, depth 1) and the run's
 //! state on `/gspn/run` ([`RunStatePublisher`], same QoS as the marking); the live
-//! monitor's drifts (`run --monitor`) on `/gspn/drift` as JSON in a `std_msgs/String` (same
-//! QoS as the firings, [`drift_message`]); and
+//! monitor's drifts (`run --monitor`) on `/gspn/drift` as `gspn_msgs/Drift` (same QoS as the
+//! firings, [`drift_message`]); and
 //! [`FiringListener`], a subscriber to them for robots, tests and tools.
 
 use std::sync::Arc;
 
 use futures::StreamExt;
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
-use ros2_client::{Name, Node, Publisher, QosProfile, Subscription};
+use ros2_client::{Node, Publisher, QosProfile, Subscription};
 
 use super::Ros2Error;
 use super::msgs::{
-    DRIFT_TOPIC, FIRINGS_TOPIC, Firing, MARKING_TOPIC, Marking, RUN_TOPIC, RunState, StringMsg,
-    Time, firing_type, marking_type, run_state_type, string_type,
+    self as msgs, DRIFT_TOPIC, FIRINGS_TOPIC, Firing, Header, MARKING_TOPIC, Marking, RUN_TOPIC,
+    RunState, drift_type, firing_type, marking_type, run_state_type,
 };
 use crate::net::Net;
 use crate::runtime::{Drift, EventKind, Events, Monitored, Received};
@@ -43,7 +43,7 @@ fn publisher<M: serde::Serialize>(
     ty: ros2_client::MessageTypeName,
     qos: QosProfile,
 ) -> Result<Publisher<M>, Ros2Error> {
-    let name = Name::parse(name).map_err(Ros2Error::dds)?;
+    let name = super::names::topic(node, name)?;
     let topic = node.create_topic(&name, ty, &qos).map_err(Ros2Error::dds)?;
     node.create_publisher(&topic, Some(qos))
         .map_err(Ros2Error::dds)
@@ -56,7 +56,7 @@ fn subscription<M: serde::de::DeserializeOwned + 'static>(
     ty: ros2_client::MessageTypeName,
     qos: QosProfile,
 ) -> Result<Subscription<M>, Ros2Error> {
-    let name = Name::parse(name).map_err(Ros2Error::dds)?;
+    let name = super::names::topic(node, name)?;
     let topic = node.create_topic(&name, ty, &qos).map_err(Ros2Error::dds)?;
     node.create_subscription(&topic, Some(qos))
         .map_err(Ros2Error::dds)
@@ -66,28 +66,28 @@ fn subscription<M: serde::de::DeserializeOwned + 'static>(
 pub struct FiringPublisher {
     firings: Publisher<Firing>,
     marking: Publisher<Marking>,
-    drift: Publisher<StringMsg>,
+    drift: Publisher<msgs::Drift>,
     net: Arc<Net>,
 }
 
-/// The `/gspn/drift` message of a drift found at model time `time`: `{"time", "transition"
-/// or "place" (by name), "observed", "predicted", "interval", "n", "p_value", "text"}`.
-pub fn drift_message(net: &Net, time: f64, d: &Drift) -> StringMsg {
-    let mut v = serde_json::json!({
-        "time": time,
-        "observed": d.observed,
-        "predicted": d.predicted,
-        "interval": d.interval,
-        "n": d.n,
-        "p_value": d.p_value,
-        "text": d.describe(net),
-    });
-    match d.of {
-        Monitored::Transition(t) => v["transition"] = net.transition(t).name.clone().into(),
-        Monitored::Place(p) => v["place"] = net.place(p).name.clone().into(),
-    }
-    StringMsg {
-        data: v.to_string(),
+/// The `/gspn/drift` message of a drift found at model time `time`.
+pub fn drift_message(net: &Net, time: f64, d: &Drift) -> msgs::Drift {
+    let (transition, place) = match d.of {
+        Monitored::Transition(t) => (net.transition(t).name.clone(), String::new()),
+        Monitored::Place(p) => (String::new(), net.place(p).name.clone()),
+    };
+    msgs::Drift {
+        header: Header::now(""),
+        model_time: time,
+        transition,
+        place,
+        observed: d.observed,
+        predicted: d.predicted,
+        interval_low: d.interval[0],
+        interval_high: d.interval[1],
+        n: d.n,
+        p_value: d.p_value,
+        text: d.describe(net),
     }
 }
 
@@ -114,7 +114,7 @@ impl FiringPublisher {
     /// Creates the two publishers on `node` for runs of `net`.
     pub fn new(node: &mut Node, net: Arc<Net>) -> Result<FiringPublisher, Ros2Error> {
         Ok(FiringPublisher {
-            drift: publisher(node, DRIFT_TOPIC, string_type(), firings_qos())?,
+            drift: publisher(node, DRIFT_TOPIC, drift_type(), firings_qos())?,
             firings: publisher(node, FIRINGS_TOPIC, firing_type(), firings_qos())?,
             marking: publisher(node, MARKING_TOPIC, marking_type(), marking_qos())?,
             net,
@@ -126,8 +126,10 @@ impl FiringPublisher {
         self.firings.get_subscription_count(node)
     }
 
-    fn marking_msg(&self, seq: u64, tokens: &[u32]) -> Marking {
+    fn marking_msg(&self, seq: u64, time: f64, tokens: &[u32]) -> Marking {
         Marking {
+            header: Header::now(""),
+            model_time: time,
             seq,
             places: self.net.places().iter().map(|p| p.name.clone()).collect(),
             tokens: tokens.to_vec(),
@@ -151,7 +153,7 @@ impl FiringPublisher {
         let initial = self.net.initial_marking();
         if self
             .marking
-            .async_publish(self.marking_msg(0, &initial))
+            .async_publish(self.marking_msg(0, 0.0, &initial))
             .await
             .is_err()
         {
@@ -184,18 +186,19 @@ impl FiringPublisher {
             };
             out.firings += 1;
             let msg = Firing {
+                header: Header::now(""),
+                model_time: e.time,
                 seq: out.firings,
                 transition: self.net.transition(transition).name.clone(),
                 marking: marking.to_vec(),
                 robots: robots.iter().map(|r| r.to_string()).collect(),
-                stamp: Time::now(),
             };
             if self.firings.async_publish(msg).await.is_err() {
                 out.errors += 1;
             }
             if self
                 .marking
-                .async_publish(self.marking_msg(out.firings, &marking))
+                .async_publish(self.marking_msg(out.firings, e.time, &marking))
                 .await
                 .is_err()
             {
@@ -222,6 +225,21 @@ impl RunStatePublisher {
     /// Publishes `state`.
     pub async fn publish(&self, state: RunState) -> Result<(), Ros2Error> {
         self.run.async_publish(state).await.map_err(Ros2Error::dds)
+    }
+
+    /// Waits (at most `limit`) until at least `n` subscribers are matched; false if fewer
+    /// were by then.
+    pub async fn matched(&self, node: &Node, n: usize, limit: std::time::Duration) -> bool {
+        let start = tokio::time::Instant::now();
+        loop {
+            if self.run.get_subscription_count(node) >= n {
+                return true;
+            }
+            if start.elapsed() >= limit {
+                return false;
+            }
+            tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+        }
     }
 
     /// Waits (at most `limit`) until every matched subscriber has acknowledged the states
@@ -290,7 +308,7 @@ mod tests {
     use crate::net::{NetBuilder, Servers};
 
     #[test]
-    fn a_drift_is_published_as_json_naming_the_transition_or_place() {
+    fn a_drift_is_published_naming_the_transition_or_place() {
         let mut b = NetBuilder::new("n");
         let p = b.place("Check", 1);
         let t = b.exponential("Done", 1.0, Servers::Single);
@@ -304,26 +322,19 @@ mod tests {
             n: 60,
             p_value: 1e-9,
         };
-        let v: serde_json::Value =
-            serde_json::from_str(&drift_message(&net, 12.5, &d).data).unwrap();
-        assert_eq!(v["transition"], "Done");
-        assert_eq!(v["time"], 12.5);
-        assert_eq!(v["observed"], 0.25);
-        assert_eq!(v["interval"], serde_json::json!([0.2, 0.3]));
-        assert_eq!(v["n"], 60);
-        assert!(v.get("place").is_none());
+        let m = drift_message(&net, 12.5, &d);
+        assert_eq!(m.transition, "Done");
+        assert_eq!(m.place, "");
+        assert_eq!(m.model_time, 12.5);
+        assert_eq!(m.observed, 0.25);
+        assert_eq!((m.interval_low, m.interval_high), (0.2, 0.3));
+        assert_eq!(m.n, 60);
         let d = Drift {
             of: Monitored::Place(p),
             ..d
         };
-        let v: serde_json::Value =
-            serde_json::from_str(&drift_message(&net, 1.0, &d).data).unwrap();
-        assert_eq!(v["place"], "Check");
-        assert!(
-            v["text"]
-                .as_str()
-                .unwrap()
-                .starts_with("Check: 0.2500 mean tokens")
-        );
+        let m = drift_message(&net, 1.0, &d);
+        assert_eq!((m.transition.as_str(), m.place.as_str()), ("", "Check"));
+        assert!(m.text.starts_with("Check: 0.2500 mean tokens"));
     }
 }

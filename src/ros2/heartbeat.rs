@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use futures::StreamExt;
 use ros2_client::qos::{Durability, History};
-use ros2_client::{Name, Node, Publisher, QosProfile, Subscription};
+use ros2_client::{Node, Publisher, QosProfile, Subscription};
 use tokio::sync::watch;
 use tokio::time::Instant;
 
@@ -31,6 +31,15 @@ pub enum Liveness {
     Alive,
     /// Heartbeats stopped: no heartbeat for `lost_after`.
     Lost,
+    /// Its ExecPlace server left DDS discovery ([`super::presence`]).
+    Gone,
+}
+
+impl Liveness {
+    /// Lost or gone: its goals fail.
+    pub fn is_lost(self) -> bool {
+        matches!(self, Liveness::Lost | Liveness::Gone)
+    }
 }
 
 fn qos() -> QosProfile {
@@ -40,7 +49,7 @@ fn qos() -> QosProfile {
 }
 
 fn topic(node: &Node, name: &str) -> Result<ros2_client::dds::rustdds::Topic, Ros2Error> {
-    let name = Name::parse(name).map_err(Ros2Error::dds)?;
+    let name = super::names::topic(node, name)?;
     node.create_topic(&name, heartbeat_type(), &qos())
         .map_err(Ros2Error::dds)
 }
@@ -181,6 +190,14 @@ impl RobotWatch {
     /// The liveness of `robot` (a receiver that follows its changes), when it is watched.
     pub fn liveness(&self, robot: &str) -> Option<watch::Receiver<Liveness>> {
         self.states.get(robot).cloned()
+    }
+
+    /// How many watched robots are [`Liveness::Alive`] now.
+    pub fn alive_count(&self) -> usize {
+        self.states
+            .values()
+            .filter(|rx| *rx.borrow() == Liveness::Alive)
+            .count()
     }
 
     /// Waits until every watched robot is [`Liveness::Alive`]; the robots still missing at

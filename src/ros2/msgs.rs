@@ -1,9 +1,17 @@
 //! The `gspn_msgs` interfaces (`ros2/gspn_msgs/`) as Rust types, serialised by ros2-client
 //! in the same CDR layout as the ROS 2 generated code, under the DDS type names ROS 2 gives
-//! them (`gspn_msgs::msg::dds_::Firing_`, …).
+//! them (`gspn_msgs::msg::dds_::Firing_`, …). Interfaces v2 ([`INTERFACES_VERSION`]):
+//! `tests/ros2/interfaces.rs` parses the `.msg`/`.action` files and checks them against these
+//! types and the Python robot's, so the copies cannot drift apart.
 
 use ros2_client::{ActionTypeName, Message, MessageTypeName};
 use serde::{Deserialize, Serialize};
+
+pub mod common;
+pub mod nav2;
+pub mod schema;
+
+pub use common::{Header, KeyValue, MAP_FRAME, Point, Pose, PoseStamped, Quaternion, Time};
 
 /// The ROS 2 package of the interfaces.
 pub const PACKAGE: &str = "gspn_msgs";
@@ -18,39 +26,19 @@ pub const HEARTBEAT_TOPIC: &str = "/gspn/heartbeat";
 pub const SUPERVISOR_HEARTBEAT_TOPIC: &str = "/gspn/supervisor_heartbeat";
 /// Topic of the supervisor's [`RunState`].
 pub const RUN_TOPIC: &str = "/gspn/run";
-/// Topic of the live monitor's drifts (`run --monitor`), as JSON in a [`StringMsg`].
+/// Topic of the live monitor's [`Drift`]s (`run --monitor`).
 pub const DRIFT_TOPIC: &str = "/gspn/drift";
 
-/// `builtin_interfaces/Time`: seconds and nanoseconds since the Unix epoch.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Time {
-    /// Whole seconds.
-    pub sec: i32,
-    /// Nanoseconds within the second.
-    pub nanosec: u32,
-}
-
-impl Time {
-    /// The wall clock now.
-    pub fn now() -> Time {
-        let d = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .unwrap_or_default();
-        Time {
-            sec: i32::try_from(d.as_secs()).unwrap_or(i32::MAX),
-            nanosec: d.subsec_nanos(),
-        }
-    }
-
-    /// Nanoseconds since the Unix epoch.
-    pub fn as_nanos(&self) -> i128 {
-        i128::from(self.sec) * 1_000_000_000 + i128::from(self.nanosec)
-    }
-}
+/// The version of the interfaces, as `ros2/gspn_msgs/package.xml` says it.
+pub const INTERFACES_VERSION: &str = "2.0.0";
 
 /// `gspn_msgs/msg/Firing`: one firing, on [`FIRINGS_TOPIC`].
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Firing {
+    /// When the supervisor published it (no frame).
+    pub header: Header,
+    /// Model time of the firing.
+    pub model_time: f64,
     /// Firings so far, this one included (1, 2, 3, … without gaps).
     pub seq: u64,
     /// The transition's name.
@@ -59,14 +47,16 @@ pub struct Firing {
     pub marking: Vec<u32>,
     /// Robots whose agents the firing consumed.
     pub robots: Vec<String>,
-    /// When the supervisor published it.
-    pub stamp: Time,
 }
 impl Message for Firing {}
 
 /// `gspn_msgs/msg/Marking`: the current marking, on [`MARKING_TOPIC`].
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Marking {
+    /// When the supervisor published it (no frame).
+    pub header: Header,
+    /// Model time of the marking (that of the last firing).
+    pub model_time: f64,
     /// Firings so far (the `seq` of the last [`Firing`]; 0 = the initial marking).
     pub seq: u64,
     /// Place names, in the net's order.
@@ -76,7 +66,8 @@ pub struct Marking {
 }
 impl Message for Marking {}
 
-/// `gspn_msgs/msg/Heartbeat`: a robot process is alive, on [`HEARTBEAT_TOPIC`].
+/// `gspn_msgs/msg/Heartbeat`: a robot process is alive, on [`HEARTBEAT_TOPIC`] (optional:
+/// robots without one are watched through DDS discovery).
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Heartbeat {
     /// The robot's id.
@@ -86,12 +77,12 @@ pub struct Heartbeat {
 }
 impl Message for Heartbeat {}
 
-/// `gspn_msgs/msg/RunState`: the supervisor's run is `running` or `over`, on [`RUN_TOPIC`]
-/// (robots leave when it is over).
+/// `gspn_msgs/msg/RunState`: the supervisor's run is [`RunState::RUNNING`] or
+/// [`RunState::OVER`], on [`RUN_TOPIC`] (robots leave when it is over).
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct RunState {
-    /// `running` or `over`.
-    pub state: String,
+    /// [`RunState::RUNNING`] or [`RunState::OVER`].
+    pub state: u8,
     /// Why the run stopped (`max_firings`, `failure`, …); empty while running.
     pub stopped: String,
     /// Firings so far.
@@ -99,43 +90,105 @@ pub struct RunState {
 }
 impl Message for RunState {}
 
-/// `std_msgs/msg/String`: one JSON document, on [`DRIFT_TOPIC`].
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct StringMsg {
-    /// The text.
-    pub data: String,
-}
-impl Message for StringMsg {}
-
-/// DDS type of [`StringMsg`]: `std_msgs::msg::dds_::String_`.
-pub fn string_type() -> MessageTypeName {
-    MessageTypeName::new("std_msgs", "String")
+impl RunState {
+    /// [`RunState::state`] of a run that has started.
+    pub const RUNNING: u8 = 1;
+    /// [`RunState::state`] of a run that has ended.
+    pub const OVER: u8 = 2;
 }
 
-/// [`RunState::state`] of a run that has started.
-pub const RUN_RUNNING: &str = "running";
-/// [`RunState::state`] of a run that has ended.
-pub const RUN_OVER: &str = "over";
+/// `gspn_msgs/msg/Drift`: the live monitor found the run drifting from the model, on
+/// [`DRIFT_TOPIC`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Drift {
+    /// When the supervisor published it (no frame).
+    pub header: Header,
+    /// Model time at which the drift was found.
+    pub model_time: f64,
+    /// The transition whose rate drifted (empty for a place).
+    pub transition: String,
+    /// The place whose mean tokens drifted (empty for a transition).
+    pub place: String,
+    /// The observation over the monitor's window.
+    pub observed: f64,
+    /// The model's value.
+    pub predicted: f64,
+    /// The 95% interval of the observation: low end.
+    pub interval_low: f64,
+    /// High end.
+    pub interval_high: f64,
+    /// Sample size: firings (a rate) or batches (mean tokens).
+    pub n: u64,
+    /// The test's p-value.
+    pub p_value: f64,
+    /// One line for people.
+    pub text: String,
+}
+impl Message for Drift {}
 
-/// `gspn_msgs/action/ExecPlace` goal: run the action of `place` for `agent`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+/// `gspn_msgs/action/ExecPlace` goal: run the action of `place` for `agent`, with the
+/// place's arguments from the plan.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ExecPlaceGoal {
     /// The action place, by name.
     pub place: String,
-    /// The agent, its id in decimal.
-    pub agent: String,
+    /// The agent's id.
+    pub agent: u64,
+    /// Whether [`ExecPlaceGoal::target`] means anything.
+    pub has_target: bool,
+    /// The place's target pose (frame `map`), e.g. where `goto` drives.
+    pub target: PoseStamped,
+    /// The place's other arguments.
+    pub args: Vec<KeyValue>,
 }
 impl Message for ExecPlaceGoal {}
 
 /// `gspn_msgs/action/ExecPlace` result.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ExecPlaceResult {
-    /// The transition to fire; empty = let the policy decide.
+    /// [`ExecPlaceResult::FIRE`], [`ExecPlaceResult::DECIDE`], [`ExecPlaceResult::FAILED`]
+    /// or [`ExecPlaceResult::CANCELLED`].
+    pub outcome: u8,
+    /// With `FIRE`: the transition to fire (an output of the place).
     pub transition: String,
-    /// How it went, for people.
-    pub outcome: String,
+    /// How the action went, for people.
+    pub message: String,
 }
 impl Message for ExecPlaceResult {}
+
+impl ExecPlaceResult {
+    /// Fire [`ExecPlaceResult::transition`].
+    pub const FIRE: u8 = 0;
+    /// Let the supervisor's policy choose.
+    pub const DECIDE: u8 = 1;
+    /// The action failed: the place's `on_failure` applies.
+    pub const FAILED: u8 = 2;
+    /// The goal was cancelled.
+    pub const CANCELLED: u8 = 3;
+
+    /// Fire `transition`, or let the policy decide when it is empty.
+    pub fn fire_or_decide(transition: String, message: &str) -> ExecPlaceResult {
+        let outcome = if transition.is_empty() {
+            ExecPlaceResult::DECIDE
+        } else {
+            ExecPlaceResult::FIRE
+        };
+        ExecPlaceResult {
+            outcome,
+            transition,
+            message: message.to_string(),
+        }
+    }
+
+    /// The goal was cancelled.
+    pub fn cancelled() -> ExecPlaceResult {
+        ExecPlaceResult {
+            outcome: ExecPlaceResult::CANCELLED,
+            transition: String::new(),
+            message: "cancelled".into(),
+        }
+    }
+}
 
 /// `gspn_msgs/action/ExecPlace` feedback.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -158,6 +211,11 @@ pub fn marking_type() -> MessageTypeName {
 /// DDS type of [`Heartbeat`]: `gspn_msgs::msg::dds_::Heartbeat_`.
 pub fn heartbeat_type() -> MessageTypeName {
     MessageTypeName::new(PACKAGE, "Heartbeat")
+}
+
+/// DDS type of [`Drift`]: `gspn_msgs::msg::dds_::Drift_`.
+pub fn drift_type() -> MessageTypeName {
+    MessageTypeName::new(PACKAGE, "Drift")
 }
 
 /// DDS type of [`RunState`]: `gspn_msgs::msg::dds_::RunState_`.
@@ -192,12 +250,5 @@ mod tests {
             run_state_type().dds_msg_type(),
             "gspn_msgs::msg::dds_::RunState_"
         );
-    }
-
-    #[test]
-    fn time_counts_nanoseconds() {
-        let t = Time { sec: 2, nanosec: 5 };
-        assert_eq!(t.as_nanos(), 2_000_000_005);
-        assert!(Time::now().sec > 1_700_000_000);
     }
 }

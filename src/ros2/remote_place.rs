@@ -6,7 +6,8 @@
 //! - the run being stopped → the goal is cancelled on the robot, [`Outcome::Cancelled`];
 //! - the place's timeout (applied by the runtime, which drops the action) → the goal is
 //!   cancelled on the robot too (a drop guard sends the cancel request);
-//! - the robot's heartbeats stop ([`Liveness::Lost`]) → `Failed("robot … lost")`, and the
+//! - the robot's heartbeats stop ([`Liveness::Lost`]) or its server leaves DDS discovery
+//!   ([`Liveness::Gone`], [`super::presence`]) → `Failed("robot … lost")`, and the
 //!   plan's failure policy decides.
 //!
 //! Any number of goals at a time per robot and server: one task per link owns the action
@@ -29,7 +30,9 @@ use ros2_client::{Message, RmwRequestId};
 use tokio::sync::{mpsc, oneshot, watch};
 
 use super::heartbeat::Liveness;
-use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult};
+use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, KeyValue, PoseStamped};
+use super::nav2::{Nav2Client, navigate};
+use super::settings::{NAV2_SERVER, PlaceArgs};
 use crate::net::PlaceId;
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
@@ -160,7 +163,7 @@ impl std::fmt::Debug for RobotLink {
 
 impl RobotLink {
     /// A link through `client` (its task is spawned on the current tokio runtime), failing
-    /// goals when `liveness` turns [`Liveness::Lost`].
+    /// goals when `liveness` turns [`Liveness::Lost`] or [`Liveness::Gone`].
     pub fn new(
         robot: String,
         client: ExecPlaceClient,
@@ -219,15 +222,43 @@ impl RobotLink {
 pub struct RemotePlaces {
     /// Server name of each `ros2` place.
     servers: Arc<HashMap<PlaceId, String>>,
+    /// Arguments of the places that have some.
+    args: Arc<HashMap<PlaceId, PlaceArgs>>,
     /// Links by (robot, server).
     links: Arc<HashMap<(String, String), Arc<RobotLink>>>,
+    /// Each robot's Nav2 (`navigate_to_pose`) client and presence, for Nav2 places.
+    nav2: Arc<HashMap<String, Nav2Link>>,
+}
+
+/// A robot's `NavigateToPose` client and its presence.
+#[derive(Clone)]
+pub struct Nav2Link {
+    /// The client of `/<robot>/navigate_to_pose`.
+    pub client: Arc<Nav2Client>,
+    /// The robot's presence.
+    pub liveness: watch::Receiver<Liveness>,
+}
+
+impl std::fmt::Debug for Nav2Link {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Nav2Link")
+            .field("liveness", &*self.liveness.borrow())
+            .finish_non_exhaustive()
+    }
 }
 
 impl RemotePlaces {
-    /// The action for places `servers` (place → server name) over `links`.
-    pub fn new(servers: HashMap<PlaceId, String>, links: Vec<(String, Arc<RobotLink>)>) -> Self {
+    /// The action for places `servers` (place → server name) with their `args` over `links`.
+    pub fn new(
+        servers: HashMap<PlaceId, String>,
+        args: HashMap<PlaceId, PlaceArgs>,
+        links: Vec<(String, Arc<RobotLink>)>,
+        nav2: HashMap<String, Nav2Link>,
+    ) -> Self {
         RemotePlaces {
             servers: Arc::new(servers),
+            args: Arc::new(args),
+            nav2: Arc::new(nav2),
             links: Arc::new(
                 links
                     .into_iter()
@@ -252,12 +283,47 @@ impl Action for RemotePlaces {
             );
             return Box::pin(async move { Outcome::Failed(m) });
         };
+        if server == NAV2_SERVER {
+            let target = self.args.get(&ctx.place).and_then(|a| a.target);
+            let (Some(link), Some([x, y, yaw])) = (self.nav2.get(&*robot), target) else {
+                let m = format!("robot `{robot}` has no Nav2 client (or the place no target)");
+                return Box::pin(async move { Outcome::Failed(m) });
+            };
+            let pose = PoseStamped::on_map(x, y, yaw);
+            let (client, live) = (Arc::clone(&link.client), link.liveness.clone());
+            return Box::pin(nav2_exec(client, robot.to_string(), pose, live, ctx));
+        }
         let Some(link) = self.links.get(&(robot.to_string(), server.clone())) else {
             let m = format!("robot `{robot}` has no link to server `{server}`");
             return Box::pin(async move { Outcome::Failed(m) });
         };
-        Box::pin(exec(Arc::clone(link), ctx))
+        let goal = goal(&ctx, self.args.get(&ctx.place));
+        Box::pin(exec(Arc::clone(link), goal, ctx))
     }
+}
+
+/// The ExecPlace goal of `ctx`'s agent in its place, with the place's arguments.
+pub fn goal(ctx: &ActionContext, args: Option<&PlaceArgs>) -> ExecPlaceGoal {
+    let mut goal = ExecPlaceGoal {
+        place: ctx.place_name().to_string(),
+        agent: ctx.agent.0,
+        ..ExecPlaceGoal::default()
+    };
+    if let Some(a) = args {
+        if let Some([x, y, yaw]) = a.target {
+            goal.has_target = true;
+            goal.target = PoseStamped::on_map(x, y, yaw);
+        }
+        goal.args = a
+            .args
+            .iter()
+            .map(|(key, value)| KeyValue {
+                key: key.clone(),
+                value: value.clone(),
+            })
+            .collect();
+    }
+    goal
 }
 
 /// Cancels the goal on the robot if the action is dropped before the goal ended (the
@@ -293,24 +359,24 @@ impl Drop for GoalGuard {
 
 enum Ended {
     Result(Result<(GoalStatusEnum, ExecPlaceResult), String>),
-    Lost,
+    Lost(Liveness),
     Cancel,
 }
 
-async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
+async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> Outcome {
     let robot = link.robot.clone();
-    let lost_msg = || format!("robot `{robot}` lost (its heartbeats stopped)");
+    let lost_msg = |l: Liveness| match l {
+        Liveness::Gone => format!("robot `{robot}` lost (its ExecPlace server left DDS discovery)"),
+        _ => format!("robot `{robot}` lost (its heartbeats stopped)"),
+    };
     let mut live = link.liveness.clone();
-    if *live.borrow() == Liveness::Lost {
-        return Outcome::Failed(lost_msg());
+    let now = *live.borrow();
+    if now.is_lost() {
+        return Outcome::Failed(lost_msg(now));
     }
     let guard = GoalGuard {
         link: Arc::clone(&link),
         goal: Mutex::new(None),
-    };
-    let goal = ExecPlaceGoal {
-        place: ctx.place_name().to_string(),
-        agent: ctx.agent.0.to_string(),
     };
     let work = async {
         let (id, resp) = link
@@ -327,27 +393,20 @@ async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
     };
     let ended = tokio::select! {
         r = work => Ended::Result(r),
-        _ = live.wait_for(|s| *s == Liveness::Lost) => Ended::Lost,
+        l = live.wait_for(|s| s.is_lost()) => Ended::Lost(l.map(|l| *l).unwrap_or(Liveness::Gone)),
         _ = ctx.cancel.cancelled() => Ended::Cancel,
     };
     match ended {
         Ended::Result(r) => {
             guard.set(None);
             match r {
-                Ok((GoalStatusEnum::Succeeded, res)) if res.transition.is_empty() => {
-                    Outcome::Decide
-                }
-                Ok((GoalStatusEnum::Succeeded, res)) => ctx.fire(&res.transition),
-                Ok((status, res)) => Outcome::Failed(format!(
-                    "robot `{robot}` ended the goal {status:?}: {}",
-                    res.outcome
-                )),
+                Ok((status, res)) => outcome(&robot, status, &res, &ctx),
                 Err(e) => Outcome::Failed(e),
             }
         }
-        Ended::Lost => {
+        Ended::Lost(l) => {
             guard.set(None);
-            Outcome::Failed(lost_msg())
+            Outcome::Failed(lost_msg(l))
         }
         Ended::Cancel => {
             if let Some(id) = guard.take() {
@@ -355,5 +414,70 @@ async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
             }
             Outcome::Cancelled
         }
+    }
+}
+
+/// A Nav2 place's action: `robot` drives to `pose` through its Nav2; arrived → the policy
+/// decides, anything else (aborted, rejected, the robot lost) fails the action; the run
+/// stopped or the place's timeout cancels the goal (`nav2::navigate`'s drop guard).
+async fn nav2_exec(
+    client: Arc<Nav2Client>,
+    robot: String,
+    pose: PoseStamped,
+    mut live: watch::Receiver<Liveness>,
+    ctx: ActionContext,
+) -> Outcome {
+    let lost = |l: Liveness| match l {
+        Liveness::Gone => {
+            format!("robot `{robot}` lost (its {NAV2_SERVER} server left DDS discovery)")
+        }
+        _ => format!("robot `{robot}` lost (its heartbeats stopped)"),
+    };
+    let now = *live.borrow();
+    if now.is_lost() {
+        return Outcome::Failed(lost(now));
+    }
+    tokio::select! {
+        r = navigate(client, &robot, pose, ctx.cancel.cancelled()) => match r {
+            Ok(()) => Outcome::Decide,
+            Err(_) if ctx.cancel.is_cancelled() => Outcome::Cancelled,
+            Err(e) => Outcome::Failed(format!("robot `{robot}`: {e}")),
+        },
+        l = live.wait_for(|s| s.is_lost()) => {
+            Outcome::Failed(lost(l.map(|l| *l).unwrap_or(Liveness::Gone)))
+        }
+    }
+}
+
+/// What a goal's end means for the place: a succeeded goal fires the robot's transition or
+/// lets the policy decide; a goal the robot says FAILED, aborted or cancelled by itself
+/// fails the action (the place's `on_failure` applies).
+fn outcome(
+    robot: &str,
+    status: GoalStatusEnum,
+    res: &ExecPlaceResult,
+    ctx: &ActionContext,
+) -> Outcome {
+    match status {
+        GoalStatusEnum::Succeeded => succeeded(robot, res, ctx),
+        status => Outcome::Failed(format!(
+            "robot `{robot}` ended the goal {status:?}: {}",
+            res.message
+        )),
+    }
+}
+
+/// The outcome of a goal that `robot` ended as succeeded with `res` (over DDS or Zenoh).
+pub fn succeeded(robot: &str, res: &ExecPlaceResult, ctx: &ActionContext) -> Outcome {
+    match res.outcome {
+        ExecPlaceResult::FIRE => ctx.fire(&res.transition),
+        ExecPlaceResult::DECIDE => Outcome::Decide,
+        ExecPlaceResult::FAILED => {
+            Outcome::Failed(format!("robot `{robot}` failed: {}", res.message))
+        }
+        o => Outcome::Failed(format!(
+            "robot `{robot}` answered outcome {o}, not FIRE (0), DECIDE (1) or FAILED (2): {}",
+            res.message
+        )),
     }
 }

@@ -18,21 +18,21 @@ use std::time::Duration;
 
 use futures::StreamExt;
 use rand::SeedableRng;
+use ros2_client::QosProfile;
 use ros2_client::action::{
     ActionServerQosPolicies, AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId,
     NewGoalHandle,
 };
 use ros2_client::qos::{Durability, History};
-use ros2_client::{Name, QosProfile};
 use tokio::sync::oneshot;
 
 use super::config::DdsConfig;
 use super::firings::FiringListener;
 use super::heartbeat::{Liveness, RobotWatch, SUPERVISOR};
 use super::msgs::{
-    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RUN_OVER, Time, exec_place_type,
+    ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, Time, exec_place_type,
 };
-use super::settings::Ros2Settings;
+use super::settings::{NAV2_SERVER, Ros2Settings};
 use super::{Ros2Error, heartbeat};
 use crate::net::{Net, PlaceId, Timing};
 use crate::sample::{self, Rng};
@@ -199,7 +199,10 @@ pub async fn serve(
         .transpose()?;
     let spinner = node.spinner().map_err(Ros2Error::dds)?;
     let spin = tokio::spawn(spinner.spin());
-    let beat = heartbeat::publish(&mut node, &opts.id, cfg.heartbeat)?;
+    // `heartbeat = 0`: none; the supervisor then sees the robot through discovery alone.
+    let beat = (!cfg.heartbeat.is_zero())
+        .then(|| heartbeat::publish(&mut node, &opts.id, cfg.heartbeat))
+        .transpose()?;
     let supervisor = RobotWatch::supervisor(&mut node, cfg.lost_after)?;
     let shared = Arc::new(Shared {
         id: opts.id.clone(),
@@ -211,12 +214,18 @@ pub async fn serve(
         goal_tasks: Mutex::new(Vec::new()),
         goal_seen: tokio::sync::Notify::new(),
     });
-    let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
+    // Nav2 places' goals go to the robot's Nav2 (`navigate_to_pose`), not to this process.
+    let mut servers: Vec<&str> = settings
+        .servers
+        .iter()
+        .map(|(_, s)| s.as_str())
+        .filter(|&s| s != NAV2_SERVER)
+        .collect();
     servers.sort_unstable();
     servers.dedup();
     let mut tasks = Vec::new();
     for s in servers {
-        let name = Name::new(&format!("/{}", opts.id), s).map_err(Ros2Error::dds)?;
+        let name = super::names::action(&node, &opts.id, s)?;
         let server = node
             .create_action_server::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
                 cfg.service_mapping,
@@ -261,7 +270,9 @@ pub async fn serve(
     if let Some(r) = rosout {
         r.finish(LEAVE_WAIT).await;
     }
-    beat.abort();
+    if let Some(b) = beat {
+        b.abort();
+    }
     spin.abort();
     let mut stats = shared
         .stats
@@ -323,7 +334,7 @@ async fn supervisor_lost(
                         unheard = None;
                         tracing::info!("robot {}: a supervisor is here", opts.id);
                     }
-                    Liveness::Unknown => {}
+                    Liveness::Unknown | Liveness::Gone => {}
                 }
             }
             _ = goal_seen.notified() => {
@@ -352,7 +363,7 @@ async fn run_over(listener: &FiringListener, opts: &RobotOptions) -> Leave {
     let states = listener.run_states();
     futures::pin_mut!(states);
     while let Some(s) = states.next().await {
-        if s.state != RUN_OVER {
+        if s.state != RunState::OVER {
             continue;
         }
         let over = Leave::RunOver(format!("{} after {} firings", s.stopped, s.firings));
@@ -398,7 +409,13 @@ async fn listen(
         }
         if let Some(out) = &mut out {
             // One line per firing, written at once: a killed robot loses nothing logged.
-            let _ = writeln!(out, "{} {} {}", f.seq, f.stamp.as_nanos(), now.as_nanos());
+            let _ = writeln!(
+                out,
+                "{} {} {}",
+                f.seq,
+                f.header.stamp.as_nanos(),
+                now.as_nanos()
+            );
         }
     }
     Ok(())
@@ -517,20 +534,16 @@ async fn run_decision(
     loop {
         tokio::select! {
             _ = &mut done => {
-                let outcome = if decision.transition.is_empty() { "decide" } else { "fire" };
                 return (
                     GoalEndStatus::Succeeded,
-                    ExecPlaceResult { transition: decision.transition, outcome: outcome.into() },
+                    ExecPlaceResult::fire_or_decide(decision.transition, "net-timed"),
                 );
             }
             _ = &mut cancelled => {
                 if let Ok(mut s) = shared.stats.lock() {
                     s.cancelled += 1;
                 }
-                return (
-                    GoalEndStatus::Canceled,
-                    ExecPlaceResult { transition: String::new(), outcome: "cancelled".into() },
-                );
+                return (GoalEndStatus::Canceled, ExecPlaceResult::cancelled());
             }
             _ = feedback.tick() => {
                 let elapsed = start.elapsed().as_secs_f64();

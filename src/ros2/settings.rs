@@ -10,6 +10,11 @@ pub const ROS2_ACTION: &str = "ros2";
 /// The ExecPlace action server a `ros2` place uses when the plan names none.
 pub const DEFAULT_SERVER: &str = "exec_place";
 
+/// The server name that makes a `ros2` place a Nav2 goal: its agents' actions are
+/// `nav2_msgs/action/NavigateToPose` goals to the place's `target` pose, sent to
+/// `/<robot>/navigate_to_pose` (Nav2's own action on a robot running Nav2), not ExecPlace.
+pub const NAV2_SERVER: &str = "navigate_to_pose";
+
 /// The plan's `[ros2]` table and its `ros2` places, resolved.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Ros2Settings {
@@ -34,6 +39,19 @@ pub struct Ros2Settings {
     pub zenoh: Option<String>,
     /// Places whose action is `ros2`, with their ExecPlace server name, in net order.
     pub servers: Vec<(PlaceId, String)>,
+    /// The arguments each `ros2` place sends in its ExecPlace goals (places without any are
+    /// absent), in net order.
+    pub args: Vec<(PlaceId, PlaceArgs)>,
+}
+
+/// A `ros2` place's arguments from the plan, sent with every ExecPlace goal.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PlaceArgs {
+    /// The target pose `[x, y, yaw]` (metres, metres, radians; frame `map`): the place's
+    /// `target`.
+    pub target: Option<[f64; 3]>,
+    /// The place's `args`, by key.
+    pub args: Vec<(String, String)>,
 }
 
 /// How the ExecPlace services (send goal, get result, cancel) carry the id that pairs a

@@ -50,7 +50,7 @@ pub enum AgentMode {
 /// current place and state (it sets Occupied and Done itself; the supervisor tells it the
 /// rest).
 #[derive(Actor)]
-pub struct Agent {
+pub(crate) struct Agent {
     /// The agent's id.
     pub id: AgentId,
     /// The place it is in.
@@ -98,7 +98,7 @@ impl Message<Run> for Agent {
 
 /// The agent moved or changed state.
 #[derive(Clone, Copy, Debug)]
-pub struct Update {
+pub(crate) struct Update {
     /// Its place now.
     pub place: PlaceId,
     /// Its state now.

@@ -271,6 +271,7 @@ impl Backends {
 
 /// Why [`Backends::run`] could not run.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RunError {
     /// A backend refused the run.
     #[error(transparent)]

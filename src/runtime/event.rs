@@ -61,6 +61,7 @@ pub struct Firing<'a> {
 /// What happened.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "event", rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum EventKind {
     /// A transition fired. `consumed` are the agents taken from action places (arc order),
     /// `produced` the agents now in its output action places (continuing ones first).

@@ -187,6 +187,7 @@ pub struct Frame {
 
 /// A journal that does not belong to the net, or a line that cannot be read.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum JournalError {
     /// A line is not the JSON the journal writes.
     #[error("line {line}: {reason}")]

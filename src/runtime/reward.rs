@@ -15,7 +15,7 @@ use crate::analysis::decision::RewardSpec;
 use crate::net::{Net, TransitionId};
 
 /// Most batches kept; when a run outgrows them, neighbours merge and the length doubles.
-pub const MAX_BATCHES: usize = 64;
+pub(crate) const MAX_BATCHES: usize = 64;
 
 /// The first batch length (model time); it doubles as the run goes on.
 const FIRST_LENGTH: f64 = 1e-3;

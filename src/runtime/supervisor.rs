@@ -79,7 +79,7 @@ pub(crate) struct PlaceSetup {
 }
 
 /// The supervisor actor.
-pub struct Supervisor {
+pub(crate) struct Supervisor {
     eng: Engine,
     buf: Firing,
     setups: Vec<PlaceSetup>,

@@ -41,7 +41,8 @@ impl Fnv {
     }
 }
 
-/// FNV-1a of `bytes`.
+/// FNV-1a of `bytes` (the ROS 2 robots' draw streams; the tests).
+#[cfg(any(feature = "ros2", test))]
 pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     let mut h = Fnv::new();
     h.bytes(bytes);

@@ -18,7 +18,7 @@ use serde::Serialize;
 use crate::net::{ArcKind, Net, NetBuilder, NetError, Place, Position, Transition};
 
 mod order;
-pub mod quality;
+pub(crate) mod quality;
 
 #[cfg(test)]
 use order::inversions;

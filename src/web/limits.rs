@@ -34,7 +34,7 @@ pub(crate) const STEP_CHUNK: u64 = 10_000;
 
 /// Longest a connection may take to send a request's headers — and so longest an idle
 /// keep-alive connection is kept — before the server closes it.
-pub const HEADER_TIMEOUT: Duration = Duration::from_secs(10);
+pub(crate) const HEADER_TIMEOUT: Duration = Duration::from_secs(10);
 
 /// Files the server leaves for everything but its connections (the journal, the net, the
 /// runtime's own descriptors) when it sizes [`connection_cap`] by the process's file limit.
@@ -45,7 +45,7 @@ const SPARE_FILES: usize = 128;
 /// answered `503` and closed at once, so a flood of idle connections cannot take the last
 /// file descriptor the server needs to accept the page (they are closed after
 /// [`HEADER_TIMEOUT`] anyway).
-pub fn connection_cap() -> usize {
+pub(crate) fn connection_cap() -> usize {
     cap_for(open_file_limit())
 }
 

@@ -26,11 +26,26 @@ use super::program::{ProgramError, Step};
 use crate::net::{Timing, TransitionId};
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
+/// How `goto` steps reach their location when not by asking the world directly: through
+/// Nav2's `NavigateToPose` over ROS 2 (`crate::ros2::nav2`, `run --robots N --ros2`), which
+/// the world serves for its robots, so a plan drives simulated robots the way it would
+/// drive real ones.
+pub trait Navigator: Send + Sync + std::fmt::Debug {
+    /// Drives `robot` to `location` of the map; `Err`: why it did not arrive. Dropping the
+    /// future gives the drive up (a Nav2 goal is cancelled).
+    fn goto(
+        &self,
+        robot: Arc<str>,
+        location: usize,
+    ) -> std::pin::Pin<Box<dyn std::future::Future<Output = Result<(), String>> + Send>>;
+}
+
 /// A built-in robot program bound to a world.
 #[derive(Clone, Debug)]
 pub struct SimAction {
     steps: Arc<[Step]>,
     world: WorldHandle,
+    navigator: Option<Arc<dyn Navigator>>,
 }
 
 impl SimAction {
@@ -44,7 +59,16 @@ impl SimAction {
         Ok(map.program(name)?.map(|steps| SimAction {
             steps: steps.into(),
             world: world.clone(),
+            navigator: None,
         }))
+    }
+
+    /// The same program with its `goto` steps going through `navigator`.
+    pub fn navigated_by(self, navigator: Arc<dyn Navigator>) -> SimAction {
+        SimAction {
+            navigator: Some(navigator),
+            ..self
+        }
     }
 }
 
@@ -84,6 +108,7 @@ impl Action for SimAction {
     fn run(&self, ctx: ActionContext) -> ActionFuture {
         let steps = Arc::clone(&self.steps);
         let world = self.world.clone();
+        let navigator = self.navigator.clone();
         Box::pin(async move {
             let Some(robot) = ctx.robot.clone() else {
                 return Outcome::Failed(format!(
@@ -95,11 +120,24 @@ impl Action for SimAction {
             let mut outcome = Outcome::Decide;
             for step in steps.iter() {
                 outcome = match *step {
+                    Step::Goto(location) if navigator.is_some() => {
+                        let nav = navigator
+                            .as_ref()
+                            .map(|n| n.goto(Arc::clone(&robot), location));
+                        let Some(drive) = nav else { continue };
+                        tokio::select! {
+                            r = drive => match r {
+                                Ok(()) => Outcome::Decide,
+                                Err(e) => return Outcome::Failed(e),
+                            },
+                            _ = ctx.cancel.cancelled() => return Outcome::Cancelled,
+                        }
+                    }
                     Step::Goto(location) => {
                         let (robot, agent) = (Arc::clone(&robot), ctx.agent.0);
                         let goto = |reply| Goto {
                             robot,
-                            agent,
+                            agent: Some(agent),
                             location,
                             reply,
                         };

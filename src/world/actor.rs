@@ -30,6 +30,7 @@ const PROGRESS: f32 = 0.05;
 
 /// Why a `goto` did not arrive.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum GotoError {
     /// No progress for the map's `stuck_after` seconds, at this position.
     Stuck(f32, f32),
@@ -140,6 +141,26 @@ impl WorldHandle {
     /// Stops the world (its robots stop where they are).
     pub fn stop(&self) {
         self.actor.kill();
+    }
+
+    /// Drives `robot` to the back of `location`'s queue, as a `goto` step does (its agent
+    /// unchanged): what a simulated robot's Nav2 server (`crate::ros2::nav2`) does with a
+    /// goal. `Err`: why it did not arrive, or that the world is gone.
+    pub async fn drive(&self, robot: Arc<str>, location: usize) -> Result<(), String> {
+        let (reply, rx) = oneshot::channel();
+        let goto = Goto {
+            robot,
+            agent: None,
+            location,
+            reply,
+        };
+        if self.actor.tell(goto).try_send().is_err() {
+            return Err("the world is gone".into());
+        }
+        match rx.await {
+            Ok(r) => r.map_err(|e| e.to_string()),
+            Err(_) => Err("the world is gone".into()),
+        }
     }
 
     pub(crate) fn actor(&self) -> &ActorRef<World> {
@@ -330,7 +351,9 @@ impl World {
                 .send(Err(GotoError::UnknownRobot(m.robot.to_string())));
             return;
         };
-        self.robots[r].agent = Some(m.agent);
+        if let Some(agent) = m.agent {
+            self.robots[r].agent = Some(agent);
+        }
         if self.robots[r].location == Some(m.location) {
             if self.robots[r].arrived {
                 let _ = m.reply.send(Ok(()));

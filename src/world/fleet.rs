@@ -11,6 +11,7 @@
 
 use std::sync::Arc;
 
+use super::action::Navigator;
 use super::map::Map;
 use super::program::ProgramError;
 use super::{RobotStart, SimAction, World, WorldHandle};
@@ -20,6 +21,7 @@ use crate::runtime::{Role, RuntimeBuilder};
 
 /// Why a plan cannot run on simulated robots.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum FleetError {
     /// The plan has no `[map]`.
     #[error("the plan has no [map]: simulated robots need one (see docs/plans.md)")]
@@ -78,6 +80,10 @@ pub struct Fleet {
     pub world: WorldHandle,
     /// The seed of the run and of the world.
     pub seed: u64,
+    /// The map the world was made from.
+    pub map: Arc<Map>,
+    /// The built-in actions registered on `builder`, by name.
+    actions: Vec<(String, SimAction)>,
 }
 
 /// What a fleet is made from: a configured run (net, roles, policy, stop conditions, seed,
@@ -220,6 +226,7 @@ impl Fleet {
         names.sort();
         names.dedup();
         let bound: Vec<Arc<str>> = starts.into_iter().map(|s| s.name).collect();
+        let mut actions = Vec::new();
         // The world steps on tokio's clock: with time scale 0, model time is that clock.
         let mut builder = run.seed(seed).robots(bound).follow_tokio_clock(true);
         for name in names {
@@ -229,13 +236,26 @@ impl Fleet {
                     reason,
                 })?;
             if let Some(a) = action {
-                builder = builder.action(name, a);
+                builder = builder.action(name.clone(), a.clone());
+                actions.push((name, a));
             }
         }
         Ok(Fleet {
             builder,
             world,
             seed,
+            map,
+            actions,
         })
+    }
+
+    /// Makes every `goto` of the plan's built-in actions go through `navigator` (Nav2 over
+    /// ROS 2: `crate::ros2::nav2`) instead of asking the world directly.
+    pub fn navigate_with(mut self, navigator: Arc<dyn Navigator>) -> Fleet {
+        for (name, action) in &mut self.actions {
+            *action = action.clone().navigated_by(Arc::clone(&navigator));
+            self.builder = self.builder.action(name.clone(), action.clone());
+        }
+        self
     }
 }

@@ -22,6 +22,7 @@ pub enum Step {
 /// Why an action name is not a valid built-in robot program. `step` is the offending
 /// `;`-separated part as written.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ProgramError {
     /// `goto` names a location the map does not have.
     #[error("`{step}`: location `{location}` does not exist")]

@@ -15,7 +15,7 @@ use crate::world::map::Map;
 
 /// The queues of every location.
 #[derive(Debug)]
-pub struct Queues {
+pub(crate) struct Queues {
     lanes: u64,
     spacing: f32,
     fronts: Vec<Vec2>,
@@ -28,7 +28,7 @@ pub struct Queues {
 
 impl Queues {
     /// Empty queues at the map's locations.
-    pub fn new(map: &Map) -> Queues {
+    pub(crate) fn new(map: &Map) -> Queues {
         let n = map.locations.len();
         let mut q = Queues {
             lanes: u64::from(map.queue.lanes),
@@ -49,7 +49,7 @@ impl Queues {
     }
 
     /// `robot` joins the back of `loc`'s queue.
-    pub fn join(&mut self, loc: usize, robot: usize) {
+    pub(crate) fn join(&mut self, loc: usize, robot: usize) {
         let k = self.joined[loc];
         self.joined[loc] += 1;
         self.queues[loc].push_back((robot, k));
@@ -57,7 +57,7 @@ impl Queues {
 
     /// `robot` leaves `loc`; returns how many robots that joined before it are still there
     /// (0 = it was at the front), or `None` when it was not in the queue.
-    pub fn leave(&mut self, loc: usize, robot: usize) -> Option<usize> {
+    pub(crate) fn leave(&mut self, loc: usize, robot: usize) -> Option<usize> {
         let q = &mut self.queues[loc];
         let i = q.iter().position(|&(r, _)| r == robot)?;
         q.remove(i);
@@ -65,12 +65,12 @@ impl Queues {
     }
 
     /// The robot at the front of `loc`'s queue.
-    pub fn front(&self, loc: usize) -> Option<usize> {
+    pub(crate) fn front(&self, loc: usize) -> Option<usize> {
         self.queues[loc].front().map(|&(r, _)| r)
     }
 
     /// Every robot of `loc` with the point of its slot now.
-    pub fn slots(&self, loc: usize) -> Vec<(usize, Vec2)> {
+    pub(crate) fn slots(&self, loc: usize) -> Vec<(usize, Vec2)> {
         let mut rows = vec![0u32; self.lanes as usize];
         let centre = (self.lanes as f32 - 1.0) / 2.0;
         self.queues[loc]
@@ -88,7 +88,7 @@ impl Queues {
     }
 
     /// The point of the location itself (the front of its queue).
-    pub fn point(&self, loc: usize) -> Vec2 {
+    pub(crate) fn point(&self, loc: usize) -> Vec2 {
         self.fronts[loc]
     }
 }

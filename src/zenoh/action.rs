@@ -21,7 +21,7 @@ pub const CANCEL_NONE: i8 = 0;
 pub const CANCEL_UNKNOWN_GOAL: i8 = 2;
 
 /// `ExecPlace_SendGoal_Request`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct SendGoalRequest {
     /// The goal's id, chosen by the client.
     pub goal_id: GoalId,
@@ -90,13 +90,15 @@ mod tests {
             goal_id: [1; 16],
             goal: ExecPlaceGoal {
                 place: "p".into(),
-                agent: "3".into(),
+                agent: 3,
+                ..ExecPlaceGoal::default()
             },
         };
         let b = encode(&r);
         assert_eq!(&b[4..20], &[1; 16]);
-        // "p\0" with its length 2, then "3\0".
+        // "p\0" with its length 2, then the agent as a u64 aligned at 8 of the body (24).
         assert_eq!(&b[20..26], &[2, 0, 0, 0, b'p', 0]);
+        assert_eq!(&b[28..36], &3u64.to_le_bytes());
         assert_eq!(decode::<SendGoalRequest>(&b).unwrap(), r);
     }
 }

@@ -11,9 +11,7 @@
 //!
 //! A `*/gspn/firings/**` subscriber (any domain, any type hash) gets every firing.
 
-use std::sync::LazyLock;
-
-use super::wire::{Field, TIME, TypeDescription, TypeHash, action_hashes, cancel_goal_hash};
+use super::type_hash::{TypeError, hash_of};
 use crate::ros2::msgs;
 
 /// The ROS 2 admin space of liveliness tokens.
@@ -55,18 +53,33 @@ pub fn topic(domain: u16, name: &str, dds_type: &str, hash: &str) -> String {
     format!("{domain}/{}/{dds_type}/{hash}", strip(name))
 }
 
-/// The three services of action `/<robot>/<server>` (ExecPlace), each with its type's hash.
-pub fn exec_place(domain: u16, robot: &str, server: &str, service: ActionService) -> String {
+/// The DDS name ROS 2 gives type `pkg/kind/Name`: `pkg::kind::dds_::Name_`.
+pub fn dds_type(full_name: &str) -> String {
+    match full_name.rsplit_once('/') {
+        Some((scope, name)) => format!("{}::dds_::{name}_", scope.replace('/', "::")),
+        None => format!("{full_name}_"),
+    }
+}
+
+/// The key expression of the service `/<robot>/<server>/_action/<sub>` of the ExecPlace
+/// action, each with its type's hash. rmw_zenoh names a service's type after its response
+/// type without `Response_` (`gspn_msgs::action::dds_::ExecPlace_SendGoal_`).
+pub fn exec_place(
+    domain: u16,
+    robot: &str,
+    server: &str,
+    service: ActionService,
+) -> Result<String, TypeError> {
     let (sub, ty) = match service {
-        ActionService::SendGoal => ("send_goal", "gspn_msgs::action::dds_::ExecPlace_SendGoal_"),
-        ActionService::GetResult => (
-            "get_result",
-            "gspn_msgs::action::dds_::ExecPlace_GetResult_",
-        ),
-        ActionService::CancelGoal => ("cancel_goal", "action_msgs::srv::dds_::CancelGoal_"),
+        ActionService::SendGoal => ("send_goal", "gspn_msgs/action/ExecPlace_SendGoal"),
+        ActionService::GetResult => ("get_result", "gspn_msgs/action/ExecPlace_GetResult"),
+        ActionService::CancelGoal => ("cancel_goal", "action_msgs/srv/CancelGoal"),
     };
-    let hash = &SERVICE_HASHES[service as usize].0;
-    format!("{domain}/{robot}/{server}/_action/{sub}/{ty}/{hash}")
+    let hash = hash_of(ty)?.0;
+    Ok(format!(
+        "{domain}/{robot}/{server}/_action/{sub}/{}/{hash}",
+        dds_type(ty)
+    ))
 }
 
 /// The services an action is made of.
@@ -134,68 +147,9 @@ pub enum Topic {
     Marking,
     /// `/gspn/run`, `gspn_msgs/msg/RunState`.
     Run,
-    /// `/gspn/drift`, `std_msgs/msg/String`.
+    /// `/gspn/drift`, `gspn_msgs/msg/Drift`.
     Drift,
 }
-
-const FIRING: TypeDescription = TypeDescription {
-    name: "gspn_msgs/msg/Firing",
-    fields: &[
-        ("seq", Field::Uint64),
-        ("transition", Field::String),
-        ("marking", Field::Uint32Seq),
-        ("robots", Field::StringSeq),
-        ("stamp", Field::Nested("builtin_interfaces/msg/Time")),
-    ],
-};
-const MARKING: TypeDescription = TypeDescription {
-    name: "gspn_msgs/msg/Marking",
-    fields: &[
-        ("seq", Field::Uint64),
-        ("places", Field::StringSeq),
-        ("tokens", Field::Uint32Seq),
-    ],
-};
-const RUN_STATE: TypeDescription = TypeDescription {
-    name: "gspn_msgs/msg/RunState",
-    fields: &[
-        ("state", Field::String),
-        ("stopped", Field::String),
-        ("firings", Field::Uint64),
-    ],
-};
-const STRING: TypeDescription = TypeDescription {
-    name: "std_msgs/msg/String",
-    fields: &[("data", Field::String)],
-};
-
-const EXEC_PLACE_GOAL: TypeDescription = TypeDescription {
-    name: "gspn_msgs/action/ExecPlace_Goal",
-    fields: &[("place", Field::String), ("agent", Field::String)],
-};
-const EXEC_PLACE_RESULT: TypeDescription = TypeDescription {
-    name: "gspn_msgs/action/ExecPlace_Result",
-    fields: &[("transition", Field::String), ("outcome", Field::String)],
-};
-
-/// The hashes of the ExecPlace action's services, in [`ActionService`] order.
-static SERVICE_HASHES: LazyLock<[TypeHash; 3]> = LazyLock::new(|| {
-    let (send_goal, get_result) = action_hashes(
-        "gspn_msgs/action/ExecPlace",
-        &EXEC_PLACE_GOAL,
-        &EXEC_PLACE_RESULT,
-    );
-    [send_goal, get_result, cancel_goal_hash()]
-});
-
-static HASHES: LazyLock<[TypeHash; 4]> = LazyLock::new(|| {
-    [
-        TypeHash::of(&FIRING, &[TIME]),
-        TypeHash::of(&MARKING, &[]),
-        TypeHash::of(&RUN_STATE, &[]),
-        TypeHash::of(&STRING, &[]),
-    ]
-});
 
 impl Topic {
     /// The ROS 2 topic name.
@@ -208,24 +162,20 @@ impl Topic {
         }
     }
 
-    /// The DDS type name (`gspn_msgs::msg::dds_::Firing_`).
-    pub fn dds_type(self) -> &'static str {
+    /// The ROS 2 type.
+    pub fn ty(self) -> &'static str {
         match self {
-            Topic::Firings => "gspn_msgs::msg::dds_::Firing_",
-            Topic::Marking => "gspn_msgs::msg::dds_::Marking_",
-            Topic::Run => "gspn_msgs::msg::dds_::RunState_",
-            Topic::Drift => "std_msgs::msg::dds_::String_",
+            Topic::Firings => "gspn_msgs/msg/Firing",
+            Topic::Marking => "gspn_msgs/msg/Marking",
+            Topic::Run => "gspn_msgs/msg/RunState",
+            Topic::Drift => "gspn_msgs/msg/Drift",
         }
     }
 
-    /// The type's RIHS01 hash.
-    pub fn type_hash(self) -> &'static str {
-        &HASHES[self as usize].0
-    }
-
     /// The key expression in `domain`.
-    pub fn key(self, domain: u16) -> String {
-        topic(domain, self.name(), self.dds_type(), self.type_hash())
+    pub fn key(self, domain: u16) -> Result<String, TypeError> {
+        let hash = hash_of(self.ty())?.0;
+        Ok(topic(domain, self.name(), &dds_type(self.ty()), &hash))
     }
 }
 
@@ -235,17 +185,17 @@ mod tests {
 
     #[test]
     fn keys_follow_rmw_zenoh() {
-        let k = Topic::Firings.key(0);
-        assert!(k.starts_with("0/gspn/firings/gspn_msgs::msg::dds_::Firing_/RIHS01_"));
-        assert_eq!(
-            k.len(),
-            "0/gspn/firings/gspn_msgs::msg::dds_::Firing_/RIHS01_".len() + 64
+        let k = Topic::Firings.key(0).unwrap();
+        let prefix = "0/gspn/firings/gspn_msgs::msg::dds_::Firing_/RIHS01_";
+        assert!(k.starts_with(prefix), "{k}");
+        assert_eq!(k.len(), prefix.len() + 64);
+        assert!(
+            Topic::Drift
+                .key(3)
+                .unwrap()
+                .starts_with("3/gspn/drift/gspn_msgs::msg::dds_::Drift_/RIHS01_")
         );
-        assert_eq!(
-            Topic::Drift.key(3),
-            "3/gspn/drift/std_msgs::msg::dds_::String_/RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
-        );
-        let k = exec_place(0, "r1", "exec_place", ActionService::SendGoal);
+        let k = exec_place(0, "r1", "exec_place", ActionService::SendGoal).unwrap();
         assert!(
             k.starts_with(
                 "0/r1/exec_place/_action/send_goal/gspn_msgs::action::dds_::ExecPlace_SendGoal_/RIHS01_"
@@ -253,9 +203,10 @@ mod tests {
             "{k}"
         );
         assert_eq!(
-            exec_place(0, "r1", "exec_place", ActionService::CancelGoal),
+            exec_place(0, "r1", "exec_place", ActionService::CancelGoal).unwrap(),
             "0/r1/exec_place/_action/cancel_goal/action_msgs::srv::dds_::CancelGoal_/RIHS01_573d8b0a534451d7bc2ac8c5ffde8ac14b8593b7001175d0cd6516dcbeb8689a"
         );
+        assert_eq!(dds_type("std_msgs/msg/String"), "std_msgs::msg::dds_::String_");
     }
 
     #[test]

@@ -33,8 +33,11 @@ use super::action::{
 use super::keys::{self, ActionService};
 use super::presence::Liveness;
 use super::wire::{self, Attachment};
+use super::type_hash::TypeError;
 use crate::net::PlaceId;
 use crate::ros2::msgs::{ExecPlaceGoal, Time};
+use crate::ros2::remote_place::{goal, succeeded};
+use crate::ros2::settings::PlaceArgs;
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
 /// How long a goal or cancel request may wait for its answer.
@@ -132,21 +135,21 @@ impl RobotLink {
         server: &str,
         liveness: watch::Receiver<Liveness>,
         present: watch::Receiver<bool>,
-    ) -> RobotLink {
+    ) -> Result<RobotLink, TypeError> {
         let key = |s| keys::exec_place(domain, &robot, server, s);
         let client = ClientId::new(&format!("/{robot}/{server}"));
-        RobotLink {
+        Ok(RobotLink {
             keys: [
-                key(ActionService::SendGoal),
-                key(ActionService::GetResult),
-                key(ActionService::CancelGoal),
+                key(ActionService::SendGoal)?,
+                key(ActionService::GetResult)?,
+                key(ActionService::CancelGoal)?,
             ],
             robot,
             session,
             client,
             liveness,
             present,
-        }
+        })
     }
 
     /// After a call failed: whether the robot's token vanished (within [`GONE_GRACE`]) and
@@ -223,14 +226,21 @@ impl RobotLink {
 #[derive(Debug, Clone)]
 pub struct ZenohPlaces {
     servers: Arc<HashMap<PlaceId, String>>,
+    args: Arc<HashMap<PlaceId, PlaceArgs>>,
     links: Arc<HashMap<(String, String), Arc<RobotLink>>>,
 }
 
 impl ZenohPlaces {
-    /// The action for places `servers` (place → server name) over `links` (server, link).
-    pub fn new(servers: HashMap<PlaceId, String>, links: Vec<(String, Arc<RobotLink>)>) -> Self {
+    /// The action for places `servers` (place → server name) with their `args` over `links`
+    /// (server, link).
+    pub fn new(
+        servers: HashMap<PlaceId, String>,
+        args: HashMap<PlaceId, PlaceArgs>,
+        links: Vec<(String, Arc<RobotLink>)>,
+    ) -> Self {
         ZenohPlaces {
             servers: Arc::new(servers),
+            args: Arc::new(args),
             links: Arc::new(
                 links
                     .into_iter()
@@ -259,7 +269,8 @@ impl Action for ZenohPlaces {
             let m = format!("robot `{robot}` has no link to server `{server}`");
             return Box::pin(async move { Outcome::Failed(m) });
         };
-        Box::pin(exec(Arc::clone(link), ctx))
+        let goal = goal(&ctx, self.args.get(&ctx.place));
+        Box::pin(exec(Arc::clone(link), goal, ctx))
     }
 }
 
@@ -297,7 +308,7 @@ enum Ended {
     Cancel,
 }
 
-async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
+async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> Outcome {
     let robot = link.robot.clone();
     let lost_msg = || format!("robot `{robot}` lost (its liveliness token is gone)");
     let mut live = link.liveness.clone();
@@ -307,10 +318,6 @@ async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
     let guard = GoalGuard {
         link: Arc::clone(&link),
         goal: Mutex::new(None),
-    };
-    let goal = ExecPlaceGoal {
-        place: ctx.place_name().to_string(),
-        agent: ctx.agent.0.to_string(),
     };
     let work = async {
         let (id, accepted) = link
@@ -334,13 +341,10 @@ async fn exec(link: Arc<RobotLink>, ctx: ActionContext) -> Outcome {
         Ended::Result(r) => {
             guard.set(None);
             match r {
-                Ok(r) if r.status == STATUS_SUCCEEDED && r.result.transition.is_empty() => {
-                    Outcome::Decide
-                }
-                Ok(r) if r.status == STATUS_SUCCEEDED => ctx.fire(&r.result.transition),
+                Ok(r) if r.status == STATUS_SUCCEEDED => succeeded(&robot, &r.result, &ctx),
                 Ok(r) => Outcome::Failed(format!(
                     "robot `{robot}` ended the goal with status {}: {}",
-                    r.status, r.result.outcome
+                    r.status, r.result.message
                 )),
                 Err(e) => Outcome::Failed(e),
             }

@@ -29,9 +29,9 @@ use super::presence::{Liveness, Presence};
 use super::wire::{self, Attachment};
 use super::{ZenohConfig, ZenohError};
 use crate::net::Net;
-use crate::ros2::msgs::{ExecPlaceResult, RUN_OVER, RunState, Time};
+use crate::ros2::msgs::{ExecPlaceResult, RunState, Time};
 use crate::ros2::robot::{Leave, RobotStats, decide, id_hash};
-use crate::ros2::settings::Ros2Settings;
+use crate::ros2::settings::{NAV2_SERVER, Ros2Settings};
 use crate::sample::Rng;
 
 /// How the robots of a process run.
@@ -83,15 +83,21 @@ pub async fn serve(
 ) -> Result<FleetStats, ZenohError> {
     let d = cfg.domain;
     let net = Arc::new(net.clone());
-    let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
+    // Nav2 places' goals go to a robot's Nav2, not to ExecPlace (and not over Zenoh).
+    let mut servers: Vec<&str> = settings
+        .servers
+        .iter()
+        .map(|(_, s)| s.as_str())
+        .filter(|&s| s != NAV2_SERVER)
+        .collect();
     servers.sort_unstable();
     servers.dedup();
     let run = session
-        .declare_subscriber(Topic::Run.key(d))
+        .declare_subscriber(Topic::Run.key(d)?)
         .await
         .map_err(ZenohError::zenoh)?;
     let firings = session
-        .declare_subscriber(Topic::Firings.key(d))
+        .declare_subscriber(Topic::Firings.key(d)?)
         .await
         .map_err(ZenohError::zenoh)?;
     let received = Arc::new(AtomicU64::new(0));
@@ -123,7 +129,7 @@ pub async fn serve(
                 ActionService::CancelGoal,
             ] {
                 let q = session
-                    .declare_queryable(keys::exec_place(d, id, server, service))
+                    .declare_queryable(keys::exec_place(d, id, server, service)?)
                     .await
                     .map_err(ZenohError::zenoh)?;
                 let robot = Arc::clone(&robot);
@@ -196,7 +202,7 @@ async fn leave(
     let over = async {
         while let Ok(s) = run.recv_async().await {
             if let Ok(r) = wire::decode::<RunState>(&s.payload().to_bytes())
-                && r.state == RUN_OVER
+                && r.state == RunState::OVER
             {
                 return Leave::RunOver(format!("{} after {} firings", r.stopped, r.firings));
             }
@@ -262,8 +268,9 @@ async fn answer(robot: &Arc<Robot>, service: ActionService, query: Query) {
                         None => GetResultResponse {
                             status: super::action::STATUS_ABORTED,
                             result: ExecPlaceResult {
+                                outcome: ExecPlaceResult::FAILED,
                                 transition: String::new(),
-                                outcome: "unknown goal".into(),
+                                message: "unknown goal".into(),
                             },
                         },
                     };
@@ -322,20 +329,17 @@ fn start_goal(robot: &Arc<Robot>, req: SendGoalRequest) -> bool {
     tokio::spawn(async move {
         let wait = tokio::time::sleep(crate::limits::duration(decision.delay));
         let resp = tokio::select! {
-            _ = wait => {
-                let outcome = if decision.transition.is_empty() { "decide" } else { "fire" };
-                GetResultResponse {
-                    status: STATUS_SUCCEEDED,
-                    result: ExecPlaceResult { transition: decision.transition, outcome: outcome.into() },
-                }
-            }
+            _ = wait => GetResultResponse {
+                status: STATUS_SUCCEEDED,
+                result: ExecPlaceResult::fire_or_decide(decision.transition, "net-timed"),
+            },
             Ok(()) = cancelled => {
                 if let Ok(mut s) = robot.stats.lock() {
                     s.cancelled += 1;
                 }
                 GetResultResponse {
                     status: STATUS_CANCELED,
-                    result: ExecPlaceResult { transition: String::new(), outcome: "cancelled".into() },
+                    result: ExecPlaceResult::cancelled(),
                 }
             }
         };

@@ -34,8 +34,8 @@ use super::wire::{self, Attachment};
 use super::{ZenohConfig, ZenohError};
 use crate::net::Net;
 use crate::ros2::firings::{Published, drift_message};
-use crate::ros2::msgs::{Firing, Marking, RUN_OVER, RUN_RUNNING, RunState, Time};
-use crate::ros2::settings::{ROS2_ACTION, Ros2Settings};
+use crate::ros2::msgs::{Firing, Header, Marking, RunState};
+use crate::ros2::settings::{NAV2_SERVER, ROS2_ACTION, Ros2Settings};
 use crate::runtime::{EventKind, Events, Received, RuntimeBuilder};
 
 /// A publisher and its rmw_zenoh attachment (GID, sequence numbers).
@@ -48,7 +48,7 @@ struct TopicPublisher {
 impl TopicPublisher {
     async fn new(session: &Session, domain: u16, topic: Topic) -> Result<Self, ZenohError> {
         let publisher = session
-            .declare_publisher(topic.key(domain))
+            .declare_publisher(topic.key(domain)?)
             .congestion_control(CongestionControl::Block)
             .await
             .map_err(ZenohError::zenoh)?;
@@ -82,8 +82,10 @@ struct RunTopics {
 }
 
 impl RunTopics {
-    fn marking_msg(&self, seq: u64, tokens: &[u32]) -> Marking {
+    fn marking_msg(&self, seq: u64, time: f64, tokens: &[u32]) -> Marking {
         Marking {
+            header: Header::now(""),
+            model_time: time,
             seq,
             places: self.net.places().iter().map(|p| p.name.clone()).collect(),
             tokens: tokens.to_vec(),
@@ -95,7 +97,7 @@ impl RunTopics {
     async fn run(&self, mut events: Events) -> Published {
         let mut out = Published::default();
         let initial = self.net.initial_marking();
-        if !self.marking.put(&self.marking_msg(0, &initial)).await {
+        if !self.marking.put(&self.marking_msg(0, 0.0, &initial)).await {
             out.errors += 1;
         }
         while let Some(r) = events.recv().await {
@@ -124,18 +126,19 @@ impl RunTopics {
             };
             out.firings += 1;
             let msg = Firing {
+                header: Header::now(""),
+                model_time: e.time,
                 seq: out.firings,
                 transition: self.net.transition(transition).name.clone(),
                 marking: marking.to_vec(),
                 robots: robots.iter().map(|r| r.to_string()).collect(),
-                stamp: Time::now(),
             };
             if !self.firings.put(&msg).await {
                 out.errors += 1;
             }
             if !self
                 .marking
-                .put(&self.marking_msg(out.firings, &marking))
+                .put(&self.marking_msg(out.firings, e.time, &marking))
                 .await
             {
                 out.errors += 1;
@@ -177,6 +180,12 @@ impl ZenohBackend {
         subscribers: usize,
     ) -> Result<ZenohBackend, ZenohError> {
         let d = cfg.domain;
+        if let Some((p, _)) = settings.servers.iter().find(|(_, s)| s == NAV2_SERVER) {
+            return Err(ZenohError::Unsupported(format!(
+                "place `{}` is a Nav2 place (server = \"{NAV2_SERVER}\"): Nav2 goals go over DDS only; use transport = \"dds\"",
+                net.place(*p).name
+            )));
+        }
         let token = session
             .liveliness()
             .declare_token(keys::node_token(
@@ -215,7 +224,7 @@ impl ZenohBackend {
                     server,
                     live.clone(),
                     present.clone(),
-                );
+                )?;
                 links.push((server.to_string(), Arc::new(link)));
             }
         }
@@ -246,12 +255,13 @@ impl ZenohBackend {
             })?;
         }
         let servers: HashMap<_, _> = settings.servers.iter().cloned().collect();
+        let args: HashMap<_, _> = settings.args.iter().cloned().collect();
         Ok(ZenohBackend {
             session,
             _token: token,
             topics: Arc::new(topics),
             task: None,
-            places: ZenohPlaces::new(servers, links),
+            places: ZenohPlaces::new(servers, args, links),
             presence,
         })
     }
@@ -265,7 +275,7 @@ impl ZenohBackend {
     /// `events`.
     pub async fn publish(&mut self, events: Events) {
         let running = RunState {
-            state: RUN_RUNNING.into(),
+            state: RunState::RUNNING,
             stopped: String::new(),
             firings: 0,
         };
@@ -295,7 +305,7 @@ impl ZenohBackend {
             None => Published::default(),
         };
         let over = RunState {
-            state: RUN_OVER.into(),
+            state: RunState::OVER,
             stopped: stopped.to_string(),
             firings: published.firings,
         };

@@ -31,10 +31,21 @@ fn ci_runs_the_readme_test_command_which_sets_up_and_runs_the_suite() {
     let readme = read("README.md");
     let test_cmd = command_after(&readme, "Run the tests:");
     assert_eq!(test_cmd, "./test.sh");
+    // CI runs the test command as its three steps, in order, `cargo test` among them.
     let ci = read(".ci/run");
+    let ci_cmds = commands(&ci);
+    let steps = [
+        "./test.sh --setup",
+        "cargo test --all-features",
+        "./test.sh --python",
+    ];
+    let at: Vec<Option<usize>> = steps
+        .iter()
+        .map(|s| ci_cmds.iter().position(|c| c == s))
+        .collect();
     assert!(
-        commands(&ci).contains(&test_cmd.as_str()),
-        ".ci/run must run `{test_cmd}`"
+        at.iter().all(Option::is_some) && at.windows(2).all(|w| w[0] < w[1]),
+        ".ci/run must run {steps:?} in order: {ci_cmds:?}"
     );
     // CI installs nothing itself: the test command does, for a user as for CI.
     assert!(
@@ -43,15 +54,23 @@ fn ci_runs_the_readme_test_command_which_sets_up_and_runs_the_suite() {
     );
     let script = read("test.sh");
     let run = commands(&script);
-    // The suite (with the arguments, if any), then the Python package's.
-    assert!(
-        run.contains(&"cargo test --all-features \"$@\""),
+    // Without flags: the same three steps — the set-up, the suite (with the arguments, if
+    // any), then the Python package's.
+    let tail: Vec<&str> = run.iter().rev().take(7).rev().copied().collect();
+    assert_eq!(
+        tail,
+        [
+            "setup",
+            "echo \"== cargo test --all-features $*\"",
+            "cargo test --all-features \"$@\"",
+            "if [ \"$#\" -gt 0 ]; then",
+            "exit 0",
+            "fi",
+            "python_tests",
+        ],
         "{script}"
     );
-    assert!(
-        run.last().unwrap().contains("pytest -q python/tests"),
-        "{script}"
-    );
+    assert!(script.contains("pytest -q python/tests"), "{script}");
     for needed in [
         "chromium",
         "chromium-driver",
@@ -60,6 +79,7 @@ fn ci_runs_the_readme_test_command_which_sets_up_and_runs_the_suite() {
         "target/venv-ros2",
         "cyclonedds==11.0.1",
         "stormpy==2.0.0",
+        "mcap==1.6.0 mcap-ros2-support==0.6.0",
         "eclipse-zenoh==1.10.2",
         "./python pytest matplotlib",
     ] {

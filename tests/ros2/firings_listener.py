@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import int32, sequence, uint32, uint64
+from cyclonedds.idl.types import float64, int32, sequence, uint32, uint64
 from cyclonedds.internal import InvalidSample
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
@@ -33,12 +33,19 @@ class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
 
 
 @dataclass
+class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
+    stamp: Time
+    frame_id: str
+
+
+@dataclass
 class Firing(IdlStruct, typename="gspn_msgs::msg::dds_::Firing_"):
+    header: Header
+    model_time: float64
     seq: uint64
     transition: str
     marking: sequence[uint32]
     robots: sequence[str]
-    stamp: Time
 
 
 def main() -> int:
@@ -69,7 +76,8 @@ def main() -> int:
                         "transition": f.transition,
                         "marking": list(f.marking),
                         "robots": list(f.robots),
-                        "stamp_ns": f.stamp.sec * 1_000_000_000 + f.stamp.nanosec,
+                        "model_time": f.model_time,
+                        "stamp_ns": f.header.stamp.sec * 1_000_000_000 + f.header.stamp.nanosec,
                     }
                 ),
                 flush=True,

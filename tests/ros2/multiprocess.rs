@@ -67,7 +67,7 @@ async fn every_firing_reaches_a_subscriber_exactly_once_in_order() {
         // Each firing of the patrol moves one robot.
         assert_eq!(f.robots.len(), 1, "{f:?}");
         assert!(ROBOTS.contains(&f.robots[0].as_str()), "{f:?}");
-        assert!(f.stamp.sec > 1_700_000_000);
+        assert!(f.header.stamp.sec > 1_700_000_000);
     }
     let movers: BTreeSet<&str> = got.iter().map(|f| f.robots[0].as_str()).collect();
     assert_eq!(movers.len(), 3, "all three robots move: {movers:?}");

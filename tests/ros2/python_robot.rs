@@ -17,7 +17,7 @@ use std::time::Duration;
 use support::{CYCLONE_CONFIG, domain, finish, python, repo, robot_with, supervisor_with};
 
 /// The patrol plan with the Cyclone service mapping.
-fn write_cyclone_plan(dir: &std::path::Path) -> std::path::PathBuf {
+pub(crate) fn write_cyclone_plan(dir: &std::path::Path) -> std::path::PathBuf {
     let text = std::fs::read_to_string(repo(support::PLAN))
         .unwrap()
         .replace(

@@ -361,7 +361,8 @@ pub fn python() -> PathBuf {
     assert!(
         py.is_file(),
         "the ROS 2 tests with Python peers need a Python venv with cyclonedds at {} \
-         (create it: python3 -m venv {0} && {0}/bin/pip install cyclonedds==11.0.1; \
+         (create it: python3 -m venv {0} && {0}/bin/pip install cyclonedds==11.0.1 \
+         mcap==1.6.0 mcap-ros2-support==0.6.0; \
          .ci/run does this; or point GSPN_ROS2_VENV at one)",
         venv.display()
     );

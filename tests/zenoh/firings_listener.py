@@ -1,8 +1,8 @@
 """A subscriber of the run's firings on the PyPI `eclipse-zenoh` package (not our code):
 connects to the router given as argv[1] as a client, subscribes to `*/gspn/firings/**`
 (any domain, any type hash), and prints `seq transition key attachment-seq` for each
-firing, decoding the CDR payload by hand (header 00 01 00 00, then uint64 seq, then the
-transition string) and the attachment with zenoh's own deserializer as rmw_zenoh writes it
+firing, decoding the CDR payload by hand (header 00 01 00 00, then gspn_msgs/Firing: a
+std_msgs/Header, float64 model_time, uint64 seq, the transition string, …) and the attachment with zenoh's own deserializer as rmw_zenoh writes it
 (int64 sequence number, int64 source timestamp, the 16-byte GID as a sequence).
 Prints `ready` once subscribed; exits after argv[2] firings or argv[3] seconds."""
 
@@ -32,9 +32,16 @@ def main() -> None:
                 continue
             b = sample.payload.to_bytes()
             assert b[:4] == b"\x00\x01\x00\x00", b[:4]
-            (seq,) = struct.unpack_from("<Q", b, 4)
-            (n,) = struct.unpack_from("<I", b, 12)
-            name = b[16 : 16 + n - 1].decode()
+            body = b[4:]
+            # header.stamp (int32 sec, uint32 nanosec), header.frame_id (uint32 length with
+            # the NUL, the bytes), then model_time aligned at 8 of the body.
+            (frame_len,) = struct.unpack_from("<I", body, 8)
+            pos = 12 + frame_len
+            pos += (-pos) % 8
+            model_time, seq = struct.unpack_from("<dQ", body, pos)
+            (n,) = struct.unpack_from("<I", body, pos + 16)
+            name = body[pos + 20 : pos + 20 + n - 1].decode()
+            assert model_time >= 0.0, model_time
             att_seq, _stamp, gid = z_deserialize(
                 tuple[Int64, Int64, list[UInt8]], sample.attachment
             )

@@ -358,10 +358,33 @@ async fn a_python_subscriber_gets_500_firings_of_the_210_robot_fleet() {
 /// ExecPlace as three queryables and declares its node token; the supervisor drives it,
 /// beside two gspn robots, through the temperature patrol, and it leaves when the run is
 /// over.
+/// The patrol plan with a target `[k, 2, 0.5]` and `args = { speed = "0.5" }` on each
+/// Check_Temperature place (location k): ExecPlace goals then carry both.
+fn patrol_with_targets(dir: &Path) -> PathBuf {
+    let mut text = std::fs::read_to_string(repo(PATROL)).unwrap().replace(
+        "net = \"nets/temperature_patrol.xml\"",
+        &format!(
+            "net = {:?}",
+            repo("plans/nets/temperature_patrol.xml").to_string_lossy()
+        ),
+    );
+    for (k, p) in [(1, "p1"), (2, "p5"), (3, "p9"), (4, "p13")] {
+        let old = format!("[places.\"{p}:Check_Temperature_L{k}\"]\naction = \"ros2\"\n");
+        assert!(text.contains(&old), "{old}");
+        let new = format!("{old}target = [{k}.0, 2.0, 0.5]\nargs = {{ speed = \"0.5\" }}\n");
+        text = text.replace(&old, &new);
+    }
+    let plan = dir.join("patrol.toml");
+    std::fs::write(&plan, text).unwrap();
+    plan
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_python_robot_on_eclipse_zenoh_completes_a_patrol() {
     const N: u64 = 200;
     let dir = tempfile::tempdir().unwrap();
+    let plan = patrol_with_targets(dir.path());
+    let plan = plan.to_str().unwrap();
     let e = endpoint();
     let _router = router(dir.path(), "router", &e).await;
     let py = spawn(
@@ -387,7 +410,7 @@ async fn a_python_robot_on_eclipse_zenoh_completes_a_patrol() {
             plan_runner(
                 dir.path(),
                 id,
-                &["robot", "--id", id, "--plan", PATROL, "--zenoh", &e],
+                &["robot", "--id", id, "--plan", plan, "--zenoh", &e],
                 false,
             )
         })
@@ -398,7 +421,7 @@ async fn a_python_robot_on_eclipse_zenoh_completes_a_patrol() {
         "supervisor",
         &[
             "run",
-            PATROL,
+            plan,
             "--json",
             "--zenoh",
             &e,
@@ -461,4 +484,25 @@ async fn a_python_robot_on_eclipse_zenoh_completes_a_patrol() {
         ]),
         "{text}"
     );
+    // The goals carried each place's target (frame map) and args, read by the Python
+    // robot from the CDR of interfaces v2; places without any carried none.
+    let targets: std::collections::BTreeSet<(String, String)> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("python robot r1: goal "))
+        .filter_map(|g| {
+            let (place, rest) = g.split_once(" agent ")?;
+            let (_, what) = rest.split_once(": ")?;
+            what.starts_with("target")
+                .then(|| (place.to_string(), what.to_string()))
+        })
+        .collect();
+    let want: std::collections::BTreeSet<(String, String)> = (1..=4)
+        .map(|k| {
+            (
+                format!("p{}:Check_Temperature_L{k}", 4 * k - 3),
+                format!("target ({k}, 2) in map, args speed=0.5"),
+            )
+        })
+        .collect();
+    assert_eq!(targets, want, "{text}");
 }

@@ -56,6 +56,7 @@ impl Default for SteadyOptions {
 
 /// Why a solver gave no answer.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SolveError {
     /// The iterative solvers did not reach the tolerance.
     #[error(

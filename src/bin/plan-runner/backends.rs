@@ -61,6 +61,8 @@ pub(crate) fn check(plan: &Plan, args: &BackendArgs) -> anyhow::Result<()> {
     }
     #[cfg(feature = "ros2")]
     crate::ros2::check_plan(plan, &args.ros2)?;
+    #[cfg(all(feature = "ros2", feature = "sim"))]
+    crate::ros2::check_sim_nav2(plan, &args.ros2)?;
     #[cfg(not(feature = "ros2"))]
     if !plan.ros2.servers.is_empty() {
         return Err(crate::common::BadInput(format!(
@@ -116,8 +118,26 @@ pub(crate) async fn setup(
     }
     #[cfg(feature = "sim")]
     if plan.map.is_some() {
+        #[cfg(feature = "ros2")]
+        let nav2 = match args.ros2.ros2 {
+            true => Some(crate::ros2::sim_config(
+                &plan,
+                &args.ros2,
+                args.robots.unwrap_or(plan.robots.len()),
+            )?),
+            false => None,
+        };
         let fleet =
             gspn::world::Fleet::new(plan, args.robots).map_err(|e| BadInput(e.to_string()))?;
+        #[cfg(feature = "ros2")]
+        let fleet = match nav2 {
+            Some(cfg) => {
+                let (fleet, servers) = crate::ros2::sim_nav2(fleet, &cfg).await?;
+                backends.push(servers);
+                fleet
+            }
+            None => fleet,
+        };
         #[cfg(feature = "web")]
         if let Some(addr) = args.web {
             let feed = gspn::world::WorldView::json_feed(fleet.world.view());

@@ -9,6 +9,7 @@ mod check;
 mod common;
 mod conform;
 mod convert;
+mod export;
 mod import_thesis;
 mod progress;
 mod repeats;
@@ -51,6 +52,8 @@ enum Command {
     Synthesize(synthesize::Args),
     /// Convert a net between formats (chosen by the output's extension).
     Convert(convert::Args),
+    /// Write a run's journal as MCAP (ROS 2 messages; feature `ros2`).
+    Export(export::Args),
     /// Turn a thesis framework execution input (JSON) into a plan.toml next to its net.
     ImportThesis(import_thesis::Args),
     /// Open the viewer for a net or a plan: drawing, token game, analysis (feature `web`).
@@ -84,6 +87,7 @@ fn main() -> ExitCode {
         Command::Run(a) => run::main(a),
         Command::Synthesize(a) => synthesize::main(a),
         Command::Convert(a) => convert::main(a),
+        Command::Export(a) => export::main(a),
         Command::ImportThesis(a) => import_thesis::main(a),
         #[cfg(feature = "web")]
         Command::Serve(a) => serve::main(a),

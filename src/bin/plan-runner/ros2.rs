@@ -9,6 +9,7 @@ use anyhow::Context as _;
 use gspn::plan::{Plan, read_plan};
 use gspn::ros2::config::{parse_domain, parse_networks};
 use gspn::ros2::heartbeat::Liveness;
+use gspn::ros2::names::RosArgs;
 use gspn::ros2::robot::{RobotOptions, serve};
 use gspn::ros2::{DdsConfig, Ros2Backend};
 use gspn::runtime::Role;
@@ -33,6 +34,24 @@ pub(crate) struct DdsArgs {
     /// ROS 2 nodes do), besides stderr [default: the plan's `[ros2] rosout`, else off].
     #[arg(long)]
     ros2_rosout: bool,
+    /// ROS arguments, last on the line (or ended by `--`): `-r __ns:=/NS` (every node,
+    /// topic and action under /NS), `-r __node:=NAME`, `-p KEY:=VALUE` (domain_id,
+    /// heartbeat, lost_after, startup, service_mapping, rosout; over the plan's and flags).
+    #[arg(
+        long = "ros-args",
+        num_args = 0..,
+        allow_hyphen_values = true,
+        value_terminator = "--",
+        value_name = "ARGS"
+    )]
+    ros_args: Option<Vec<String>>,
+}
+
+impl DdsArgs {
+    /// What `--ros-args` says.
+    fn ros(&self) -> anyhow::Result<RosArgs> {
+        Ok(RosArgs::parse(self.ros_args.as_deref().unwrap_or_default()).map_err(BadInput)?)
+    }
 }
 
 fn domain(s: &str) -> Result<u16, String> {
@@ -50,6 +69,7 @@ impl DdsArgs {
                 .map_err(|why| BadInput(format!("--ros2-networks `{n}`: {why}")))?;
         }
         c.rosout |= self.ros2_rosout;
+        c.apply_ros_args(&self.ros()?).map_err(BadInput)?;
         c.bind_address().map_err(|e| BadInput(e.to_string()))?;
         // The supervisor, the robots and a viewer or two on one host: any start order.
         Ok(c.for_fleet(robots(plan).len() + 2))
@@ -73,6 +93,14 @@ pub(crate) struct RunArgs {
     /// time, so model times mean nothing.
     #[arg(long)]
     allow_virtual_time: bool,
+    /// With simulated robots (`--robots N`, feature `sim`): every `goto` goes through Nav2's
+    /// NavigateToPose over DDS to /<robot>/navigate_to_pose, which the simulated world
+    /// serves for each robot, and the robots' poses are published on /<robot>/pose
+    /// (geometry_msgs/PoseStamped, frame `map`). Needs a time scale > 0 (DDS is on the wall
+    /// clock).
+    #[cfg(feature = "sim")]
+    #[arg(long)]
+    pub(crate) ros2: bool,
 }
 
 /// Refuses a plan with ros2 places the supervisor cannot run: no robots to send goals to,
@@ -99,6 +127,56 @@ pub(crate) fn check_plan(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// Refuses `--ros2` on a run that cannot serve Nav2 from a simulated world: no `[map]`, or
+/// virtual time (DDS runs on the wall clock, so the world must too).
+#[cfg(feature = "sim")]
+pub(crate) fn check_sim_nav2(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
+    if !args.ros2 {
+        return Ok(());
+    }
+    if plan.map.is_none() {
+        return Err(BadInput(format!(
+            "{}: --ros2 serves Nav2 for simulated robots: the plan needs a [map] (see docs/ros2.md, \"Nav2\")",
+            plan.path.display()
+        ))
+        .into());
+    }
+    if plan.time_scale.unwrap_or(0.0) == 0.0 {
+        return Err(BadInput(format!(
+            "{}: --ros2 with time scale 0 (virtual time): DDS runs on the wall clock, so the \
+             world must too; give --time-scale X > 0 (1 = real time, 0.05 = 20x faster)",
+            plan.path.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// Serves Nav2 for `fleet`'s robots and makes its `goto`s go through it: the world's
+/// servers (a backend of the run, which counts the goals) and the fleet, ready.
+#[cfg(feature = "sim")]
+pub(crate) async fn sim_nav2(
+    fleet: gspn::world::Fleet,
+    cfg: &DdsConfig,
+) -> anyhow::Result<(gspn::world::Fleet, gspn::ros2::nav2::SimNav2)> {
+    use gspn::ros2::nav2::{Nav2Navigator, SimNav2};
+    let servers = SimNav2::serve(&fleet.world, std::sync::Arc::clone(&fleet.map), cfg)?;
+    let robots = fleet.world.robots().to_vec();
+    eprintln!(
+        "ros2: domain {}, Nav2 NavigateToPose served for {} simulated robot(s)",
+        cfg.domain_id,
+        robots.len()
+    );
+    let nav = Nav2Navigator::connect(&robots, std::sync::Arc::clone(&fleet.map), cfg).await?;
+    Ok((fleet.navigate_with(std::sync::Arc::new(nav)), servers))
+}
+
+/// The DDS settings of a run with simulated robots served over ROS 2 (`--ros2`).
+#[cfg(feature = "sim")]
+pub(crate) fn sim_config(plan: &Plan, args: &RunArgs, robots: usize) -> anyhow::Result<DdsConfig> {
+    Ok(args.dds.config(plan)?.for_fleet(robots + 4))
 }
 
 /// Whether the plan has `ros2` places (else the ROS 2 backend stays off).
@@ -141,7 +219,7 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2R
     eprintln!("ros2: robots ready");
     // Say when a robot is lost or back (the runs' errors say which action it failed).
     for r in &robots {
-        if let Some(mut live) = backend.watch().liveness(r) {
+        if let Some(mut live) = backend.presence().liveness(r) {
             let r = r.clone();
             let after = cfg.lost_after;
             live.borrow_and_update();
@@ -151,6 +229,9 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2R
                         Liveness::Lost => {
                             eprintln!("ros2: robot `{r}` lost: no heartbeat for {after:?}")
                         }
+                        Liveness::Gone => eprintln!(
+                            "ros2: robot `{r}` lost: its ExecPlace server left DDS discovery"
+                        ),
                         Liveness::Alive => eprintln!("ros2: robot `{r}` is back"),
                         Liveness::Unknown => {}
                     }
@@ -217,9 +298,10 @@ impl Backend for Ros2Run {
 /// Arguments of `robot`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct RobotArgs {
-    /// The robot's id, as in the plan's `robots` (its servers are `/<ID>/<server>`).
+    /// The robot's id, as in the plan's `robots` (its servers are `/<ID>/<server>`)
+    /// [default: the node name of `--ros-args -r __node:=ID`].
     #[arg(long)]
-    id: String,
+    id: Option<String>,
     /// The plan.
     #[arg(long)]
     plan: PathBuf,
@@ -259,11 +341,20 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         ))
         .into());
     }
+    let id = match (&args.id, args.dds.ros()?.node) {
+        (Some(id), _) => id.clone(),
+        (None, Some(node)) => node,
+        (None, None) => {
+            return Err(
+                BadInput("robot: give --id ID (or --ros-args -r __node:=ID)".to_string()).into(),
+            );
+        }
+    };
     let robots = robots(&plan);
-    if !robots.contains(&args.id) {
+    if !robots.contains(&id) {
         eprintln!(
             "warning: robot `{}` is not in the plan's robots ({})",
-            args.id,
+            id,
             robots.join(", ")
         );
     }
@@ -277,7 +368,7 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
     #[cfg(feature = "zenoh")]
     if let Some(endpoint) = crate::zenoh::endpoint(&plan, args.zenoh.as_deref()) {
         let opts = gspn::zenoh::robot::FleetOptions {
-            ids: vec![args.id.clone()],
+            ids: vec![id.clone()],
             seed: args.seed.or(plan.seed).unwrap_or(0),
             time_scale: scale,
             stay: args.stay,
@@ -286,7 +377,7 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
     }
     let cfg = args.dds.config(&plan)?;
     let opts = RobotOptions {
-        id: args.id.clone(),
+        id: id.clone(),
         seed: args.seed.or(plan.seed).unwrap_or(0),
         time_scale: scale,
         latency_log: args.latency_log.clone(),
@@ -307,11 +398,11 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         serve(&plan.net, &plan.ros2, &cfg, opts, shutdown()).await
     })?;
     if let Some(left) = &stats.left {
-        eprintln!("robot {}: {left}: leaving", args.id);
+        eprintln!("robot {id}: {left}: leaving");
     }
     eprintln!(
         "robot {}: {} goals, {} cancelled, {} firings received",
-        args.id, stats.goals, stats.cancelled, stats.firings
+        id, stats.goals, stats.cancelled, stats.firings
     );
     Ok(ExitCode::SUCCESS)
 }

@@ -29,6 +29,7 @@ use gspn::runtime::{Backends, RuntimeBuilder, Section, StopReason, Summary};
 
 use crate::backends::{self, BackendArgs};
 use crate::common::{BadInput, Interrupted, NetArgs, StopSignals};
+use crate::export;
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
@@ -49,7 +50,9 @@ pub(crate) struct Args {
     /// Stop after this many firings.
     #[arg(long, value_name = "N")]
     max_firings: Option<u64>,
-    /// Write every event to this file (JSON Lines).
+    /// Write every event to this file (JSON Lines). FILE.mcap: the journal goes to
+    /// FILE.mcap.jsonl and is exported to FILE.mcap as ROS 2 messages when the run ends
+    /// (feature `ros2`).
     #[arg(long, value_name = "FILE")]
     journal: Option<PathBuf>,
     /// Print the summary as JSON.
@@ -71,6 +74,15 @@ pub(crate) struct Args {
 }
 
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
+    let mcap = args.journal.as_deref().filter(|j| export::is_mcap(j));
+    #[cfg(not(feature = "ros2"))]
+    if let Some(m) = mcap {
+        return Err(BadInput(format!(
+            "--journal {}: MCAP needs the feature `ros2` (cargo build --features ros2)",
+            m.display()
+        ))
+        .into());
+    }
     let mut plan = crate::common::open_checked(&args.file, &args.net)?.into_plan();
     if let Some(x) = args.time_scale {
         if !(x.is_finite() && (0.0..=gspn::limits::MAX_SECONDS).contains(&x)) {
@@ -130,6 +142,14 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     // blocking thread) must not hold the exit up: `main` kills what actions left behind.
     rt.shutdown_background();
     let (summary, sections, code) = ran?;
+    if let Some(m) = mcap {
+        let (firings, _, _, poses, robots) = export::write(&export::journal_beside(m), m)?;
+        eprintln!(
+            "{}: {firings} firings, {poses} poses of {robots} robot(s) (journal: {})",
+            m.display(),
+            export::journal_beside(m).display()
+        );
+    }
     if args.json {
         if sections.is_empty() {
             println!("{}", serde_json::to_string_pretty(&summary)?);
@@ -164,7 +184,11 @@ async fn execute(
 ) -> anyhow::Result<(Summary, Vec<(&'static str, Section)>, u8)> {
     let mut b = backends.attach(run)?;
     if let Some(j) = &args.journal {
-        b = b.journal(j);
+        b = if export::is_mcap(j) {
+            b.journal(export::journal_beside(j))
+        } else {
+            b.journal(j)
+        };
     }
     if args.monitor {
         let m = gspn::conform::SharedMonitor::new(crate::conform::monitor_for(

@@ -142,7 +142,7 @@ pub(crate) async fn connect(
                             eprintln!("zenoh: robot `{r}` lost: no liveliness token for {after:?}")
                         }
                         Liveness::Alive => eprintln!("zenoh: robot `{r}` is back"),
-                        Liveness::Unknown => {}
+                        Liveness::Unknown | Liveness::Gone => {}
                     }
                 }
             });

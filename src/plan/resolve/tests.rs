@@ -206,9 +206,23 @@ fn ros2_places_and_settings_resolve() {
     let plan = load(
         "net = \"n.xml\"\n[ros2]\ndomain_id = 42\nnetworks = [\"127.0.0.1\"]\nlost_after = 0.5\n\
          service_mapping = \"cyclone\"\nrosout = true\n\
-         [places.P2]\naction = \"ros2\"\nserver = \"exec_p2\"\n[places.P3]\naction = \"ros2\"\n",
+         [places.P2]\naction = \"ros2\"\nserver = \"exec_p2\"\ntarget = [1.5, -2.0]\n\
+         args = { speed = \"0.5\", sensor = \"t1\" }\n[places.P3]\naction = \"ros2\"\n",
     )
     .unwrap();
+    assert_eq!(
+        plan.ros2.args,
+        vec![(
+            PlaceId(1),
+            crate::ros2::settings::PlaceArgs {
+                target: Some([1.5, -2.0, 0.0]),
+                args: vec![
+                    ("sensor".to_string(), "t1".to_string()),
+                    ("speed".to_string(), "0.5".to_string())
+                ],
+            }
+        )]
+    );
     assert_eq!(plan.ros2.domain_id, Some(42));
     assert_eq!(
         plan.ros2.networks,
@@ -235,9 +249,30 @@ fn ros2_mistakes_are_refused_at_their_position() {
         "`server` applies to places with action = \"ros2\"",
     );
     refused(
+        "net = \"n.xml\"\n[places.P2]\naction = \"a\"\ntarget = [1.0, 2.0]\n",
+        (4, 10),
+        "place `P2`: `target` applies to places with action = \"ros2\" only",
+    );
+    refused(
+        "net = \"n.xml\"\n[places.P2]\naction = \"ros2\"\ntarget = [1.0]\n",
+        (4, 10),
+        "place `P2`: target must be [x, y] or [x, y, yaw] (finite numbers)",
+    );
+    refused(
+        "net = \"n.xml\"\n[places.P2]\naction = \"a\"\nargs = { a = \"b\" }\n",
+        (4, 8),
+        "place `P2`: `args` applies to places with action = \"ros2\" only",
+    );
+    refused(
         "net = \"n.xml\"\n[places.P2]\naction = \"ros2\"\nserver = \"a b\"\n",
         (4, 10),
         "server `a b` is not a ROS 2 name",
+    );
+    refused(
+        "net = \"n.xml\"\n[ros2]\ntransport = \"zenoh\"\n[places.P2]\naction = \"ros2\"\n\
+         server = \"navigate_to_pose\"\ntarget = [1.0, 2.0]\n",
+        (6, 10),
+        "place `P2`: server \"navigate_to_pose\" sends Nav2 goals over DDS only, and the plan says transport = \"zenoh\"",
     );
     refused(
         "net = \"n.xml\"\n[ros2]\nnetworks = [\"127.0.0.1\", \"lo\"]\n",

@@ -280,6 +280,8 @@ async function startReplay() {
   $('play').addEventListener('click', play);
   $('step-back').addEventListener('click', () => stepBy(-1));
   $('step-forward').addEventListener('click', () => stepBy(1));
-  window.gspnReplay = { playing, at: () => at, time: () => now };
+  // `tick`: the animation frame's timestamp (ms) that set `time`, so a test can read the
+  // model time advanced per wall second without timing the page from outside.
+  window.gspnReplay = { playing, at: () => at, time: () => now, tick: () => wall };
   show(0);
 }

@@ -16,7 +16,7 @@ const NEAREST_PX: f64 = 70.0;
 
 /// What [`measure`] counts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Quality {
+pub(crate) struct Quality {
     /// Pairs of nodes whose bodies overlap.
     pub overlaps: usize,
     /// Arc segments that pass through the body of a node other than their ends.
@@ -84,7 +84,7 @@ fn bodies(net: &Net, layout: &Layout, s: f64) -> Vec<Body> {
 }
 
 /// Counts what makes `layout` of `net` hard to read (see [`Quality`]).
-pub fn measure(net: &Net, layout: &Layout) -> Quality {
+pub(crate) fn measure(net: &Net, layout: &Layout) -> Quality {
     let s = page_scale(layout);
     let body = bodies(net, layout, s);
     let np = net.place_count();
@@ -135,7 +135,7 @@ pub fn measure(net: &Net, layout: &Layout) -> Quality {
 /// Why the file's positions of `net` are not worth drawing, or `None` when they are: most
 /// nodes on a few points (MCC's nets put every node at (100, 100)), nodes on top of each
 /// other, or straight arcs drawn through other nodes (the grid positions of GSPNR's plans).
-pub fn useless(net: &Net, layout: &Layout) -> Option<String> {
+pub(crate) fn useless(net: &Net, layout: &Layout) -> Option<String> {
     let n = layout.places.len() + layout.transitions.len();
     if n < 2 {
         return None;

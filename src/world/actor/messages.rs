@@ -13,7 +13,8 @@ use crate::net::TransitionId;
 #[derive(Debug)]
 pub(crate) struct Goto {
     pub(crate) robot: Arc<str>,
-    pub(crate) agent: u64,
+    /// The agent the robot now carries (`None`: unchanged, e.g. a Nav2 goal).
+    pub(crate) agent: Option<u64>,
     pub(crate) location: usize,
     pub(crate) reply: oneshot::Sender<Result<(), GotoError>>,
 }

@@ -380,6 +380,20 @@ impl Spinner {
               }
               Some(GraphEvent::EntityUndeclared(guid_entity(EntityKind::Publisher, guid)))
             }
+            // A participant whose lease ended (or that was disposed) takes its readers
+            // and writers with it: RustDDS reports only the participant then, not each
+            // endpoint (gspn patch; the matched counts would stay up forever).
+            DomainParticipantStatusEvent::ParticipantLost {id, ..} => {
+              for readers
+              in self.writers_to_remote_readers.lock().unwrap().values_mut() {
+                readers.retain(|g| g.prefix != id);
+              }
+              for writers
+              in self.readers_to_remote_writers.lock().unwrap().values_mut() {
+                writers.retain(|g| g.prefix != id);
+              }
+              None
+            }
 
             _ => None,
           };
@@ -944,6 +958,21 @@ impl Node {
         error!("get_publisher_count: Subscriber {subscription_guid:?} not known to node.");
         0
       })
+  }
+
+  /// [`Node::get_subscription_count`] as a function that outlives the borrow of the node
+  /// (gspn patch).
+  pub(crate) fn subscription_counter(
+    &self,
+    publisher_guid: GUID,
+  ) -> impl Fn() -> usize + Send + Sync + 'static {
+    let map = Arc::clone(&self.writers_to_remote_readers);
+    move || {
+      map
+        .lock()
+        .map(|m| m.get(&publisher_guid).map(BTreeSet::len).unwrap_or(0))
+        .unwrap_or(0)
+    }
   }
 
   pub(crate) fn get_subscription_count(&self, publisher_guid: GUID) -> usize {
@@ -1567,16 +1596,16 @@ impl Future for ReaderWait<'_> {
         debug!("wait_for_reader: Waiting for a reader.");
         loop {
           match status_event_stream.poll_next_unpin(cx) {
-            // A GraphEvent carries only the *remote* entity (see `crate::graph`
-            // docs), not which local writer it matched, so we cannot filter by
-            // identity here as the old `NodeEvent::DDS` match did. Instead,
-            // treat any newly-declared Subscription as a cue to re-check the
-            // (unchanged) `writers_to_remote_readers` map, which the Spinner
-            // updates from the raw DDS event before it is mapped to a
-            // GraphEvent.
-            Poll::Ready(Some(NodeEvent::Graph(GraphEvent::EntityDeclared(entity))))
-              if entity.kind == EntityKind::Subscription =>
-            {
+            // Any event is a cue to re-check `writers_to_remote_readers`, which
+            // the Spinner updates before it sends the event. Not only this
+            // writer's kind of event: the status channel is bounded and the
+            // Spinner drops events when it is full (a participant joining
+            // brings a burst of matches), so the event of *our* match may
+            // never arrive; an event that was queued before it does, and by
+            // the time we take it the map holds our match (gspn patch: with
+            // the check on `Subscription` events only, a supervisor waiting
+            // for a robot's server could miss it for good).
+            Poll::Ready(Some(_)) => {
               if writers_to_remote_readers
                 .lock()
                 .unwrap()
@@ -1587,15 +1616,9 @@ impl Future for ReaderWait<'_> {
                 debug!("wait_for_reader: Matched remote reader.");
                 return Poll::Ready(());
               }
-              // Not (yet) for this_writer; keep polling.
             }
-
-            Poll::Ready(_) => {
-              // Received something else, such as other event or error
-              debug!("wait_for_reader: other event. Continue polling.");
-              // So we do nothing but go to the next iteration.
-            }
-
+            // The Spinner is gone: nothing will change any more.
+            Poll::Ready(None) => return Poll::Ready(()),
             Poll::Pending => return Poll::Pending,
           }
         }
@@ -1642,16 +1665,8 @@ impl Future for WriterWait<'_> {
           // event or "Pending". If we stop at the first event, then
           // there is no waker installed and we are stuck.
           match status_event_stream.poll_next_unpin(cx) {
-            // A GraphEvent carries only the *remote* entity (see `crate::graph`
-            // docs), not which local reader it matched, so we cannot filter by
-            // identity here as the old `NodeEvent::DDS` match did. Instead,
-            // treat any newly-declared Publisher as a cue to re-check the
-            // (unchanged) `readers_to_remote_writers` map, which the Spinner
-            // updates from the raw DDS event before it is mapped to a
-            // GraphEvent.
-            Poll::Ready(Some(NodeEvent::Graph(GraphEvent::EntityDeclared(entity))))
-              if entity.kind == EntityKind::Publisher =>
-            {
+            // Any event is a cue to re-check: see `ReaderWait` (gspn patch).
+            Poll::Ready(Some(_)) => {
               if readers_to_remote_writers
                 .lock()
                 .unwrap()
@@ -1662,15 +1677,9 @@ impl Future for WriterWait<'_> {
                 debug!("wait_for_writer: Matched remote writer.");
                 return Poll::Ready(());
               }
-              // Not (yet) for this_reader; keep polling.
             }
-
-            Poll::Ready(_) => {
-              // Received something else, such as other event or error
-              trace!("=== other writer. Continue polling.");
-              // No return, go to next iteration.
-            }
-
+            // The Spinner is gone: nothing will change any more.
+            Poll::Ready(None) => return Poll::Ready(()),
             Poll::Pending => return Poll::Pending,
           }
         }

@@ -245,6 +245,13 @@ where
   /// If the Node has no background Spinner running, this resolves immediately
   /// (an error is logged), since without a Spinner no match events are
   /// delivered.
+  /// A function counting the servers matched now (the remote request readers this client's
+  /// request writer is matched with), for use without the node: it drops to 0 when the
+  /// server's participant leaves DDS discovery (disposed, or its lease expired). gspn patch.
+  pub fn server_counter(&self, my_node: &Node) -> impl Fn() -> usize + Send + Sync + 'static {
+    my_node.subscription_counter(self.request_sender.guid())
+  }
+
   pub async fn wait_for_service(&self, my_node: &Node) {
     join!(
       my_node.wait_for_reader(self.request_sender.guid()),
