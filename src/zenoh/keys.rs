@@ -206,7 +206,10 @@ mod tests {
             exec_place(0, "r1", "exec_place", ActionService::CancelGoal).unwrap(),
             "0/r1/exec_place/_action/cancel_goal/action_msgs::srv::dds_::CancelGoal_/RIHS01_573d8b0a534451d7bc2ac8c5ffde8ac14b8593b7001175d0cd6516dcbeb8689a"
         );
-        assert_eq!(dds_type("std_msgs/msg/String"), "std_msgs::msg::dds_::String_");
+        assert_eq!(
+            dds_type("std_msgs/msg/String"),
+            "std_msgs::msg::dds_::String_"
+        );
     }
 
     #[test]

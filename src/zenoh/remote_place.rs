@@ -32,8 +32,8 @@ use super::action::{
 };
 use super::keys::{self, ActionService};
 use super::presence::Liveness;
-use super::wire::{self, Attachment};
 use super::type_hash::TypeError;
+use super::wire::{self, Attachment};
 use crate::net::PlaceId;
 use crate::ros2::msgs::{ExecPlaceGoal, Time};
 use crate::ros2::remote_place::{goal, succeeded};

@@ -67,7 +67,10 @@ pub const STANDARD: &[(&str, &str)] = &[
          int8 STATUS_CANCELING = 3\nint8 STATUS_SUCCEEDED = 4\nint8 STATUS_CANCELED = 5\n\
          int8 STATUS_ABORTED = 6\nGoalInfo goal_info\nint8 status\n",
     ),
-    ("action_msgs/msg/GoalStatusArray", "GoalStatus[] status_list\n"),
+    (
+        "action_msgs/msg/GoalStatusArray",
+        "GoalStatus[] status_list\n",
+    ),
     (
         "service_msgs/msg/ServiceEventInfo",
         "uint8 REQUEST_SENT = 0\nuint8 REQUEST_RECEIVED = 1\nuint8 RESPONSE_SENT = 2\n\
