@@ -38,6 +38,7 @@ mod marking;
 pub mod predicate;
 
 pub use builder::{NetBuilder, NetError};
+pub(crate) use builder::overflowing_arc;
 pub use element::{Arc, ArcKind, Place, Position, Servers, Timing, Transition};
 pub use id::{PlaceId, TransitionId};
 pub use marking::Marking;

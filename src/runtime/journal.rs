@@ -23,7 +23,7 @@ mod lines;
 mod writer;
 
 pub use lines::{Entry, JournalReader};
-pub use writer::{FLUSH_AFTER, FLUSH_EVENTS, JournalTap};
+pub use writer::{FLUSH_AFTER, FLUSH_EVENTS, HANDOVERS_ENV, JournalTap};
 pub(crate) use writer::{Journal, RunFacts};
 
 use super::event::Event;

@@ -19,5 +19,6 @@ mod questions;
 mod readable;
 mod replay_robots;
 mod replay_world;
+mod replay_windows;
 mod security;
 mod share;

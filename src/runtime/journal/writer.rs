@@ -66,6 +66,38 @@ pub(crate) struct Journal {
     /// the run on it ([`Journal::broken`]).
     broken: Arc<OnceLock<String>>,
     names: Names,
+    handovers: Option<Handovers>,
+}
+
+/// The environment variable naming a file to which every event's handover to the writer is
+/// appended as `SEQ UNIX_NANOS` (unbuffered: a line per event, in the kernel's hands before
+/// the event is sent, so a `SIGKILL` loses none of them). A measurement hook, not a
+/// feature: `benches/journal_kill.py` compares it with the journal after killing the run,
+/// which gives the age of every event the kill lost (docs/reliability.md).
+pub const HANDOVERS_ENV: &str = "GSPN_JOURNAL_HANDOVERS";
+
+/// The handover log ([`HANDOVERS_ENV`]).
+#[derive(Debug)]
+struct Handovers(File);
+
+impl Handovers {
+    fn from_env() -> Option<Handovers> {
+        let path = std::env::var_os(HANDOVERS_ENV)?;
+        File::options()
+            .create(true)
+            .append(true)
+            .open(path)
+            .ok()
+            .map(Handovers)
+    }
+
+    fn log(&mut self, seq: u64) {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos());
+        // One write per line (formatting straight into the file would write it in pieces).
+        let _ = self.0.write_all(format!("{seq} {nanos}\n").as_bytes());
+    }
 }
 
 /// Place and transition names as JSON strings, added to each event line beside the ids
@@ -178,6 +210,7 @@ impl Journal {
             failed: None,
             broken,
             names,
+            handovers: Handovers::from_env(),
         })
     }
 
@@ -203,6 +236,9 @@ impl Journal {
         } else {
             Msg::Line(line)
         };
+        if let Some(h) = &mut self.handovers {
+            h.log(e.seq);
+        }
         if tx.send(msg).is_err() {
             // The writer ended early: it failed, and says why when joined.
             self.tx = None;
