@@ -486,7 +486,7 @@ fn routes(state: WebState, bound: guard::Bound) -> Router {
         .route("/api/edit/redo", post(edit::routes::redo))
         .route("/api/edit/export", post(edit::routes::export))
         .route("/api/edit/save", post(edit::routes::save))
-        .route("/api/replay", get(replay::outline))
+        .route("/api/replay", get(replay::outline_route))
         .route("/api/replay/window", get(replay::window))
         .route("/api/live/state", get(live::state))
         .route("/api/live/world", get(live::world))

@@ -23,6 +23,7 @@ mod lines;
 mod writer;
 
 pub use lines::{Entry, JournalReader};
+pub(crate) use lines::entry;
 pub use writer::{FLUSH_AFTER, FLUSH_EVENTS, HANDOVERS_ENV, JournalTap};
 pub(crate) use writer::{Journal, RunFacts};
 

@@ -2,6 +2,7 @@
 //! item — observed beside predicted, with the 95% interval — sent as `"conform"` in every
 //! live state frame and drawn by `conform.js`, drifting rows highlighted.
 
+use serde_json::value::RawValue;
 use serde_json::{Value, json};
 
 use crate::conform::{SharedMonitor, Statistic};
@@ -48,7 +49,8 @@ pub(crate) struct ReplayRows {
     every: usize,
     firings: usize,
     last_time: f64,
-    out: Vec<Value>,
+    /// The snapshots as their JSON text (a tenth of the memory of `Value`s).
+    out: Vec<Box<RawValue>>,
 }
 
 impl ReplayRows {
@@ -89,24 +91,31 @@ impl ReplayRows {
 
     fn snapshot(&mut self) {
         let rows = rows(&self.net, &self.monitor);
-        if rows.as_array().is_some_and(|r| !r.is_empty()) {
-            self.out
-                .push(json!({ "time": self.last_time, "rows": rows }));
+        if rows.as_array().is_some_and(|r| !r.is_empty())
+            && let Ok(raw) =
+                serde_json::value::to_raw_value(&json!({ "time": self.last_time, "rows": rows }))
+        {
+            self.out.push(raw);
         }
     }
 
     /// The snapshots, the last firing's included; `None` when no transition ever had
     /// enough firings.
-    pub(crate) fn finish(mut self) -> Option<Value> {
+    pub(crate) fn finish(mut self) -> Option<Box<RawValue>> {
         if self.firings % self.every != 0 {
             self.snapshot();
         }
-        (!self.out.is_empty()).then_some(Value::Array(self.out))
+        (!self.out.is_empty())
+            .then(|| serde_json::value::to_raw_value(&self.out).ok())
+            .flatten()
     }
 }
 
 /// [`ReplayRows`] of `frames` (the initial marking, then the marking after each firing).
-pub(crate) fn replay_rows(net: &Net, frames: &[crate::runtime::journal::Frame]) -> Option<Value> {
+pub(crate) fn replay_rows(
+    net: &Net,
+    frames: &[crate::runtime::journal::Frame],
+) -> Option<Box<RawValue>> {
     let first = frames.first()?;
     let mut table = ReplayRows::new(net, first.tokens.clone());
     for f in &frames[1..] {

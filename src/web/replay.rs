@@ -11,19 +11,27 @@
 //! the whole run: the robots' stays (the robot timeline) and at most 400 snapshots of the
 //! conformance table.
 
-use std::io::{BufReader, Seek, SeekFrom};
+use std::borrow::Cow;
+use std::io::{BufRead, BufReader, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
 use axum::extract::{Query, State};
-use axum::http::StatusCode;
+use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
+use serde::{Deserialize, Serialize};
+use serde_json::value::RawValue;
 use serde_json::{Value, json};
 
 use super::conform::ReplayRows;
 use super::stays::RobotStays;
 use super::{WebState, api};
 use crate::net::Net;
-use crate::runtime::journal::{Entry, Frame, JournalError, JournalReader, Record, Recording};
+use crate::runtime::journal::{
+    Entry, Frame, JournalError, JournalReader, Record, Recording, entry,
+};
+
+/// A pose record (`world`) as the page gets it: its time and the robots' JSON as written.
+type Pose = (f64, Box<RawValue>);
 
 /// Frames per window the page asks for.
 pub(crate) const WINDOW: usize = 256;
@@ -33,28 +41,21 @@ pub(crate) const WINDOW: usize = 256;
 pub(crate) struct Replay {
     /// Firings in the run.
     firings: usize,
-    /// The model time of the last event or record.
-    end: f64,
     /// The time of each window's first frame.
     starts: Vec<f64>,
     source: Source,
-    /// `{"map", "radius", "robots"}` when the journal recorded a world.
-    world: Option<Value>,
-    /// The conformance table along the run (`[{time, rows}]`, see [`ReplayRows`]).
-    conform: Option<Value>,
-    /// Each robot's stays in places (`[{robot, stays}]`, see [`RobotStays`]), empty when
-    /// no robot was bound.
-    robots: Value,
+    /// The journal recorded a world (`map` and `world` records).
+    world: bool,
+    /// `GET /api/replay`'s answer, made once: the panels' whole-run parts are kept as the
+    /// JSON they are sent as (a tenth of the memory of `Value`s).
+    outline: axum::body::Bytes,
 }
 
 /// Where the frames and poses come from.
 #[derive(Debug)]
 enum Source {
     /// Given whole (a library caller's frames or recording): the frames and the poses.
-    Memory {
-        frames: Vec<Frame>,
-        poses: Vec<(f64, Value)>,
-    },
+    Memory { frames: Vec<Frame>, poses: Vec<Pose> },
     /// A journal file, read a window at a time.
     File {
         path: PathBuf,
@@ -76,18 +77,39 @@ struct Mark {
     pose: Option<(u64, usize)>,
 }
 
-/// One window: its frames, and the poses recorded over its time.
+/// One window as `GET /api/replay/window` sends it: its frames, and the poses recorded over
+/// its time.
+#[derive(Serialize)]
 struct Window {
+    k: usize,
     first: usize,
     frames: Vec<Frame>,
-    poses: Vec<(f64, Value)>,
+    poses: Vec<PoseJson>,
+}
+
+/// `{time, robots}`.
+#[derive(Serialize)]
+struct PoseJson {
+    time: f64,
+    robots: Box<RawValue>,
+}
+
+/// A side record read for its kind and time, its data left as written.
+#[derive(Deserialize)]
+struct RawRecord<'a> {
+    #[serde(borrow)]
+    record: Cow<'a, str>,
+    time: f64,
+    #[serde(borrow, default)]
+    data: Option<&'a RawValue>,
 }
 
 impl Replay {
     /// The frames of a journal of `net` without a world.
     pub(crate) fn of_frames(net: &Net, frames: Vec<Frame>) -> Replay {
         let conform = super::conform::replay_rows(net, &frames);
-        Replay::of_memory(frames, Vec::new(), None, conform, Value::Array(Vec::new()))
+        let robots = RobotStays::default().raw_json(net);
+        Replay::of_memory(frames, Vec::new(), None, conform, robots)
     }
 
     /// The frames and the world of `recording`.
@@ -98,31 +120,31 @@ impl Replay {
             .map(|m| world_of(m, &recording.robots));
         let poses = recording
             .records("world")
-            .map(|r| (r.time, r.data.clone()))
+            .filter_map(|r| Some((r.time, serde_json::value::to_raw_value(&r.data).ok()?)))
             .collect();
         let frames = recording.frames();
         let conform = super::conform::replay_rows(&recording.net, &frames);
-        let robots = RobotStays::of(&recording.events).json(&recording.net);
+        let robots = RobotStays::of(&recording.events).raw_json(&recording.net);
         Replay::of_memory(frames, poses, world, conform, robots)
     }
 
     fn of_memory(
         frames: Vec<Frame>,
-        poses: Vec<(f64, Value)>,
+        poses: Vec<Pose>,
         world: Option<Value>,
-        conform: Option<Value>,
-        robots: Value,
+        conform: Option<Box<RawValue>>,
+        robots: Box<RawValue>,
     ) -> Replay {
         let last = |t: Option<f64>| t.unwrap_or(0.0);
         let end = last(frames.last().map(|f| f.time)).max(last(poses.last().map(|p| p.0)));
+        let starts: Vec<f64> = frames.iter().step_by(WINDOW).map(|f| f.time).collect();
+        let firings = frames.len().saturating_sub(1);
         Replay {
-            firings: frames.len().saturating_sub(1),
-            end,
-            starts: frames.iter().step_by(WINDOW).map(|f| f.time).collect(),
+            outline: outline(firings, end, &starts, world.as_ref(), conform, &robots),
+            firings,
+            starts,
+            world: world.is_some(),
             source: Source::Memory { frames, poses },
-            world,
-            conform,
-            robots,
         }
     }
 
@@ -171,12 +193,17 @@ impl Replay {
         }
         let torn = journal.torn().cloned();
         let replay = Replay {
+            outline: outline(
+                firings,
+                end,
+                &starts,
+                world.as_ref(),
+                table.finish(),
+                &stays.raw_json(&net),
+            ),
             firings,
-            end,
             starts,
-            world,
-            conform: table.finish(),
-            robots: stays.json(&net),
+            world: world.is_some(),
             source: Source::File {
                 path: path.to_path_buf(),
                 net,
@@ -211,9 +238,16 @@ impl Replay {
                     (poses.partition_point(|p| p.0 < t) + 1).min(poses.len())
                 });
                 Ok(Window {
+                    k,
                     first,
                     frames: frames[first..last].to_vec(),
-                    poses: poses[from.min(to)..to].to_vec(),
+                    poses: poses[from.min(to)..to]
+                        .iter()
+                        .map(|(time, robots)| PoseJson {
+                            time: *time,
+                            robots: robots.clone(),
+                        })
+                        .collect(),
                 })
             }
             Source::File {
@@ -221,7 +255,7 @@ impl Replay {
                 net,
                 marks,
                 end,
-            } => read_window(path, net, marks, *end, self.world.is_some(), k)
+            } => read_window(path, net, marks, *end, self.world, k)
                 .map_err(|e| e.to_string()),
         }
     }
@@ -236,6 +270,39 @@ fn world_of(map: &Record, robots: &[String]) -> Value {
     })
 }
 
+/// `GET /api/replay`'s answer (see [`outline_route`]).
+fn outline(
+    firings: usize,
+    end: f64,
+    starts: &[f64],
+    world: Option<&Value>,
+    conform: Option<Box<RawValue>>,
+    robots: &RawValue,
+) -> axum::body::Bytes {
+    #[derive(Serialize)]
+    struct Outline<'a> {
+        firings: usize,
+        end: f64,
+        window: usize,
+        starts: &'a [f64],
+        robots: &'a RawValue,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        world: Option<&'a Value>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        conform: Option<Box<RawValue>>,
+    }
+    let v = Outline {
+        firings,
+        end,
+        window: WINDOW,
+        starts,
+        robots,
+        world,
+        conform,
+    };
+    serde_json::to_vec(&v).unwrap_or_default().into()
+}
+
 /// Reads window `k` of the journal at `path` (see [`Replay::window`]).
 fn read_window(
     path: &Path,
@@ -247,17 +314,16 @@ fn read_window(
 ) -> Result<Window, JournalError> {
     let mark = marks[k];
     let stop = marks.get(k + 1).map_or(end, |m| m.firing.0);
-    let (offset, line) = match mark.pose {
+    let (offset, first_line) = match mark.pose {
         Some(p) if p.0 < mark.firing.0 => p,
         _ => mark.firing,
     };
-    let io = |e: std::io::Error| JournalError::BadLine {
-        line,
-        reason: format!("cannot read {}: {e}", path.display()),
-    };
+    let mut line = first_line - 1;
+    let bad = |line: usize, reason: String| JournalError::BadLine { line, reason };
+    let io = |e: std::io::Error| bad(first_line, format!("cannot read {}: {e}", path.display()));
     let mut file = std::fs::File::open(path).map_err(io)?;
     file.seek(SeekFrom::Start(offset)).map_err(io)?;
-    let mut reader = JournalReader::resume(BufReader::new(file), net.clone(), line, offset);
+    let mut input = BufReader::new(file);
     let mut frames = Vec::with_capacity(WINDOW);
     if k == 0 {
         frames.push(Frame {
@@ -267,33 +333,54 @@ fn read_window(
         });
     }
     let mut poses = Vec::new();
-    while let Some(entry) = reader.next() {
-        let start = reader.line_start();
-        // Past the window: only the first pose after it (for the robots to move towards).
-        let past = start >= stop;
-        if past && !world {
+    let (mut at, mut buf) = (offset, String::new());
+    while at < end {
+        buf.clear();
+        let n = input.read_line(&mut buf).map_err(io)?;
+        if n == 0 {
             break;
         }
-        match entry? {
-            Entry::Event(e) if !past && start >= mark.firing.0 => {
-                if let Some(f) = e.firing() {
-                    frames.push(Frame {
-                        time: f.time,
-                        transition: Some(net.transition(f.transition).name.clone()),
-                        tokens: f.marking.to_vec(),
-                    });
-                }
+        let start = at;
+        at += n as u64;
+        line += 1;
+        let text = buf.trim_end();
+        // Past the window: only the first pose after it (for the robots to move towards).
+        let past = start >= stop;
+        if text.is_empty() || past && !world {
+            if past {
+                break;
             }
-            Entry::Record(r) if &*r.record == "world" => {
-                poses.push((r.time, r.data));
+            continue;
+        }
+        if text.starts_with("{\"record\"") {
+            let r: RawRecord<'_> =
+                serde_json::from_str(text).map_err(|e| bad(line, e.to_string()))?;
+            if r.record == "world"
+                && let Some(robots) = r.data
+            {
+                poses.push(PoseJson {
+                    time: r.time,
+                    robots: robots.to_owned(),
+                });
                 if past {
                     break;
                 }
             }
-            _ => {}
+        } else if !past && start >= mark.firing.0 {
+            let entry = entry(text, net).map_err(|e| bad(line, e.to_string()))?;
+            if let Entry::Event(e) = entry
+                && let Some(f) = e.firing()
+            {
+                frames.push(Frame {
+                    time: f.time,
+                    transition: Some(net.transition(f.transition).name.clone()),
+                    tokens: f.marking.to_vec(),
+                });
+            }
         }
     }
     Ok(Window {
+        k,
         first: k * WINDOW,
         frames,
         poses,
@@ -304,30 +391,19 @@ fn read_window(
 /// "starts": [each window's first time], "robots": [{robot, stays: [{t0, t1, place,
 /// agent}]}], "world"?: {map, radius, robots}, "conform"?: [{time, rows}]}` (404 without a
 /// recording; `conform`: the monitor's table of transitions' rates along the run).
-pub(crate) async fn outline(State(state): State<WebState>) -> Response {
+pub(crate) async fn outline_route(State(state): State<WebState>) -> Response {
     match state.inner.replay.get() {
-        Some(r) => {
-            let mut v = json!({
-                "firings": r.firings,
-                "end": r.end,
-                "window": WINDOW,
-                "starts": r.starts,
-                "robots": r.robots,
-            });
-            if let Some(w) = &r.world {
-                v["world"] = w.clone();
-            }
-            if let Some(c) = &r.conform {
-                v["conform"] = c.clone();
-            }
-            axum::Json(v).into_response()
-        }
+        Some(r) => (
+            [(header::CONTENT_TYPE, "application/json")],
+            r.outline.clone(),
+        )
+            .into_response(),
         None => api::error(StatusCode::NOT_FOUND, "no recorded run"),
     }
 }
 
 /// Which window `GET /api/replay/window` asks for.
-#[derive(serde::Deserialize)]
+#[derive(Deserialize)]
 pub(crate) struct WindowQuery {
     k: usize,
 }
@@ -342,23 +418,9 @@ pub(crate) async fn window(
     let Some(replay) = state.inner.replay.get().cloned() else {
         return api::error(StatusCode::NOT_FOUND, "no recorded run");
     };
-    let read = tokio::task::spawn_blocking(move || replay.window(q.k)).await;
-    match read {
-        Ok(Ok(w)) => {
-            let poses: Vec<Value> = w
-                .poses
-                .into_iter()
-                .map(|(time, robots)| json!({ "time": time, "robots": robots }))
-                .collect();
-            axum::Json(json!({
-                "k": q.k,
-                "first": w.first,
-                "frames": w.frames,
-                "poses": poses,
-            }))
-            .into_response()
-        }
-        Ok(Err(e)) => api::error(StatusCode::NOT_FOUND, &e),
-        Err(e) => api::error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string()),
+    match tokio::task::spawn_blocking(move || replay.window(q.k)).await {
+        Ok(Ok(w)) => axum::Json(w).into_response(),
+        Ok(Err(e)) => api::error(StatusCode::NOT_FOUND, e),
+        Err(e) => api::error(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
     }
 }

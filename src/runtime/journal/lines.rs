@@ -142,40 +142,19 @@ impl<R: BufRead> JournalReader<R> {
         })
     }
 
-    /// A reader of the same journal's lines from a later point: `input` is positioned at
-    /// byte `offset`, the start of line `line` (both as [`JournalReader::line_start`] and
-    /// [`JournalReader::line`] said of that line on a first pass). The header is not read
-    /// again: the lines are checked against `net`, the net as it ran
-    /// ([`JournalReader::net`]). What the viewer's replay reads a window of the run with.
-    pub fn resume(input: R, net: Net, line: usize, offset: u64) -> JournalReader<R> {
-        JournalReader {
-            input,
-            net,
-            remarked: false,
-            file: None,
-            robots: Vec::new(),
-            line: line.saturating_sub(1),
-            offset,
-            line_start: offset,
-            buf: String::new(),
-            torn: None,
-            done: false,
-        }
-    }
-
     /// The byte offset of the start of the last line read (after the iterator returned an
     /// entry: that entry's line; before: the first line after the header).
-    pub fn line_start(&self) -> u64 {
+    pub(crate) fn line_start(&self) -> u64 {
         self.line_start
     }
 
     /// The bytes read so far: where the last line read ends.
-    pub fn offset(&self) -> u64 {
+    pub(crate) fn offset(&self) -> u64 {
         self.offset
     }
 
     /// The 1-based number of the last line read.
-    pub fn line(&self) -> usize {
+    pub(crate) fn line(&self) -> usize {
         self.line
     }
 
