@@ -37,8 +37,8 @@ mod id;
 mod marking;
 pub mod predicate;
 
-pub use builder::{NetBuilder, NetError};
 pub(crate) use builder::overflowing_arc;
+pub use builder::{NetBuilder, NetError};
 pub use element::{Arc, ArcKind, Place, Position, Servers, Timing, Transition};
 pub use id::{PlaceId, TransitionId};
 pub use marking::Marking;

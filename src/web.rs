@@ -345,8 +345,10 @@ impl WebState {
     pub fn for_journal(
         path: &std::path::Path,
         journal: crate::runtime::journal::JournalReader<std::io::BufReader<std::fs::File>>,
-    ) -> Result<(WebState, Option<crate::runtime::journal::JournalError>), crate::runtime::journal::JournalError>
-    {
+    ) -> Result<
+        (WebState, Option<crate::runtime::journal::JournalError>),
+        crate::runtime::journal::JournalError,
+    > {
         let net = journal.net().clone();
         let (replay, torn) = replay::Replay::of_journal(path, journal)?;
         let state = WebState::new(net, None, 0);

@@ -63,7 +63,7 @@ pub(crate) fn rate_test(n: u64, e: f64, lambda: f64) -> f64 {
 /// far in the tail, where the score test's normal approximation is off.
 pub(crate) fn gamma_test(n: u64, e: f64, lambda: f64) -> f64 {
     let x = lambda * e;
-    if n == 0 || !(x > 0.0) {
+    if n == 0 || x.is_nan() || x <= 0.0 {
         return if n == 0 { 1.0 } else { 0.0 };
     }
     let (a, b) = (gamma_p(n as f64, x), gamma_q(n as f64, x));

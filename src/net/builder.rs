@@ -394,8 +394,7 @@ fn arc_lists(
 pub(crate) fn overflowing_arc(
     arcs: impl IntoIterator<Item = (ArcKind, PlaceId, TransitionId, u32)>,
 ) -> Option<usize> {
-    let mut sums: rustc_hash::FxHashMap<(ArcKind, PlaceId, TransitionId), u32> =
-        Default::default();
+    let mut sums: rustc_hash::FxHashMap<(ArcKind, PlaceId, TransitionId), u32> = Default::default();
     arcs.into_iter()
         .enumerate()
         .find_map(|(i, (kind, p, t, w))| {

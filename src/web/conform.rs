@@ -76,7 +76,7 @@ impl ReplayRows {
         crate::runtime::Watcher::fired(&mut watcher, time, t, tokens);
         self.firings += 1;
         self.last_time = time;
-        if self.firings % self.every == 0 {
+        if self.firings.is_multiple_of(self.every) {
             self.snapshot();
         }
         if self.out.len() > REPLAY_SNAPSHOTS {
@@ -102,7 +102,7 @@ impl ReplayRows {
     /// The snapshots, the last firing's included; `None` when no transition ever had
     /// enough firings.
     pub(crate) fn finish(mut self) -> Option<Box<RawValue>> {
-        if self.firings % self.every != 0 {
+        if !self.firings.is_multiple_of(self.every) {
             self.snapshot();
         }
         (!self.out.is_empty())

@@ -55,12 +55,15 @@ pub(crate) struct Replay {
 #[derive(Debug)]
 enum Source {
     /// Given whole (a library caller's frames or recording): the frames and the poses.
-    Memory { frames: Vec<Frame>, poses: Vec<Pose> },
+    Memory {
+        frames: Vec<Frame>,
+        poses: Vec<Pose>,
+    },
     /// A journal file, read a window at a time.
     File {
         path: PathBuf,
         /// The net as it ran.
-        net: Net,
+        net: Box<Net>,
         /// Per window, where to start reading.
         marks: Vec<Mark>,
         /// Where the last whole line ends (a line cut short after it is never read).
@@ -206,7 +209,7 @@ impl Replay {
             world: world.is_some(),
             source: Source::File {
                 path: path.to_path_buf(),
-                net,
+                net: Box::new(net),
                 marks,
                 end: file_end,
             },
@@ -255,8 +258,7 @@ impl Replay {
                 net,
                 marks,
                 end,
-            } => read_window(path, net, marks, *end, self.world, k)
-                .map_err(|e| e.to_string()),
+            } => read_window(path, net, marks, *end, self.world, k).map_err(|e| e.to_string()),
         }
     }
 }

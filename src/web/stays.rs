@@ -165,8 +165,8 @@ fn natural(name: &str) -> (&str, u64, &str) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
     use crate::net::{Marking, NetBuilder, Servers};
+    use serde_json::json;
 
     #[test]
     fn a_robot_moves_with_its_agent_and_learns_its_place_from_the_action() {

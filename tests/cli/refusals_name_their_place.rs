@@ -134,5 +134,10 @@ fn parallel_arcs_adding_past_the_maximum_are_refused_at_the_arc_that_did_it() {
     // Within the maximum, the same arcs are one arc of their sum.
     std::fs::write(&path, pipe_with_parallel_arcs(4_294_967_294, 1)).unwrap();
     let out = bin().arg("check").arg(&path).output().unwrap();
-    assert_ne!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_ne!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

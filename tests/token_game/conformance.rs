@@ -324,7 +324,10 @@ fn the_monitors_false_alarms_on_runs_of_the_model_meet_its_design() {
         var_t.sqrt()
     );
     let within = |k: usize, mean: f64, var: f64| (k as f64 - mean).abs() <= 4.0 * var.sqrt();
-    assert!(within(alarms_t, mean_t, var_t), "{alarms_t} vs {mean_t} ± {var_t}");
+    assert!(
+        within(alarms_t, mean_t, var_t),
+        "{alarms_t} vs {mean_t} ± {var_t}"
+    );
     assert!(
         alarms_p as f64 <= mean_p + 4.0 * var_p.sqrt(),
         "{alarms_p} vs ≤ {mean_p}"

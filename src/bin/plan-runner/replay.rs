@@ -183,11 +183,7 @@ fn print_firings(
 
 /// Without the viewer compiled in, `--web` is refused (exit code 2).
 #[cfg(not(feature = "web"))]
-fn viewer(
-    _: SocketAddr,
-    _: &Path,
-    _: JournalReader<BufReader<File>>,
-) -> anyhow::Result<ExitCode> {
+fn viewer(_: SocketAddr, _: &Path, _: JournalReader<BufReader<File>>) -> anyhow::Result<ExitCode> {
     Err(BadInput("--web needs plan-runner built with the `web` feature".into()).into())
 }
 

@@ -10,8 +10,8 @@ use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span};
 use crate::net::{
-    ArcKind, NetBuilder, NetError, Place, overflowing_arc, PlaceId, Position, Servers, Timing, Transition,
-    TransitionId,
+    ArcKind, NetBuilder, NetError, Place, PlaceId, Position, Servers, Timing, Transition,
+    TransitionId, overflowing_arc,
 };
 
 use super::nodes::{ArcRecord, NodeRecord, Record, RecordKind, Value, collect};
@@ -100,8 +100,11 @@ pub(crate) fn read(
     for a in deferred {
         arcs.push(resolve_arc(&x, &ids, &a, true)?.expect("final resolution errs or resolves"));
     }
-    let overflow = overflowing_arc(arcs.iter().map(|a| (a.0, PlaceId(a.1), TransitionId(a.2), a.3)))
-        .map(|i| arcs[i].5);
+    let overflow = overflowing_arc(
+        arcs.iter()
+            .map(|a| (a.0, PlaceId(a.1), TransitionId(a.2), a.3)),
+    )
+    .map(|i| arcs[i].5);
     for (kind, p, t, w, points, _) in arcs {
         b.arc(kind, PlaceId(p), TransitionId(t), w, points);
     }
