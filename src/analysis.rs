@@ -37,7 +37,7 @@
 //! let m = solver.measures(&steady.pi);
 //! assert!((m.mean_tokens[up.index()] - 2.0 / 2.1).abs() < 1e-12);
 //! assert!((m.throughput[fail.index()] - 0.2 / 2.1).abs() < 1e-12);
-//! let at_1 = &solver.transient(&[1.0], 1e-12)[0];
+//! let at_1 = &solver.transient(&[1.0], &Default::default()).unwrap()[0];
 //! assert!((solver.measures(at_1).mean_tokens[up.index()]
 //!     - (2.0 + 0.1 * (-2.1f64).exp()) / 2.1).abs() < 1e-11);
 //! ```

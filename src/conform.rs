@@ -301,7 +301,6 @@ pub fn steady_predictions(
         &[],
         &opts,
         &SolverOptions::default(),
-        &crate::analysis::state_space::Monitor::new(),
     )
     .map_err(|e| ConformError::Analysis(e.to_string()))?;
     let what = if policy.is_some() {

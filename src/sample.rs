@@ -38,7 +38,7 @@ pub fn exponential(rng: &mut Rng, rate: f64) -> f64 {
 }
 
 /// Natural logarithm, portable: the `libm` crate's software `log`, measured as fast as the
-/// platform's on the sampler's inputs (docs/benchmarks.md, `examples/bench_ln.rs`).
+/// platform's on the sampler's inputs (docs/benchmarks.md, `benches/ln.rs`).
 #[inline]
 pub fn ln(x: f64) -> f64 {
     libm::log(x)

@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use gspn::analysis::decision::BuildOptions;
 use gspn::analysis::invariants::{p_invariants, t_invariants};
-use gspn::analysis::measures::{Solver, SolverOptions, bad_time};
+use gspn::analysis::measures::{Solver, SolverOptions, TransientOptions, bad_time};
 use gspn::analysis::properties::Properties;
 use gspn::analysis::query::{Evaluator, Query, QueryError};
 use gspn::analysis::report::{MeasuresReport, Report, StateSpaceReport};
@@ -33,15 +33,16 @@ pub(crate) fn analyze(
     max_memory_mib: usize,
 ) -> PyResult<String> {
     let plan = Arc::clone(&model.plan);
-    let monitor = Monitor::new();
+    let monitor = Arc::new(Monitor::new());
     let cancel = monitor.cancel_flag();
     interruptible(py, cancel, move || {
         let opts = Options {
             max_states,
             threads: 0,
             max_memory: max_memory_mib.saturating_mul(1 << 20),
+            monitor: Some(monitor),
         };
-        report(&plan, steady, &transient, &prob, &opts, &monitor)
+        report(&plan, steady, &transient, &prob, &opts)
     })
 }
 
@@ -51,7 +52,6 @@ fn report(
     transient: &[f64],
     prob: &[String],
     opts: &Options,
-    monitor: &Monitor,
 ) -> Outcome<String> {
     let net = &plan.net;
     let regime = if plan.policy.is_empty() {
@@ -84,14 +84,13 @@ fn report(
             &plan.rewards,
             opts,
             &SolverOptions::default(),
-            monitor,
         ) {
             Ok(a) => (a.space, Some((a.limiting, a.measures, a.rewards))),
             Err(PolicyAnalysisError::StateSpace(e)) => return json(&unbounded(e)?),
             Err(e) => return Err(Failure::Analysis(format!("steady state: {e}"))),
         }
     } else {
-        match StateSpace::build_under_policy(net, &plan.policy, opts, monitor) {
+        match StateSpace::build_under_policy(net, &plan.policy, opts) {
             Ok(s) => (s, None),
             Err(e) => return json(&unbounded(e)?),
         }
@@ -109,7 +108,17 @@ fn report(
             .with_probabilities(prob, &probs)
             .with_rewards(&rewards)
     });
-    let points = solver.transient_points(transient, &predicates);
+    // Ctrl-C stops the transient solver too (the same monitor).
+    let points = solver
+        .transient_points(
+            transient,
+            &predicates,
+            &TransientOptions {
+                monitor: opts.monitor.clone(),
+                ..TransientOptions::default()
+            },
+        )
+        .map_err(|e| Failure::Analysis(format!("transient: {e}")))?;
     json(&Report {
         analysed: regime.label().to_string(),
         state_space: StateSpaceReport::new(net, &props, &pinv, &tinv),
@@ -140,7 +149,7 @@ pub(crate) fn query(
     max_memory_mib: usize,
 ) -> PyResult<Vec<f64>> {
     let plan = Arc::clone(&model.plan);
-    let monitor = Monitor::new();
+    let monitor = Arc::new(Monitor::new());
     let cancel = monitor.cancel_flag();
     interruptible(py, cancel, move || {
         let parsed = queries
@@ -158,8 +167,9 @@ pub(crate) fn query(
             max_states,
             threads: 0,
             max_memory: max_memory_mib.saturating_mul(1 << 20),
+            monitor: Some(monitor),
         };
-        let space = StateSpace::build_under_policy(&plan.net, &plan.policy, &opts, &monitor)
+        let space = StateSpace::build_under_policy(&plan.net, &plan.policy, &opts)
             .map_err(|e| Failure::Analysis(e.to_string()))?;
         let ev = Evaluator::new(&plan.net, &space, &plan.rewards).with_controls(
             &plan.controls,

@@ -3,7 +3,7 @@
 use std::sync::Arc;
 
 use gspn::analysis::decision::{
-    Action, Algorithm, BuildOptions, DecisionError, DecisionModel, Objective, RewardSpec,
+    Algorithm, BuildOptions, DecisionError, DecisionModel, Objective, PolicyTable, RewardSpec,
     SolveOptions, compress, solve,
 };
 use gspn::analysis::state_space::Monitor;
@@ -62,7 +62,7 @@ pub(crate) fn synthesize(
         method,
         max_states,
     };
-    let monitor = Monitor::new();
+    let monitor = Arc::new(Monitor::new());
     interruptible(py, monitor.cancel_flag(), move || {
         run(&plan, &request, &monitor)
     })
@@ -177,7 +177,7 @@ fn decision(e: DecisionError) -> Failure {
     Failure::Analysis(e.to_string())
 }
 
-fn run(plan: &Plan, r: &Request, monitor: &Monitor) -> Outcome<String> {
+fn run(plan: &Plan, r: &Request, monitor: &Arc<Monitor>) -> Outcome<String> {
     if !plan.policy.is_empty() {
         return Err(Failure::input(format!(
             "{}: the plan already has [[policy]] rules; synthesize from a plan without them",
@@ -196,14 +196,14 @@ fn run(plan: &Plan, r: &Request, monitor: &Monitor) -> Outcome<String> {
         controls.keep_races = true;
     }
     let t0 = std::time::Instant::now();
-    let model = DecisionModel::build_monitored(
+    let model = DecisionModel::build(
         net,
         &controls,
         &BuildOptions {
             max_states: r.max_states,
             threads: 0,
+            monitor: Some(Arc::clone(monitor)),
         },
-        monitor,
     )
     .map_err(decision)?;
     let build_s = t0.elapsed().as_secs_f64();
@@ -255,18 +255,10 @@ fn run(plan: &Plan, r: &Request, monitor: &Monitor) -> Outcome<String> {
     .map_err(decision)?;
     let solve_s = t1.elapsed().as_secs_f64();
     // The decision markings and what the policy fires there (WAIT: no rule).
-    let mut table = Vec::new();
-    let mut waits = 0;
-    for st in 0..model.state_count() {
-        if model.choices(st).len() < 2 {
-            continue;
-        }
-        match model.action(sol.policy[st] as usize) {
-            Action::Fire(t) => table.push((model.marking(st), t)),
-            Action::Wait => waits += 1,
-            Action::Race | Action::Delay => {}
-        }
-    }
+    let PolicyTable {
+        fires: table,
+        waits,
+    } = model.policy_table(&sol.policy);
     let marking = |pairs: Vec<(usize, u32)>| -> serde_json::Map<String, Value> {
         pairs
             .into_iter()

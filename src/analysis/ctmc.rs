@@ -13,7 +13,7 @@
 //! let pi = c.steady_state(&SteadyOptions::default()).unwrap();
 //! assert!((pi[0] - 2.0 / 3.0).abs() < 1e-12);
 //! assert!(c.residual(&pi) < 1e-12);
-//! let pt = c.transient(&[(0, 1.0)], &[0.5], 1e-12);
+//! let pt = c.transient(&[(0, 1.0)], &[0.5], &Default::default()).unwrap();
 //! // p_00(t) = 2/3 + 1/3·e^{-3t}
 //! assert!((pt[0][0] - (2.0 / 3.0 + (-1.5f64).exp() / 3.0)).abs() < 1e-11);
 //! ```
@@ -27,7 +27,7 @@ mod transient;
 pub(crate) use columns::Columns;
 pub use limiting::Limiting;
 pub use steady::{Method, SolveError, SteadyOptions};
-pub use transient::poisson_weights;
+pub use transient::{TRANSIENT_EPS, TransientOptions, poisson_weights};
 
 /// A CTMC over states `0..n`: off-diagonal rates in compressed sparse rows. The diagonal is
 /// implied (minus the row's sum). Self-loops are not stored (they do not change π).

@@ -57,6 +57,8 @@ mod quotient;
 mod solve;
 mod tree;
 
+use std::sync::Arc;
+
 use thiserror::Error;
 
 pub use evaluate::{PolicyValue, evaluate_lra};
@@ -66,6 +68,15 @@ pub use tree::compress;
 use crate::analysis::state_space::packing::MarkingStore;
 use crate::analysis::state_space::{AnalysisError, Monitor};
 use crate::net::{Net, PlaceId, Timing, TransitionId};
+
+/// A policy where it decides ([`DecisionModel::policy_table`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PolicyTable {
+    /// Each decision marking whose choice fires a transition, and that transition.
+    pub fires: Vec<(Vec<u32>, TransitionId)>,
+    /// How many decision states choose WAIT (no rule: the exponential race goes on).
+    pub waits: usize,
+}
 
 /// What the decision-maker controls, and how the model is built.
 #[derive(Clone, Debug, PartialEq)]
@@ -118,6 +129,9 @@ pub struct BuildOptions {
     pub max_states: usize,
     /// Threads for the search; 0 = all cores.
     pub threads: usize,
+    /// Watches the search from another thread: its progress and a cancel that stops it
+    /// (default: none).
+    pub monitor: Option<Arc<Monitor>>,
 }
 
 impl Default for BuildOptions {
@@ -125,6 +139,7 @@ impl Default for BuildOptions {
         BuildOptions {
             max_states: 10_000_000,
             threads: 0,
+            monitor: None,
         }
     }
 }
@@ -262,24 +277,14 @@ pub struct DecisionModel {
 }
 
 impl DecisionModel {
-    /// Builds the decision model of `net` under `controls`.
+    /// Builds the decision model of `net` under `controls`, reporting the search's progress
+    /// to [`BuildOptions::monitor`] if there is one.
     pub fn build(
         net: &Net,
         controls: &Controls,
         opts: &BuildOptions,
     ) -> Result<DecisionModel, DecisionError> {
-        build::build(net, controls, opts, &Monitor::new())
-    }
-
-    /// Like [`build`](Self::build), reporting the search's progress to `monitor` and giving
-    /// up once it is cancelled.
-    pub fn build_monitored(
-        net: &Net,
-        controls: &Controls,
-        opts: &BuildOptions,
-        monitor: &Monitor,
-    ) -> Result<DecisionModel, DecisionError> {
-        build::build(net, controls, opts, monitor)
+        build::build(net, controls, opts)
     }
 
     /// Number of states (Markovian, dead, decision, WAIT copies).
@@ -344,6 +349,25 @@ impl DecisionModel {
         let mut m = vec![0u32; self.places];
         self.store.get(self.marking[s] as usize, &mut m);
         m
+    }
+
+    /// What `policy` (one choice per state, as [`Solution::policy`]) does where there is a
+    /// decision: the marking and transition of every state with two or more choices whose
+    /// choice fires a transition, and how many choose WAIT. The table a plan's policy is
+    /// written from ([`compress`] turns it into rules; each row is also an exact rule).
+    pub fn policy_table(&self, policy: &[u32]) -> PolicyTable {
+        let mut table = PolicyTable::default();
+        for (s, &choice) in policy.iter().enumerate().take(self.state_count()) {
+            if self.choices(s).len() < 2 {
+                continue;
+            }
+            match self.action(choice as usize) {
+                Action::Fire(t) => table.fires.push((self.marking(s), t)),
+                Action::Wait => table.waits += 1,
+                Action::Race | Action::Delay => {}
+            }
+        }
+        table
     }
 
     /// The global ids of the choices of state `s`.

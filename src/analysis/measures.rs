@@ -26,14 +26,14 @@
 //! assert!((m.throughput[1] - 6.0 / 7.0).abs() < 1e-12); // t2, immediate
 //! let busy = Predicate::parse(&net, "P3 > 0").unwrap();
 //! assert!((solver.probability(&steady.pi, &busy) - 3.0 / 7.0).abs() < 1e-12);
-//! let at = solver.transient(&[0.0, 1.0], 1e-12);
+//! let at = solver.transient(&[0.0, 1.0], &Default::default()).unwrap();
 //! assert_eq!(at[0][0], 1.0);
 //! ```
 
 use std::sync::OnceLock;
 
 use crate::analysis::ctmc::{Columns, Ctmc, Limiting, Method, SolveError, SteadyOptions};
-use crate::analysis::state_space::{Monitor, StateSpace};
+use crate::analysis::state_space::StateSpace;
 use crate::net::Net;
 use crate::net::predicate::Predicate;
 
@@ -114,8 +114,7 @@ impl TokenDistribution {
     }
 }
 
-/// The error bound of each transient distribution [`Solver::transient_points`] computes.
-pub const TRANSIENT_EPS: f64 = 1e-12;
+pub use crate::analysis::ctmc::{TRANSIENT_EPS, TransientOptions};
 
 /// The state at one time: its measures and the probabilities of the asked predicates.
 #[derive(Clone, Debug)]
@@ -311,9 +310,13 @@ impl<'a> Solver<'a> {
         r.iter().fold(0.0f64, |m, x| m.max(x.abs()))
     }
 
-    /// π(t) at each time, from the initial marking (uniformization, error ≤ `eps` each).
-    pub fn transient(&self, times: &[f64], eps: f64) -> Vec<Vec<f64>> {
-        self.chain().transient(self.space.initial(), times, eps)
+    /// π(t) at each time, from the initial marking (uniformization; [`Ctmc::transient`]).
+    pub fn transient(
+        &self,
+        times: &[f64],
+        opts: &TransientOptions,
+    ) -> Result<Vec<Vec<f64>>, SolveError> {
+        self.chain().transient(self.space.initial(), times, opts)
     }
 
     /// The largest of `times` when uniformisation would need more than
@@ -327,27 +330,16 @@ impl<'a> Solver<'a> {
     }
 
     /// The state at each of `times` from the initial marking: its measures and the
-    /// probability of each predicate (error ≤ [`TRANSIENT_EPS`] each) — what `plan-runner
-    /// analyze --transient T --prob EXPR` reports and the viewer's panel shows.
-    pub fn transient_points(&self, times: &[f64], predicates: &[Predicate]) -> Vec<TransientPoint> {
-        self.points(self.transient(times, TRANSIENT_EPS), times, predicates)
-    }
-
-    /// [`Solver::transient_points`] watched by `monitor` from another thread (the viewer's
-    /// questions): its progress and cancel as [`Ctmc::transient_monitored`]'s; stops with
-    /// [`SolveError::Cancelled`] within one iteration of [`Monitor::cancel`].
-    pub fn transient_points_monitored(
+    /// probability of each predicate — what `plan-runner analyze --transient T --prob EXPR`
+    /// reports and the viewer's panel shows (which watches it through
+    /// [`TransientOptions::monitor`]).
+    pub fn transient_points(
         &self,
         times: &[f64],
         predicates: &[Predicate],
-        monitor: &Monitor,
+        opts: &TransientOptions,
     ) -> Result<Vec<TransientPoint>, SolveError> {
-        let at = self.chain().transient_monitored(
-            self.space.initial(),
-            times,
-            TRANSIENT_EPS,
-            monitor,
-        )?;
+        let at = self.transient(times, opts)?;
         Ok(self.points(at, times, predicates))
     }
 

@@ -55,6 +55,17 @@ pub struct Options {
     /// Most bytes the search may hold (markings, their index and their moves), estimated
     /// before each allocation (default 4 GiB).
     pub max_memory: usize,
+    /// Watches the search from another thread: its progress ([`Monitor::markings`]) and a
+    /// cancel that stops it with [`AnalysisError::Cancelled`] (default: none).
+    pub monitor: Option<Arc<Monitor>>,
+}
+
+impl Options {
+    /// The monitor the search reports to: [`Options::monitor`], or a fresh one nobody
+    /// watches.
+    pub(crate) fn watcher(&self) -> Arc<Monitor> {
+        self.monitor.clone().unwrap_or_default()
+    }
 }
 
 /// [`Options::max_memory`]'s default: 4 GiB.
@@ -66,6 +77,7 @@ impl Default for Options {
             max_states: 10_000_000,
             threads: 0,
             max_memory: DEFAULT_MAX_MEMORY,
+            monitor: None,
         }
     }
 }
@@ -144,9 +156,11 @@ pub enum AnalysisError {
     },
 }
 
-/// Watches a long computation from another thread — a [`StateSpace::build_monitored`] or a
-/// transient solution ([`Ctmc::transient_monitored`](crate::analysis::ctmc::Ctmc::transient_monitored))
-/// — and stops it: how many markings the search has found so far, how far the transient
+/// Watches a long computation from another thread — a state space search
+/// ([`Options::monitor`], [`BuildOptions::monitor`](crate::analysis::decision::BuildOptions::monitor))
+/// or a transient solution
+/// ([`TransientOptions::monitor`](crate::analysis::ctmc::TransientOptions::monitor)) — and
+/// stops it: how many markings the search has found so far, how far the transient
 /// solver is (the time point it works towards, its iterations done of planned), and a flag
 /// that makes either give up ([`AnalysisError::Cancelled`], [`SolveError::Cancelled`](crate::analysis::ctmc::SolveError::Cancelled)).
 ///
@@ -155,6 +169,7 @@ pub enum AnalysisError {
 /// cancel takes effect within milliseconds and costs nothing measurable.
 ///
 /// ```
+/// use std::sync::Arc;
 /// use gspn::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
 /// use gspn::net::{NetBuilder, Servers};
 /// let mut b = NetBuilder::new("loop");
@@ -163,9 +178,12 @@ pub enum AnalysisError {
 /// let u = b.exponential("u", 1.0, Servers::Single);
 /// b.input(p, t, 1); b.output(t, q, 1); b.input(q, u, 1); b.output(u, p, 1);
 /// let net = b.build().unwrap();
-/// let monitor = Monitor::new();
+/// let monitor = Arc::new(Monitor::new());
+/// let opts = Options { monitor: Some(Arc::clone(&monitor)), ..Options::default() };
+/// let space = StateSpace::build(&net, &opts).unwrap();
+/// assert_eq!(monitor.markings(), space.tangible_count());
 /// monitor.cancel();
-/// let r = StateSpace::build_monitored(&net, &Options::default(), &monitor);
+/// let r = StateSpace::build(&net, &opts);
 /// assert!(matches!(r, Err(AnalysisError::Cancelled { .. })));
 /// ```
 #[derive(Debug, Default)]
@@ -353,23 +371,13 @@ pub(crate) fn search(
 }
 
 impl StateSpace {
-    /// Builds the state space of `net`.
+    /// Builds the state space of `net`, reporting to [`Options::monitor`] if there is one.
     pub fn build(net: &Net, opts: &Options) -> Result<StateSpace, AnalysisError> {
-        StateSpace::build_monitored(net, opts, &Monitor::new())
-    }
-
-    /// Like [`StateSpace::build`], reporting progress to `monitor` and giving up with
-    /// [`AnalysisError::Cancelled`] once it is cancelled. Same result as `build` otherwise.
-    pub fn build_monitored(
-        net: &Net,
-        opts: &Options,
-        monitor: &Monitor,
-    ) -> Result<StateSpace, AnalysisError> {
-        let raw = search(net, opts, monitor, false)?;
+        let raw = search(net, opts, &opts.watcher(), false)?;
         Self::from_raw(net, raw)
     }
 
-    /// Like [`StateSpace::build_monitored`], with `policy` choosing in vanishing markings:
+    /// Like [`StateSpace::build`], with `policy` choosing in vanishing markings:
     /// each one's immediate transitions fire with [`Policy::distribution_or_weights`] (the
     /// policy's rule when one applies, else the net's weights) instead of the weights. The
     /// markings are the net's (a transition the policy never picks still has its target
@@ -378,9 +386,8 @@ impl StateSpace {
         net: &Net,
         policy: &Policy,
         opts: &Options,
-        monitor: &Monitor,
     ) -> Result<StateSpace, AnalysisError> {
-        let mut raw = search(net, opts, monitor, false)?;
+        let mut raw = search(net, opts, &opts.watcher(), false)?;
         if !policy.is_empty() {
             let mut m = vec![0u32; net.place_count()];
             let mut firable = Vec::new();

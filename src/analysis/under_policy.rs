@@ -15,7 +15,7 @@
 //! so a synthesised policy's optimal value and the analysis of the policy it wrote agree.
 //!
 //! ```
-//! use gspn::analysis::state_space::{Monitor, Options};
+//! use gspn::analysis::state_space::Options;
 //! use gspn::analysis::under_policy::{Regime, analyse};
 //! use gspn::analysis::decision::{PlaceMode, RewardSpec};
 //! use gspn::analysis::measures::SolverOptions;
@@ -40,12 +40,12 @@
 //! };
 //! let (opts, solver) = (Options::default(), SolverOptions::default());
 //! // Bare net: a fair coin at Home; π(Cleaning) = 2/3, π(Charging) = 1/3.
-//! let bare = analyse(&net, &Policy::empty(), &[spec.clone()], &opts, &solver, &Monitor::new()).unwrap();
+//! let bare = analyse(&net, &Policy::empty(), &[spec.clone()], &opts, &solver).unwrap();
 //! assert_eq!(bare.regime, Regime::BareNet);
 //! assert!((bare.rewards[0].rate - (2.0 * 2.0 / 3.0 + 2.0 / 3.0)).abs() < 1e-12);
 //! // Always clean: 2 per unit of time, no charging.
 //! let always = Policy::new(&net, vec![Rule { pattern: Pattern::Exact(vec![1, 0, 0]), choose: vec![(clean, 1.0)] }]).unwrap();
-//! let a = analyse(&net, &always, &[spec], &opts, &solver, &Monitor::new()).unwrap();
+//! let a = analyse(&net, &always, &[spec], &opts, &solver).unwrap();
 //! assert_eq!(a.regime, Regime::UnderPolicy);
 //! assert!((a.rewards[0].rate - 2.0).abs() < 1e-12);
 //! ```
@@ -57,7 +57,7 @@ use thiserror::Error;
 use crate::analysis::ctmc::{Limiting, SolveError};
 use crate::analysis::decision::RewardSpec;
 use crate::analysis::measures::{Measures, Solver, SolverOptions};
-use crate::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
+use crate::analysis::state_space::{AnalysisError, Options, StateSpace};
 use crate::net::Net;
 use crate::policy::Policy;
 
@@ -135,9 +135,8 @@ pub fn analyse(
     rewards: &[RewardSpec],
     opts: &Options,
     solver_opts: &SolverOptions,
-    monitor: &Monitor,
 ) -> Result<PolicyAnalysis, PolicyAnalysisError> {
-    let space = StateSpace::build_under_policy(net, policy, opts, monitor)?;
+    let space = StateSpace::build_under_policy(net, policy, opts)?;
     Ok(solve(net, policy, space, rewards, solver_opts)?)
 }
 

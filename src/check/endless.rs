@@ -126,6 +126,7 @@ pub fn ending(net: &Net, max_states: usize) -> Ending {
         max_states,
         threads: 1,
         max_memory: 256 << 20,
+        monitor: None,
     };
     let ss = match StateSpace::build(net, &opts) {
         Ok(ss) => ss,

@@ -59,7 +59,7 @@ impl Phase {
 #[derive(Debug, Default)]
 pub(crate) struct Progress {
     /// The search's count and cancel flag.
-    pub(crate) monitor: Monitor,
+    pub(crate) monitor: Arc<Monitor>,
     phase: AtomicU8,
 }
 

@@ -4,9 +4,11 @@
 //! and `--query` queries computed by the same library calls as `plan-runner analyze`
 //! ([`query`]).
 
+use std::sync::Arc;
+
 use serde_json::{Value, json};
 
-use crate::analysis::ctmc::{Limiting, SolveError};
+use crate::analysis::ctmc::{Limiting, SolveError, TransientOptions};
 use crate::analysis::decision::RewardSpec;
 use crate::analysis::invariants::{p_invariants, t_invariants};
 use crate::analysis::measures::{Solver, SolverOptions, bad_time};
@@ -50,6 +52,7 @@ pub(crate) fn analyse(
     let opts = Options {
         max_states,
         threads: 0,
+        monitor: Some(Arc::clone(&progress.monitor)),
         ..Options::default()
     };
     let cancelled = || (json!({ "error": "cancelled", "kind": "cancelled" }), None);
@@ -61,7 +64,7 @@ pub(crate) fn analyse(
     } else {
         Regime::UnderPolicy
     };
-    let ss = match StateSpace::build_under_policy(net, policy, &opts, &progress.monitor) {
+    let ss = match StateSpace::build_under_policy(net, policy, &opts) {
         Ok(ss) => ss,
         Err(e) => {
             let kind = match &e {
@@ -141,7 +144,7 @@ pub(crate) enum QueryError {
 /// The panel's questions on a finished analysis (`POST /api/analysis/query`): the
 /// predicates' steady-state probabilities and the state at each of `times`, computed as
 /// `plan-runner analyze --prob EXPR --transient T --json` computes them
-/// ([`Solver::probabilities`], [`Solver::transient_points_monitored`]) and in its JSON form
+/// ([`Solver::probabilities`], [`Solver::transient_points`]) and in its JSON form
 /// (`steady_state.probability`, `transient`), watched by `monitor` (progress, cancel).
 pub(crate) fn query(
     net: &Net,
@@ -149,7 +152,7 @@ pub(crate) fn query(
     times: &[f64],
     exprs: &[String],
     queries: &[String],
-    monitor: &Monitor,
+    monitor: &Arc<Monitor>,
 ) -> Result<Value, QueryError> {
     if let Some(t) = bad_time(times) {
         return Err(QueryError::Bad(format!("transient: {t} is not a time ≥ 0")));
@@ -166,7 +169,14 @@ pub(crate) fn query(
         return Err(QueryError::Bad(format!("transient: {e}")));
     }
     let transient: Vec<MeasuresReport> = solver
-        .transient_points_monitored(times, &predicates, monitor)
+        .transient_points(
+            times,
+            &predicates,
+            &TransientOptions {
+                monitor: Some(Arc::clone(monitor)),
+                ..TransientOptions::default()
+            },
+        )
         .map_err(|e| match e {
             SolveError::Cancelled { .. } => QueryError::Cancelled,
             e => QueryError::Bad(e.to_string()),

@@ -2,7 +2,14 @@
 //! Gauss–Seidel, power iteration), limiting distributions of non-ergodic chains, transient
 //! distributions by uniformization.
 
-use gspn::analysis::ctmc::{Ctmc, Method, SteadyOptions, poisson_weights};
+use gspn::analysis::ctmc::{Ctmc, Method, SteadyOptions, TransientOptions, poisson_weights};
+
+fn eps(eps: f64) -> TransientOptions {
+    TransientOptions {
+        eps,
+        ..TransientOptions::default()
+    }
+}
 
 fn opts(method: Method) -> SteadyOptions {
     // A residual of 1e-12 leaves an error up to the chain's condition number times that;
@@ -119,7 +126,7 @@ fn transient_two_state_matches_matrix_exponential() {
     let (a, b) = (1.0, 2.0);
     let c = Ctmc::from_triplets(2, vec![(0, 1, a), (1, 0, b)]);
     let times = [0.0, 0.5, 1.0, 5.0, 500.0];
-    let pt = c.transient(&[(0, 1.0)], &times, 1e-13);
+    let pt = c.transient(&[(0, 1.0)], &times, &eps(1e-13)).unwrap();
     for (p, t) in pt.iter().zip(times) {
         let p00 = b / (a + b) + a / (a + b) * (-(a + b) * t).exp();
         assert!(close(p[0], p00, 1e-12), "t={t}: {} vs {p00}", p[0]);
@@ -133,7 +140,7 @@ fn transient_pure_death_chain_matches_closed_form() {
     let (a, b) = (1.5, 0.25);
     let c = Ctmc::from_triplets(3, vec![(0, 1, a), (1, 2, b)]);
     let times = [5.0, 0.5, 1.0];
-    let pt = c.transient(&[(0, 1.0)], &times, 1e-13);
+    let pt = c.transient(&[(0, 1.0)], &times, &eps(1e-13)).unwrap();
     for (p, t) in pt.iter().zip(times) {
         let p0 = (-a * t).exp();
         let p1 = a / (b - a) * ((-a * t).exp() - (-b * t).exp());

@@ -4,7 +4,7 @@
 //! and the two solvers (sparse LU, Gauss–Seidel) agree on ergodic chains.
 
 use gspn::analysis::ctmc::{Method, SteadyOptions};
-use gspn::analysis::measures::{Solver, SolverOptions};
+use gspn::analysis::measures::{Solver, SolverOptions, TransientOptions};
 use gspn::analysis::state_space::{Options, StateSpace};
 use gspn::net::{Net, NetBuilder, Servers};
 use proptest::prelude::*;
@@ -78,7 +78,10 @@ proptest! {
                 prop_assert!((a - b).abs() < 1e-9);
             }
         }
-        for pi in solver.transient(&[0.3, 2.0], 1e-12) {
+        for pi in solver
+            .transient(&[0.3, 2.0], &TransientOptions::default())
+            .unwrap()
+        {
             prop_assert!((pi.iter().sum::<f64>() - 1.0).abs() < 1e-10);
         }
         let m = solver.measures(&l.pi);

@@ -144,7 +144,6 @@ fn the_net_under_the_written_policy_earns_the_optimum() {
             std::slice::from_ref(&spec),
             &Options::default(),
             &SolverOptions::default(),
-            &Monitor::new(),
         )
         .unwrap()
     };
@@ -470,9 +469,13 @@ fn the_cancel_flag_stops_the_solver_and_the_search() {
         matches!(r, Err(DecisionError::Cancelled { iterations: 0 })),
         "{r:?}"
     );
-    let monitor = Monitor::new();
+    let monitor = Arc::new(Monitor::new());
     monitor.cancel();
-    let r = DecisionModel::build_monitored(&net, &controls, &BuildOptions::default(), &monitor);
+    let opts = BuildOptions {
+        monitor: Some(monitor),
+        ..BuildOptions::default()
+    };
+    let r = DecisionModel::build(&net, &controls, &opts);
     assert!(
         matches!(
             r,

@@ -7,7 +7,7 @@ use crate::support::fixtures as shared_fixtures;
 
 use std::collections::BTreeMap;
 
-use gspn::analysis::measures::{Solver, SolverOptions};
+use gspn::analysis::measures::{Solver, SolverOptions, TransientOptions};
 use gspn::analysis::state_space::{Options, StateSpace};
 use gspn::io::{ReadOptions, read_net};
 use serde_json::Value;
@@ -155,7 +155,13 @@ fn check_net(path: &str, r: &Value) -> Vec<String> {
         .keys()
         .map(|k| (k.clone(), k.parse().unwrap()))
         .collect();
-    let at = solver.transient(&times.iter().map(|t| t.1).collect::<Vec<_>>(), 1e-13);
+    let opts = TransientOptions {
+        eps: 1e-13,
+        ..TransientOptions::default()
+    };
+    let at = solver
+        .transient(&times.iter().map(|t| t.1).collect::<Vec<_>>(), &opts)
+        .unwrap();
     for ((key, _), pi) in times.iter().zip(&at) {
         errors.extend(check_distribution(
             &format!("π({key})"),

@@ -1,7 +1,7 @@
 //! The thesis's temperature patrol on simulated robots (plans/temperature-patrol), in virtual
 //! time: with 1, 2, 3, 4 (where the thesis's Gazebo run failed) and 64 robots, every robot
 //! completes at least 10 patrol loops with no collision, no robot overtaking another at a
-//! location, and no robot stuck. Wall-clock times are measured in `examples/bench_sim_world.rs`
+//! location, and no robot stuck. Wall-clock times are measured in `benches/sim_world.rs`
 //! (docs/benchmarks.md), not here.
 #![cfg(feature = "sim")]
 

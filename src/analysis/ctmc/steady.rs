@@ -70,7 +70,7 @@ pub enum SolveError {
     },
     /// [`SteadyOptions::cancel`] was raised, or the transient solver's
     /// [`Monitor`](crate::analysis::state_space::Monitor) was cancelled
-    /// ([`Ctmc::transient_monitored`](super::Ctmc::transient_monitored)).
+    /// ([`TransientOptions::monitor`](super::TransientOptions::monitor)).
     #[error("the solver was cancelled after {iterations} iterations")]
     Cancelled {
         /// Sweeps (steady state) or products with the generator (transient) done.

@@ -1,6 +1,8 @@
 //! Transient distribution π(t) by uniformization, with Fox–Glynn truncation of the Poisson
 //! weights.
 
+use std::sync::Arc;
+
 use super::{Ctmc, SolveError};
 use crate::analysis::state_space::Monitor;
 
@@ -48,43 +50,61 @@ pub fn poisson_weights(qt: f64, eps: f64) -> (usize, Vec<f64>) {
     (first, weights)
 }
 
-impl Ctmc {
-    /// π(t) for each time in `times` (any order, ≥ 0) from the initial distribution
-    /// `initial` (`(state, probability)` pairs), with total error at most `eps` per time.
-    pub fn transient(&self, initial: &[(u32, f64)], times: &[f64], eps: f64) -> Vec<Vec<f64>> {
-        match self.transient_monitored(initial, times, eps, &Monitor::new()) {
-            Ok(at) => at,
-            Err(_) => {
-                unreachable!("only a cancel stops the solver, and nothing holds this monitor")
-            }
-        }
-    }
+/// The default error bound of each transient distribution ([`TransientOptions::eps`]).
+pub const TRANSIENT_EPS: f64 = 1e-12;
 
-    /// [`Ctmc::transient`] watched by `monitor` (from another thread): it publishes the time
-    /// point it works towards (in increasing time order) and its iterations done of planned
+/// How [`Ctmc::transient`] computes.
+#[derive(Clone, Debug)]
+pub struct TransientOptions {
+    /// The total error allowed in each π(t) (default [`TRANSIENT_EPS`]).
+    pub eps: f64,
+    /// Watches the solver from another thread (default: none): it publishes the time point
+    /// it works towards (in increasing time order) and its iterations done of planned
     /// ([`Monitor::transient_progress`]), and stops within one iteration (one product with
     /// the generator) of [`Monitor::cancel`] with [`SolveError::Cancelled`].
+    pub monitor: Option<Arc<Monitor>>,
+}
+
+impl Default for TransientOptions {
+    fn default() -> Self {
+        TransientOptions {
+            eps: TRANSIENT_EPS,
+            monitor: None,
+        }
+    }
+}
+
+impl Ctmc {
+    /// π(t) for each time in `times` (any order, ≥ 0) from the initial distribution
+    /// `initial` (`(state, probability)` pairs), with total error at most
+    /// [`TransientOptions::eps`] per time. Fails only when [`TransientOptions::monitor`] is
+    /// cancelled.
     ///
     /// ```
-    /// use gspn::analysis::ctmc::{Ctmc, SolveError};
+    /// use std::sync::Arc;
+    /// use gspn::analysis::ctmc::{Ctmc, SolveError, TransientOptions};
     /// use gspn::analysis::state_space::Monitor;
     /// let c = Ctmc::from_triplets(2, vec![(0, 1, 1.0), (1, 0, 2.0)]);
-    /// let monitor = Monitor::new();
-    /// let at = c.transient_monitored(&[(0, 1.0)], &[2.0, 0.5], 1e-12, &monitor).unwrap();
-    /// assert_eq!(at, c.transient(&[(0, 1.0)], &[2.0, 0.5], 1e-12));
+    /// let at = c.transient(&[(0, 1.0)], &[0.5], &TransientOptions::default()).unwrap();
+    /// let p0 = (2.0 + (-3.0f64 * 0.5).exp()) / 3.0;
+    /// assert!((at[0][0] - p0).abs() < 1e-12);
+    /// let monitor = Arc::new(Monitor::new());
+    /// let opts = TransientOptions { monitor: Some(monitor.clone()), ..Default::default() };
+    /// c.transient(&[(0, 1.0)], &[2.0, 0.5], &opts).unwrap();
     /// let (point, done, planned) = monitor.transient_progress();
     /// assert_eq!((point, done), (1, planned));
     /// monitor.cancel();
-    /// let r = c.transient_monitored(&[(0, 1.0)], &[1e6], 1e-12, &monitor);
+    /// let r = c.transient(&[(0, 1.0)], &[1e6], &opts);
     /// assert!(matches!(r, Err(SolveError::Cancelled { iterations: 0 })));
     /// ```
-    pub fn transient_monitored(
+    pub fn transient(
         &self,
         initial: &[(u32, f64)],
         times: &[f64],
-        eps: f64,
-        monitor: &Monitor,
+        opts: &TransientOptions,
     ) -> Result<Vec<Vec<f64>>, SolveError> {
+        let monitor = opts.monitor.clone().unwrap_or_default();
+        let eps = opts.eps;
         let n = self.n;
         let mut start = vec![0.0; n];
         for &(s, p) in initial {
@@ -126,7 +146,7 @@ impl Ctmc {
                     &exit,
                     lambda,
                     (first, &weights),
-                    monitor,
+                    &monitor,
                     &mut done,
                 )?;
             }

@@ -9,7 +9,9 @@ use super::absorbing::{Absorbing, Class};
 use super::{Kind, Query, QueryError};
 use crate::analysis::ctmc::{Ctmc, Limiting, poisson_weights};
 use crate::analysis::decision::{BuildOptions, Controls, RewardSpec};
-use crate::analysis::measures::{MAX_UNIFORMISATION, Solver, SolverOptions, TRANSIENT_EPS};
+use crate::analysis::measures::{
+    MAX_UNIFORMISATION, Solver, SolverOptions, TRANSIENT_EPS, TransientOptions,
+};
 use crate::analysis::state_space::StateSpace;
 use crate::analysis::under_policy::reward_rate;
 use crate::net::Net;
@@ -163,12 +165,11 @@ impl<'a> Evaluator<'a> {
             )));
         }
         let goal = abs.goal() as usize;
-        Ok(abs
+        let at = abs
             .chain
-            .transient(&abs.initial, times, TRANSIENT_EPS)
-            .iter()
-            .map(|pi| pi[goal].min(1.0))
-            .collect())
+            .transient(&abs.initial, times, &TransientOptions::default())
+            .map_err(|e| QueryError::Solve(e.to_string()))?;
+        Ok(at.iter().map(|pi| pi[goal].min(1.0)).collect())
     }
 
     fn limiting(&self) -> Result<&Limiting, QueryError> {

@@ -15,7 +15,7 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use gspn::analysis::invariants::{Invariants, p_invariants, t_invariants};
-use gspn::analysis::measures::{Measures, Solver, SolverOptions, bad_time};
+use gspn::analysis::measures::{Measures, Solver, SolverOptions, TransientOptions, bad_time};
 use gspn::analysis::properties::Properties;
 use gspn::analysis::report::{MeasuresReport, Report, StateSpaceReport, transition_names};
 use gspn::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
@@ -110,15 +110,16 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
                 .map_err(|e| BadInput(format!("--prob `{}`: {e}", gspn::io::excerpt(p, 80))))
         })
         .collect::<Result<Vec<_>, _>>()?;
+    let monitor = Arc::new(Monitor::new());
     let opts = Options {
         max_states: args.max_states,
         threads: 0,
         max_memory: args.max_memory.saturating_mul(1 << 20),
+        monitor: Some(Arc::clone(&monitor)),
     };
     // `--transient T` asks for the distribution at T only (its --prob values included);
     // the steady state comes with --steady, or when no time is asked for.
     let want_steady = args.steady || times.is_empty();
-    let monitor = Arc::new(Monitor::new());
     let spinner = Spinner::start(!args.json && std::io::stderr().is_terminal(), &monitor);
     let unbounded = |e: &AnalysisError| match e {
         AnalysisError::Unbounded { places } => Some(places.clone()),
@@ -133,7 +134,6 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             &plan.rewards,
             &opts,
             &SolverOptions::default(),
-            &monitor,
         ) {
             Ok(a) => (a.space, Some((a.limiting, a.measures, a.rewards))),
             Err(PolicyAnalysisError::StateSpace(e)) => match unbounded(&e) {
@@ -146,7 +146,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             Err(e) => return Err(e).context("steady state"),
         }
     } else {
-        match StateSpace::build_under_policy(net, &plan.policy, &opts, &monitor) {
+        match StateSpace::build_under_policy(net, &plan.policy, &opts) {
             Ok(ss) => (ss, None),
             Err(e) => match unbounded(&e) {
                 Some(places) => {
@@ -189,7 +189,9 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(e) = solver.too_far(&times) {
         return Err(BadInput(format!("--transient: {e}")).into());
     }
-    let transient = solver.transient_points(&times, &predicates);
+    let transient = solver
+        .transient_points(&times, &predicates, &TransientOptions::default())
+        .context("transient")?;
     let answers = queries::answer(&plan, &ss, limiting.clone(), &queries, args.max_states)?;
     if args.csv.is_some() || args.plot.is_some() {
         let ev = gspn::analysis::query::Evaluator::new(net, &ss, &plan.rewards);

@@ -13,8 +13,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use gspn::analysis::decision::{
-    Action, Algorithm, BuildOptions, Controls, DecisionError, DecisionModel, Objective, PlaceMode,
-    RewardSpec, Rewards, Solution, SolveOptions, compress, solve,
+    Algorithm, BuildOptions, Controls, DecisionError, DecisionModel, Objective, PlaceMode,
+    PolicyTable, RewardSpec, Rewards, Solution, SolveOptions, compress, solve,
 };
 use gspn::analysis::state_space::{AnalysisError, Monitor};
 use gspn::io::drn;
@@ -183,14 +183,14 @@ fn synthesize(
 ) -> anyhow::Result<Solved> {
     let t0 = Instant::now();
     let spinner = Spinner::start(progress, monitor);
-    let model = DecisionModel::build_monitored(
+    let model = DecisionModel::build(
         net,
         controls,
         &BuildOptions {
             max_states: args.max_states,
             threads: 0,
+            monitor: Some(Arc::clone(monitor)),
         },
-        monitor,
     )
     .map_err(|e| or_interrupted(e, monitor, &args.file, args.file.display().to_string()))?;
     drop(spinner);
@@ -265,22 +265,6 @@ fn shown(goal: &Goal, sol: &Solution) -> (f64, f64, f64) {
 }
 
 /// The policy table: each decision marking and the transition the solution fires there.
-fn table(s: &Solved) -> (Vec<(Vec<u32>, gspn::net::TransitionId)>, usize) {
-    let mut out = Vec::new();
-    let mut waits = 0;
-    for st in 0..s.model.state_count() {
-        if s.model.choices(st).len() < 2 {
-            continue;
-        }
-        match s.model.action(s.solution.policy[st] as usize) {
-            Action::Fire(t) => out.push((s.model.marking(st), t)),
-            Action::Wait => waits += 1,
-            Action::Race | Action::Delay => {}
-        }
-    }
-    (out, waits)
-}
-
 pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let input = read_input(&args)?;
     let net = &input.net;
@@ -327,7 +311,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
     }
     check("after solving")?;
-    let (table, waits) = table(&s);
+    let PolicyTable {
+        fires: table,
+        waits,
+    } = s.model.policy_table(&s.solution.policy);
     let exact: Vec<Rule> = table
         .iter()
         .map(|(m, t)| Rule {

@@ -3,13 +3,16 @@
 //! to the paint after it — what `plan-runner run PLAN --robots N --time-scale 1 --web` serves.
 //!
 //! ```text
-//! cargo run --release --example bench_viewer_robots [-- --robots 64 --seconds 10]
+//! cargo bench --bench viewer_robots -- [--robots 64 --seconds 10]
 //! ```
 //!
 //! The thesis's temperature patrol (`plans/temperature-patrol/plan.toml`) with its tokens
 //! scaled to `robots`, in real time. "open": navigation start → the first paint after the net
 //! is drawn (`window.gspnPerf.drawn`); "frames": `window.gspnPerf.frames` over `seconds`
 //! seconds. Needs chromedriver (Debian: `chromium`, `chromium-driver`).
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 #[path = "../tests/support/browser.rs"]
 mod browser;
@@ -24,7 +27,7 @@ use gspn::web::{LiveRun, WebState, serve};
 use gspn::world::{Fleet, WorldView};
 
 fn arg(name: &str, default: u64) -> u64 {
-    let args: Vec<String> = std::env::args().collect();
+    let args: Vec<String> = bench_args::args().collect();
     args.iter()
         .position(|a| a == name)
         .and_then(|i| args.get(i + 1))

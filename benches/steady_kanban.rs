@@ -3,8 +3,11 @@
 //! mean tokens per place, the time taken and the peak memory (VmHWM).
 //!
 //! ```text
-//! cargo run --release --example bench_steady_kanban [-- path/to/kanban_gspn_N4.pnml]
+//! cargo bench --bench steady_kanban -- [path/to/kanban_gspn_N4.pnml]
 //! ```
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::time::Instant;
 
@@ -16,7 +19,7 @@ use gspn::analysis::state_space::{Options, StateSpace};
 use gspn::io::{ReadOptions, read_net};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let path = std::env::args().nth(1).unwrap_or_else(|| {
+    let path = bench_args::args().nth(1).unwrap_or_else(|| {
         fixtures::fixture("kanban/kanban_gspn_N4.pnml")
             .display()
             .to_string()

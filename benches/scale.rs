@@ -1,9 +1,9 @@
 //! Scale benchmark of the runtime: a ring of K action places, N agents, no-op actions.
 //!
 //! ```text
-//! cargo run --release --example bench_scale -- --places 4 --agents 100000 --firings 1000000
-//! cargo run --release --example bench_scale -- --places 1000 --agents 1000 --firings 1000000 --net-timed
-//! cargo run --release --example bench_scale -- --places 4 --agents 100000 --firings 100000 --mode light
+//! cargo bench --bench scale -- --places 4 --agents 100000 --firings 1000000
+//! cargo bench --bench scale -- --places 1000 --agents 1000 --firings 1000000 --net-timed
+//! cargo bench --bench scale -- --places 4 --agents 100000 --firings 100000 --mode light
 //! ```
 //!
 //! `--mode actor` (the default: one kameo actor per agent, running its actions) or `light`
@@ -14,6 +14,9 @@
 //! for CPU over a few seconds of real time, memory per agent from the resident set before and
 //! after its start; (2) start N agents and fire F times in virtual time, each action returning
 //! at once (`--net-timed`: no actions, the supervisor's own ceiling).
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::time::{Duration, Instant};
 
@@ -75,7 +78,7 @@ fn arg(args: &[String], name: &str, default: u64) -> u64 {
 
 #[tokio::main]
 async fn main() {
-    let args: Vec<String> = std::env::args().collect();
+    let args: Vec<String> = bench_args::args().collect();
     let k = arg(&args, "--places", 4) as usize;
     let n = arg(&args, "--agents", 1000) as usize;
     let f = arg(&args, "--firings", 100_000);

@@ -3,7 +3,7 @@
 //! check, 32,000 names 15 s to import).
 //!
 //! ```text
-//! cargo run --release --example bench_check_import -- 1000000
+//! cargo bench --bench check_import -- 1000000
 //! ```
 //!
 //! `check`: a chain of N places (`p0 → t1 → p1 → …`, one token), written as PNML, read back
@@ -18,6 +18,9 @@
 //! 850 ns at 10⁶ on the 2-core VM: the map leaves the caches), so a reader whose time per
 //! element grows by the same factor is linear in its input, and what remains is the memory
 //! hierarchy.
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::time::Instant;
 
@@ -87,7 +90,7 @@ fn memory_mb() -> (f64, f64) {
 }
 
 fn main() {
-    let n: usize = std::env::args()
+    let n: usize = bench_args::args()
         .nth(1)
         .map(|s| s.parse().expect("N, a number of places"))
         .unwrap_or(100_000);

@@ -4,8 +4,11 @@
 //! reference. Prints nanoseconds per call, the median of 5 rounds each.
 //!
 //! ```text
-//! cargo run --release --example bench_ln [CALLS]
+//! cargo bench --bench ln -- [CALLS]
 //! ```
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -13,7 +16,7 @@ use std::time::Instant;
 use rand::SeedableRng;
 
 fn main() {
-    let calls: usize = std::env::args()
+    let calls: usize = bench_args::args()
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(10_000_000);

@@ -2,9 +2,12 @@
 //! states per second and the peak memory of the process.
 //!
 //! ```text
-//! cargo run --release --example bench_state_space -- ../shared/fixtures/mcc/Kanban-PT-00005/model.pnml
-//! cargo run --release --example bench_state_space -- FILE --threads 1
+//! cargo bench --bench state_space -- ../shared/fixtures/mcc/Kanban-PT-00005/model.pnml
+//! cargo bench --bench state_space -- FILE --threads 1
 //! ```
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -24,7 +27,7 @@ fn peak_rss_mb() -> f64 {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut args = std::env::args().skip(1);
+    let mut args = bench_args::args().skip(1);
     let mut file: Option<PathBuf> = None;
     let mut opts = Options::default();
     let mut props = false;

@@ -3,12 +3,15 @@
 //! worker for the whole run (`--kind worker`, python/gspn/worker.py), many requests in flight.
 //!
 //! ```text
-//! cargo run --release --example bench_actions -- --kind worker --agents 1000 --firings 100000
-//! cargo run --release --example bench_actions -- --kind command --agents 50 --firings 2000
+//! cargo bench --bench actions -- --kind worker --agents 1000 --firings 100000
+//! cargo bench --bench actions -- --kind command --agents 50 --firings 2000
 //! ```
 //!
 //! Prints one JSON line: `{kind, agents, firings, seconds, actions_per_s}` (each firing ends
 //! one action, so actions/s = firings/s).
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::path::Path;
 use std::time::Instant;
@@ -28,7 +31,7 @@ run()
 "#;
 
 fn arg(name: &str, default: &str) -> String {
-    let args: Vec<String> = std::env::args().collect();
+    let args: Vec<String> = bench_args::args().collect();
     args.iter()
         .position(|a| a == name)
         .and_then(|i| args.get(i + 1).cloned())

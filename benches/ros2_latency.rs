@@ -2,8 +2,8 @@
 //! processes on loopback, and each process's CPU (from /proc).
 //!
 //! ```text
-//! cargo build --release --features ros2 --bin plan-runner --example bench_ros2_latency
-//! target/release/examples/bench_ros2_latency [--robots 16] [--firings 3000] [--runs 3]
+//! cargo build --release --features ros2 --bin plan-runner
+//! cargo bench --features ros2 --bench ros2_latency -- [--robots 16] [--firings 3000] [--runs 3]
 //! ```
 //!
 //! Each run writes a net of 16 robots alternating between `Work` and `Move` (both `ros2`
@@ -12,6 +12,9 @@
 //! logs: for each firing, the latency is the last robot's receive time minus the firing's
 //! stamp (the supervisor's publish time; one machine, one clock). CPU is utime + stime over
 //! each process's lifetime, sampled from /proc/PID/stat every 100 ms.
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -37,7 +40,7 @@ fn opts() -> Opts {
         scale: 0.05,
         domain: 150,
     };
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let args: Vec<String> = bench_args::args().skip(1).collect();
     for w in args.chunks(2) {
         let v = w.get(1).map(String::as_str).unwrap_or("");
         match w[0].as_str() {
@@ -53,7 +56,7 @@ fn opts() -> Opts {
 }
 
 fn plan_runner() -> PathBuf {
-    // target/release/examples/bench_ros2_latency → target/release/plan-runner
+    // target/release/deps/ros2_latency-HASH → target/release/plan-runner
     let exe = std::env::current_exe().expect("own path");
     let bin = exe
         .parent()

@@ -3,8 +3,11 @@
 //! steady state is uniform, so every place averages 1 token).
 //!
 //! ```text
-//! cargo run --release --example bench_token_game_ring [FIRINGS]
+//! cargo bench --bench token_game_ring -- [FIRINGS]
 //! ```
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::time::Instant;
 
@@ -12,7 +15,7 @@ use gspn::net::{NetBuilder, Servers};
 use gspn::sim::Simulator;
 
 fn main() {
-    let firings: u64 = std::env::args()
+    let firings: u64 = bench_args::args()
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(20_000_000);

@@ -4,8 +4,11 @@
 //! as at step 1 (it used to replay every step since the reset: seconds per request).
 //!
 //! ```text
-//! cargo run --release --example bench_viewer_step [STEPS]
+//! cargo bench --bench viewer_step -- [STEPS]
 //! ```
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::time::Instant;
 
@@ -17,7 +20,7 @@ use tower::ServiceExt;
 
 #[tokio::main(flavor = "current_thread")]
 async fn main() {
-    let steps: u64 = std::env::args()
+    let steps: u64 = bench_args::args()
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(10_000_000);

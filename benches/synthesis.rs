@@ -3,10 +3,13 @@
 //! the value and the peak memory of the process.
 //!
 //! ```text
-//! cargo run --release --example bench_synthesis -- ../shared/fixtures/gspnr/home_n06
-//! cargo run --release --example bench_synthesis -- DIR --objective per-step --gamma 0.99
-//! cargo run --release --example bench_synthesis -- DIR --method policy --threads 1
+//! cargo bench --bench synthesis -- ../shared/fixtures/gspnr/home_n06
+//! cargo bench --bench synthesis -- DIR --objective per-step --gamma 0.99
+//! cargo bench --bench synthesis -- DIR --method policy --threads 1
 //! ```
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -56,7 +59,7 @@ fn rewards(net: &Net, text: &str) -> Result<(RewardSpec, Controls), Box<dyn std:
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut args = std::env::args().skip(1);
+    let mut args = bench_args::args().skip(1);
     let mut dir: Option<PathBuf> = None;
     let mut objective = "lra".to_string();
     let mut gamma = 0.99;

@@ -6,8 +6,11 @@
 //!
 //! ```text
 //! cargo build --release --bin plan-runner
-//! cargo run --release --example bench_ws_soak -- target/release/plan-runner [CLIENTS] [ROUNDS]
+//! cargo bench --bench ws_soak -- target/release/plan-runner [CLIENTS] [ROUNDS]
 //! ```
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
@@ -57,7 +60,7 @@ async fn visit(url: String) -> bool {
 
 #[tokio::main(flavor = "multi_thread", worker_threads = 2)]
 async fn main() {
-    let mut args = std::env::args().skip(1);
+    let mut args = bench_args::args().skip(1);
     let bin = args.next().expect("the plan-runner binary");
     let clients: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(2_000);
     let rounds: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(12);

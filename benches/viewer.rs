@@ -2,8 +2,8 @@
 //! and how long each live update takes to reach the screen.
 //!
 //! ```text
-//! cargo run --release --example bench_viewer [-- --places 10000 --runs 5 --seconds 10 --svg]
-//! cargo run --release --example bench_viewer -- --net FILE --runs 5 --seconds 0
+//! cargo bench --bench viewer -- [--places 10000 --runs 5 --seconds 10 --svg]
+//! cargo bench --bench viewer -- --net FILE --runs 5 --seconds 0
 //! ```
 //!
 //! `--net FILE` opens that net (or plan) instead of the ring (the thesis's temperature
@@ -20,6 +20,9 @@
 //! frame, the time from the WebSocket message to the first paint after it
 //! (`window.gspnPerf.frames`), for `seconds` seconds. Needs chromedriver (Debian:
 //! `chromium`, `chromium-driver`).
+
+#[path = "support/args.rs"]
+mod bench_args;
 
 #[path = "../tests/support/browser.rs"]
 mod browser;
@@ -46,7 +49,7 @@ fn ring(n: usize) -> Net {
 }
 
 fn arg(name: &str, default: u64) -> u64 {
-    let args: Vec<String> = std::env::args().collect();
+    let args: Vec<String> = bench_args::args().collect();
     args.iter()
         .position(|a| a == name)
         .and_then(|i| args.get(i + 1))
@@ -59,7 +62,7 @@ async fn main() {
     let n = arg("--places", 10_000) as usize;
     let runs = arg("--runs", 5);
     let seconds = arg("--seconds", 10);
-    let query = if std::env::args().any(|a| a == "--svg") {
+    let query = if bench_args::args().any(|a| a == "--svg") {
         "?renderer=svg"
     } else {
         ""
@@ -69,7 +72,7 @@ async fn main() {
     // ---- open: the token game's page, loaded `runs` times
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
-    let args: Vec<String> = std::env::args().collect();
+    let args: Vec<String> = bench_args::args().collect();
     let file = args
         .iter()
         .position(|a| a == "--net")

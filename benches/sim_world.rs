@@ -3,7 +3,7 @@
 //! of the whole temperature patrol (plans/temperature-patrol) for 4, 16 and 64 robots in
 //! virtual time. Medians of 3 runs; the results are in docs/benchmarks.md.
 //!
-//! `cargo run --release --example bench_sim_world`
+//! `cargo bench --bench sim_world`
 
 use std::time::Instant;
 
