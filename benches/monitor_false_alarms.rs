@@ -57,8 +57,8 @@ fn main() {
     // The design: each item's tests' levels added up.
     let level = |k: u64| opts.alpha / (k as f64 * (k as f64 + 1.0));
     let sum = |tests: u64| (1..=tests).map(level).sum::<f64>();
-    let transitions = sum(fired[t1.index()] / opts.block as u64)
-        + sum(fired[t3.index()] / opts.block as u64);
+    let transitions =
+        sum(fired[t1.index()] / opts.block as u64) + sum(fired[t3.index()] / opts.block as u64);
     let windows = firings / opts.batch_firings / opts.batches as u64;
     let places = 3.0 * sum(windows);
     println!(

@@ -157,17 +157,21 @@ async function startReplay() {
   // Runs `then` with window k: at once when it is here, else once fetched unless a later
   // request came meanwhile (the latest wins).
   let wanted = 0;
+  let done = 0;
   const withWindow = (k, then) => {
     const ticket = ++wanted;
     const w = windows.get(k);
     if (w) {
       windows.delete(k);
       windows.set(k, w);
+      done = ticket;
       then(w);
       return;
     }
     fetchWindow(k).then((got) => {
-      if (ticket === wanted) then(got);
+      if (ticket !== wanted) return;
+      done = ticket;
+      then(got);
     }, () => {});
   };
   const windowOf = (i) => Math.floor(i / size);
@@ -241,17 +245,21 @@ async function startReplay() {
   let now = 0;
   // Frame i of window w; the map at model time t (the frame's time unless the slider picked
   // another).
-  const render = (w, i, t) => {
-    const f = w.frames[i - w.first];
-    now = t === undefined ? f.time : t;
+  // What model time t shows whatever the window: the robots, the table, the cursor.
+  const showTime = (t) => {
+    now = t;
     slider.value = String(now);
-    showWorld(w, now);
     showRobots(now);
     if (conform) showConformAt(conform, now);
     $('timeline-time').textContent = 't = ' + fmtTime(now) + ' s';
     $('timeline-time').dataset.t = String(now);
     $('timeline-time').title = timeTitle(now);
     scheduleFollowDraw();
+  };
+  const render = (w, i, t) => {
+    const f = w.frames[i - w.first];
+    showTime(t === undefined ? f.time : t);
+    showWorld(w, now);
     if (i === at && t !== undefined && $('frame').textContent) return;
     at = i;
     f.tokens.forEach((k, p) => setTokens(p, k));
@@ -271,7 +279,10 @@ async function startReplay() {
   const show = (i, t) => withWindow(windowOf(i), (w) => render(w, i, t));
   // The frame shown at model time t: the last firing at or before it (the range input
   // keeps its value to about 15 digits: a hair's tolerance).
-  const showAt = (t) => withWindow(lastAtOrBefore(starts, t), (w) => render(w, w.first + lastAtOrBefore(w.times, t), t));
+  const showAt = (t) => {
+    showTime(t);
+    withWindow(lastAtOrBefore(starts, t), (w) => render(w, w.first + lastAtOrBefore(w.times, t), t));
+  };
   slider.addEventListener('input', () => showAt(Number(slider.value)));
   const speedBox = $('replay-speed');
   speedBox.textContent = '';
@@ -337,7 +348,9 @@ async function startReplay() {
   $('step-forward').addEventListener('click', () => stepBy(1));
   // `tick`: the animation frame's timestamp (ms) that set `time`, so a test can read the
   // model time advanced per wall second without timing the page from outside.
-  window.gspnReplay = { playing, at: () => at, time: () => now, tick: () => wall };
+  // `settled`: the last window asked for is shown (a test waits for it after moving the
+  // slider; the frames of a window not yet fetched come when it arrives).
+  window.gspnReplay = { playing, at: () => at, time: () => now, tick: () => wall, settled: () => done === wanted };
   await fetchWindow(0);
   show(0);
 }
