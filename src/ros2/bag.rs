@@ -135,89 +135,135 @@ pub fn export<W: Write + Seek>(text: &str, out: W) -> Result<Exported, BagError>
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
         .peekable();
-    let bad = |i: usize, reason: String| BagError::Journal {
-        line: i + 1,
-        reason,
-    };
     let (i, first) = lines
         .next()
         .ok_or_else(|| bad(0, "empty journal: no header".into()))?;
     let header: JournalHeader<'_> =
         serde_json::from_str(first).map_err(|e| bad(i, e.to_string()))?;
-    let places: Vec<String> = header.places.iter().map(|p| p.to_string()).collect();
-    let name_of = |names: &[std::borrow::Cow<'_, str>], k: usize, what: &str, i: usize| {
-        names
-            .get(k)
-            .map(|n| n.to_string())
-            .ok_or_else(|| bad(i, format!("{what} {k} is not in the header")))
-    };
     let out = mcap::WriteOptions::new()
         .compression(None)
         .create(out)
         .map_err(|e| BagError::Mcap(e.to_string()))?;
-    let mut bag = Bag {
-        out,
-        channels: BTreeMap::new(),
-    };
-    let mut n = Exported::default();
-    let marking = |seq: u64, t: f64, tokens: Vec<u32>| {
-        let (stamp, _) = stamp(t);
-        Marking {
-            header: Header {
-                stamp,
-                frame_id: String::new(),
-            },
-            model_time: t,
-            seq,
-            places: places.clone(),
-            tokens,
-        }
+    let mut x = Exporter {
+        bag: Bag {
+            out,
+            channels: BTreeMap::new(),
+        },
+        places: header.places.iter().map(|p| p.to_string()).collect(),
+        header: &header,
+        n: Exported::default(),
+        robots: std::collections::BTreeSet::new(),
     };
     if let Some(m) = &header.initial {
-        bag.write(
-            MARKING,
-            "gspn_msgs/msg/Marking",
-            0.0,
-            &marking(0, 0.0, m.clone()),
-        )?;
-        n.markings += 1;
+        let msg = x.marking(0, 0.0, m.clone());
+        x.bag.write(MARKING, "gspn_msgs/msg/Marking", 0.0, &msg)?;
+        x.n.markings += 1;
     }
-    let mut robots = std::collections::BTreeSet::new();
     while let Some((i, line)) = lines.next() {
         let last = lines.peek().is_none();
         let v: serde_json::Value = match serde_json::from_str(line) {
             Ok(v) => v,
             // A run killed mid-write leaves its last line cut short.
             Err(_) if last => {
-                n.skipped += 1;
+                x.n.skipped += 1;
                 continue;
             }
             Err(e) => return Err(bad(i, e.to_string())),
         };
         if v.get("record").is_some() {
             let r: Record = serde_json::from_value(v).map_err(|e| bad(i, e.to_string()))?;
-            if &*r.record != "world" {
-                continue;
-            }
-            let poses: Vec<WorldPose> =
-                serde_json::from_value(r.data).map_err(|e| bad(i, e.to_string()))?;
-            for p in poses {
-                let mut msg = PoseStamped::on_map(p.x, p.y, 0.0);
-                msg.header = Header {
-                    stamp: stamp(r.time).0,
-                    frame_id: MAP_FRAME.into(),
-                };
-                let topic = format!("/{}/pose", p.id);
-                bag.write(&topic, "geometry_msgs/msg/PoseStamped", r.time, &msg)?;
-                robots.insert(p.id);
-                n.poses += 1;
-            }
-            continue;
+            x.record(i, r)?;
+        } else {
+            let e: Event = serde_json::from_value(v).map_err(|e| bad(i, e.to_string()))?;
+            x.event(i, e)?;
         }
-        let e: Event = serde_json::from_value(v).map_err(|e| bad(i, e.to_string()))?;
-        let (ros_stamp, _) = stamp(e.time);
+    }
+    let Exporter {
+        mut bag,
+        mut n,
+        robots,
+        ..
+    } = x;
+    n.robots = robots.len() as u64;
+    bag.out
+        .finish()
+        .map_err(|e| BagError::Mcap(e.to_string()))?;
+    Ok(n)
+}
+
+/// A journal line `i` (0-based) that cannot be read.
+fn bad(i: usize, reason: String) -> BagError {
+    BagError::Journal {
+        line: i + 1,
+        reason,
+    }
+}
+
+/// The export under way: the bag, the journal's header and what was written so far.
+struct Exporter<'h, W: Write + Seek> {
+    bag: Bag<W>,
+    header: &'h JournalHeader<'h>,
+    places: Vec<String>,
+    n: Exported,
+    robots: std::collections::BTreeSet<String>,
+}
+
+impl<W: Write + Seek> Exporter<'_, W> {
+    /// The marking after firing `seq` (0: the initial one) at model time `t`.
+    fn marking(&self, seq: u64, t: f64, tokens: Vec<u32>) -> Marking {
+        Marking {
+            header: Header {
+                stamp: stamp(t).0,
+                frame_id: String::new(),
+            },
+            model_time: t,
+            seq,
+            places: self.places.clone(),
+            tokens,
+        }
+    }
+
+    /// The name of transition or place `k` (`what`) in the header.
+    fn name_of(
+        &self,
+        names: &[std::borrow::Cow<'_, str>],
+        k: usize,
+        what: &str,
+        i: usize,
+    ) -> Result<String, BagError> {
+        names
+            .get(k)
+            .map(|n| n.to_string())
+            .ok_or_else(|| bad(i, format!("{what} {k} is not in the header")))
+    }
+
+    /// A `record` line: a `world` record's robot poses, each on `/<robot>/pose`; other
+    /// records are not exported.
+    fn record(&mut self, i: usize, r: Record) -> Result<(), BagError> {
+        if &*r.record != "world" {
+            return Ok(());
+        }
+        let poses: Vec<WorldPose> =
+            serde_json::from_value(r.data).map_err(|e| bad(i, e.to_string()))?;
+        for p in poses {
+            let mut msg = PoseStamped::on_map(p.x, p.y, 0.0);
+            msg.header = Header {
+                stamp: stamp(r.time).0,
+                frame_id: MAP_FRAME.into(),
+            };
+            let topic = format!("/{}/pose", p.id);
+            self.bag
+                .write(&topic, "geometry_msgs/msg/PoseStamped", r.time, &msg)?;
+            self.robots.insert(p.id);
+            self.n.poses += 1;
+        }
+        Ok(())
+    }
+
+    /// An event line: a firing (on the firings and marking topics) or a drift alarm.
+    fn event(&mut self, i: usize, e: Event) -> Result<(), BagError> {
         let hdr = Header {
-            stamp: ros_stamp,
+            stamp: stamp(e.time).0,
             frame_id: String::new(),
         };
         match e.kind {
@@ -227,33 +273,37 @@ pub fn export<W: Write + Seek>(text: &str, out: W) -> Result<Exported, BagError>
                 robots: who,
                 ..
             } => {
-                n.firings += 1;
+                self.n.firings += 1;
+                let seq = self.n.firings;
                 let msg = Firing {
                     header: hdr,
                     model_time: e.time,
-                    seq: n.firings,
-                    transition: name_of(&header.transitions, transition.index(), "transition", i)?,
+                    seq,
+                    transition: self.name_of(
+                        &self.header.transitions,
+                        transition.index(),
+                        "transition",
+                        i,
+                    )?,
                     marking: tokens.to_vec(),
                     robots: who.iter().map(|r| r.to_string()).collect(),
                 };
-                bag.write(FIRINGS, "gspn_msgs/msg/Firing", e.time, &msg)?;
-                bag.write(
-                    MARKING,
-                    "gspn_msgs/msg/Marking",
-                    e.time,
-                    &marking(n.firings, e.time, tokens.to_vec()),
-                )?;
-                n.markings += 1;
+                self.bag
+                    .write(FIRINGS, "gspn_msgs/msg/Firing", e.time, &msg)?;
+                let marking = self.marking(seq, e.time, tokens.to_vec());
+                self.bag
+                    .write(MARKING, "gspn_msgs/msg/Marking", e.time, &marking)?;
+                self.n.markings += 1;
             }
             EventKind::Drift(d) => {
                 let (transition, place) = match d.of {
                     Monitored::Transition(t) => (
-                        name_of(&header.transitions, t.index(), "transition", i)?,
+                        self.name_of(&self.header.transitions, t.index(), "transition", i)?,
                         String::new(),
                     ),
                     Monitored::Place(p) => (
                         String::new(),
-                        name_of(&header.places, p.index(), "place", i)?,
+                        self.name_of(&self.header.places, p.index(), "place", i)?,
                     ),
                 };
                 let msg = msgs::Drift {
@@ -272,17 +322,13 @@ pub fn export<W: Write + Seek>(text: &str, out: W) -> Result<Exported, BagError>
                     n: d.n,
                     p_value: d.p_value,
                 };
-                bag.write(DRIFT, "gspn_msgs/msg/Drift", e.time, &msg)?;
-                n.drifts += 1;
+                self.bag.write(DRIFT, "gspn_msgs/msg/Drift", e.time, &msg)?;
+                self.n.drifts += 1;
             }
             _ => {}
         }
+        Ok(())
     }
-    n.robots = robots.len() as u64;
-    bag.out
-        .finish()
-        .map_err(|e| BagError::Mcap(e.to_string()))?;
-    Ok(n)
 }
 
 const FIRINGS: &str = msgs::FIRINGS_TOPIC;

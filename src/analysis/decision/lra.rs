@@ -14,7 +14,7 @@
 use super::policy_iteration::{mec_policy_iteration, steer};
 use super::solve::{Algorithm, Equations, Method, Solution, SolveOptions};
 use super::{DecisionError, DecisionModel, Kind, Rewards};
-use crate::analysis::scc::tarjan;
+use crate::analysis::scc::{Members, tarjan};
 
 /// The maximal end components: per state its MEC (`u32::MAX` outside any), per choice
 /// whether it stays inside its state's MEC.
@@ -131,64 +131,20 @@ fn mec_value(
     iterations_so_far: usize,
     start: Option<&[f64]>,
 ) -> Result<MecValue, DecisionError> {
-    let markov: Vec<u32> = states
-        .iter()
-        .copied()
-        .filter(|&s| model.kind(s as usize) != Kind::Instant)
-        .collect();
-    let instant: Vec<u32> = states
-        .iter()
-        .copied()
-        .filter(|&s| model.kind(s as usize) == Kind::Instant)
-        .collect();
-    if markov.is_empty() {
+    let Some(step) = MecStep::new(model, rewards, mecs, states, max) else {
         // Only instant states: time never passes here (a Zeno end component).
         let s = states[0] as usize;
         return Err(DecisionError::TimelessPolicy {
             marking: format!("{:?}", model.marking(s)),
         });
-    }
-    let lambda = markov
-        .iter()
-        .map(|&s| model.exit_rate(s as usize))
-        .fold(0.0, f64::max)
-        * 1.05;
-    // Instant states sinks first (their inside choices only).
-    let mut local = vec![u32::MAX; model.state_count()];
-    for (i, &s) in instant.iter().enumerate() {
-        local[s as usize] = i as u32;
-    }
-    let sccs = tarjan(instant.len(), |v, out| {
-        for c in model.choices(instant[v as usize] as usize) {
-            if mecs.inside[c] {
-                out.extend(
-                    model
-                        .branches(c)
-                        .map(|(t, _)| local[t as usize])
-                        .filter(|&l| l != u32::MAX),
-                );
-            }
-        }
-    });
-    let order = sccs.members();
-    let better = |a: f64, b: f64| if max { a > b } else { a < b };
+    };
     let mut x = match start {
         Some(v) => v.to_vec(),
         None => vec![0.0f64; model.state_count()],
     };
-    let mut next = vec![0.0f64; markov.len()];
+    let mut next = vec![0.0f64; step.markov.len()];
     let eps = opts.precision;
-    // A gain near 0 (a minimum that avoids every reward) is bounded absolutely, relative to
-    // the largest reward rate a state of the MEC can earn.
-    let floor = markov
-        .iter()
-        .map(|&s| {
-            let s = s as usize;
-            let c = model.choices(s).start;
-            rewards.rate[s].abs() + model.exit_rate(s) * rewards.impulse[c].abs()
-        })
-        .fold(0.0f64, f64::max)
-        * 1e-3;
+    let floor = step.gain_floor();
     let mut iterations = 0;
     loop {
         if opts.cancelled() {
@@ -204,24 +160,125 @@ fn mec_value(
             });
         }
         iterations += 1;
-        // Instant states from the current Markovian values.
+        step.instant_sweep(&mut x, policy);
+        let (lo, hi) = step.markov_step(&x, &mut next, policy);
+        let (glo, ghi) = (lo * step.lambda, hi * step.lambda);
+        let reference = next[0];
+        for (i, &s) in step.markov.iter().enumerate() {
+            x[s as usize] = next[i] - reference;
+        }
+        if ghi - glo <= eps * glo.abs().max(ghi.abs()).max(floor) || ghi - glo <= 1e-300 {
+            return Ok(MecValue {
+                lower: glo,
+                upper: ghi,
+                iterations,
+            });
+        }
+    }
+}
+
+/// One MEC's relative value iteration: its Markovian states uniformised at `lambda`, its
+/// instant states solved in the order of their components (sinks first) after each step.
+struct MecStep<'a> {
+    model: &'a DecisionModel,
+    rewards: &'a Rewards,
+    mecs: &'a Mecs,
+    max: bool,
+    markov: Vec<u32>,
+    instant: Vec<u32>,
+    /// The instant states' components (local indices), sinks first.
+    order: Members,
+    lambda: f64,
+}
+
+impl<'a> MecStep<'a> {
+    /// `None` when the MEC has no Markovian state.
+    fn new(
+        model: &'a DecisionModel,
+        rewards: &'a Rewards,
+        mecs: &'a Mecs,
+        states: &[u32],
+        max: bool,
+    ) -> Option<MecStep<'a>> {
+        let (instant, markov): (Vec<u32>, Vec<u32>) = states
+            .iter()
+            .partition(|&&s| model.kind(s as usize) == Kind::Instant);
+        if markov.is_empty() {
+            return None;
+        }
+        let lambda = markov
+            .iter()
+            .map(|&s| model.exit_rate(s as usize))
+            .fold(0.0, f64::max)
+            * 1.05;
+        // Instant states sinks first (their inside choices only).
+        let mut local = vec![u32::MAX; model.state_count()];
+        for (i, &s) in instant.iter().enumerate() {
+            local[s as usize] = i as u32;
+        }
+        let sccs = tarjan(instant.len(), |v, out| {
+            for c in model.choices(instant[v as usize] as usize) {
+                if mecs.inside[c] {
+                    out.extend(
+                        model
+                            .branches(c)
+                            .map(|(t, _)| local[t as usize])
+                            .filter(|&l| l != u32::MAX),
+                    );
+                }
+            }
+        });
+        let order = sccs.members();
+        Some(MecStep {
+            model,
+            rewards,
+            mecs,
+            max,
+            markov,
+            instant,
+            order,
+            lambda,
+        })
+    }
+
+    /// A gain near 0 (a minimum that avoids every reward) is bounded absolutely, relative to
+    /// the largest reward rate a state of the MEC can earn.
+    fn gain_floor(&self) -> f64 {
+        let (model, rewards) = (self.model, self.rewards);
+        self.markov
+            .iter()
+            .map(|&s| {
+                let s = s as usize;
+                let c = model.choices(s).start;
+                rewards.rate[s].abs() + model.exit_rate(s) * rewards.impulse[c].abs()
+            })
+            .fold(0.0f64, f64::max)
+            * 1e-3
+    }
+
+    /// The instant states' values from the current Markovian values, and their best inside
+    /// choices.
+    fn instant_sweep(&self, x: &mut [f64], policy: &mut [u32]) {
+        let model = self.model;
+        let better = |a: f64, b: f64| if self.max { a > b } else { a < b };
         let tiny = 1e-15
             * (1.0
-                + markov
+                + self
+                    .markov
                     .iter()
                     .fold(0.0f64, |m, &s| m.max(x[s as usize].abs())));
-        for comp in &order {
+        for comp in &self.order {
             let rounds = if comp.len() == 1 { 1 } else { 10_000 };
             for _ in 0..rounds {
                 let mut change = 0.0f64;
                 for &v in comp {
-                    let s = instant[v as usize] as usize;
+                    let s = self.instant[v as usize] as usize;
                     let mut best: Option<f64> = None;
                     for c in model.choices(s) {
-                        if !mecs.inside[c] {
+                        if !self.mecs.inside[c] {
                             continue;
                         }
-                        let val = rewards.impulse[c]
+                        let val = self.rewards.impulse[c]
                             + model
                                 .branches(c)
                                 .map(|(t, p)| p * x[t as usize])
@@ -240,8 +297,14 @@ fn mec_value(
                 }
             }
         }
+    }
+
+    /// One uniformised step of the Markovian states into `next`; the smallest and largest
+    /// change, whose λ-multiples bound the gain.
+    fn markov_step(&self, x: &[f64], next: &mut [f64], policy: &mut [u32]) -> (f64, f64) {
+        let (model, rewards, lambda) = (self.model, self.rewards, self.lambda);
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for (i, &s) in markov.iter().enumerate() {
+        for (i, &s) in self.markov.iter().enumerate() {
             let s = s as usize;
             let c = model.choices(s).start;
             policy[s] = c as u32;
@@ -258,18 +321,112 @@ fn mec_value(
             hi = hi.max(d);
             next[i] = v;
         }
-        let (glo, ghi) = (lo * lambda, hi * lambda);
-        let reference = next[0];
-        for (i, &s) in markov.iter().enumerate() {
-            x[s as usize] = next[i] - reference;
+        (lo, hi)
+    }
+}
+
+/// The gain of every MEC ([`mec_value`]'s bounds), each started from policy iteration's
+/// bias unless the algorithm is value iteration.
+struct MecGains {
+    /// Per MEC: lower and upper bound of its optimal gain.
+    bounds: Vec<(f64, f64)>,
+    /// Sweeps and rounds over all MECs.
+    iterations: usize,
+    /// Whether every MEC went through policy iteration (the method reported).
+    all_pi: bool,
+}
+
+fn mec_gains(
+    model: &DecisionModel,
+    rewards: &Rewards,
+    mecs: &Mecs,
+    members: &[Vec<u32>],
+    max: bool,
+    opts: &SolveOptions,
+    policy: &mut [u32],
+) -> Result<MecGains, DecisionError> {
+    let pi = matches!(opts.algorithm, Algorithm::PolicyIteration | Algorithm::Auto);
+    let mut gains = MecGains {
+        bounds: Vec::with_capacity(members.len()),
+        iterations: 0,
+        all_pi: true,
+    };
+    for states in members {
+        // Policy iteration finds the MEC's optimal policy and its bias; value iteration then
+        // starts from that bias, so its first step already bounds the gain. Under `Auto` a
+        // MEC whose evaluation would be a large LU goes to value iteration alone.
+        let start = if pi {
+            match mec_policy_iteration(model, rewards, mecs, states, max, opts, policy)? {
+                Some((h, rounds)) => {
+                    gains.iterations += rounds;
+                    Some(h)
+                }
+                None => {
+                    gains.all_pi = false;
+                    None
+                }
+            }
+        } else {
+            None
+        };
+        let v = mec_value(
+            model,
+            rewards,
+            mecs,
+            states,
+            max,
+            opts,
+            policy,
+            gains.iterations,
+            start.as_deref(),
+        )?;
+        gains.iterations += v.iterations;
+        gains.bounds.push((v.lower, v.upper));
+    }
+    Ok(gains)
+}
+
+/// The policy outside the MECs' own choices: a state outside every MEC takes its best
+/// choice towards the best MEC (`y`, the values of reaching it, with `eq`'s stop values);
+/// a MEC whose best is to leave steers all its states to its best exit by an attractor;
+/// a MEC whose best is to stay keeps the choices [`mec_value`] gave it.
+fn exit_policy(
+    model: &DecisionModel,
+    mecs: &Mecs,
+    members: &[Vec<u32>],
+    eq: &Equations,
+    y: &[f64],
+    policy: &mut [u32],
+) {
+    let zero = vec![0.0; model.choice_count()];
+    let mut leave_best: Vec<Option<(f64, u32)>> = vec![None; mecs.count];
+    for (s, slot) in policy.iter_mut().enumerate() {
+        let m = mecs.of[s];
+        if m == u32::MAX {
+            let c = eq.update(model, &zero, y, s).1;
+            *slot = if c == u32::MAX {
+                model.choices(s).start as u32
+            } else {
+                c
+            };
+            continue;
         }
-        if ghi - glo <= eps * glo.abs().max(ghi.abs()).max(floor) || ghi - glo <= 1e-300 {
-            return Ok(MecValue {
-                lower: glo,
-                upper: ghi,
-                iterations,
-            });
+        for c in model.choices(s) {
+            if mecs.inside[c] {
+                continue;
+            }
+            let val: f64 = model.branches(c).map(|(t, p)| p * y[t as usize]).sum();
+            let stop = eq.stop[s].unwrap_or(0.0);
+            if val > stop + 1e-12 * stop.abs().max(1.0)
+                && leave_best[m as usize].is_none_or(|(b, _)| val > b)
+            {
+                leave_best[m as usize] = Some((val, c as u32));
+            }
         }
+    }
+    for (m, best) in leave_best.iter().enumerate() {
+        let Some((_, c)) = *best else { continue };
+        attract(model, mecs, &members[m], c as usize, policy);
     }
 }
 
@@ -289,43 +446,10 @@ pub(super) fn solve(
         }
     }
     let mut policy = vec![u32::MAX; n];
-    let mut iterations = 0;
-    let mut g: Vec<(f64, f64)> = Vec::with_capacity(mecs.count);
-    // Whether every MEC went through policy iteration (the method reported).
-    let mut all_pi = true;
     let pi = matches!(opts.algorithm, Algorithm::PolicyIteration | Algorithm::Auto);
-    for states in &members {
-        // Policy iteration finds the MEC's optimal policy and its bias; value iteration then
-        // starts from that bias, so its first step already bounds the gain. Under `Auto` a
-        // MEC whose evaluation would be a large LU goes to value iteration alone.
-        let start = if pi {
-            match mec_policy_iteration(model, rewards, &mecs, states, max, opts, &mut policy)? {
-                Some((h, rounds)) => {
-                    iterations += rounds;
-                    Some(h)
-                }
-                None => {
-                    all_pi = false;
-                    None
-                }
-            }
-        } else {
-            None
-        };
-        let v = mec_value(
-            model,
-            rewards,
-            &mecs,
-            states,
-            max,
-            opts,
-            &mut policy,
-            iterations,
-            start.as_deref(),
-        )?;
-        iterations += v.iterations;
-        g.push((v.lower, v.upper));
-    }
+    let gains = mec_gains(model, rewards, &mecs, &members, max, opts, &mut policy)?;
+    let (g, all_pi) = (gains.bounds, gains.all_pi);
+    let mut iterations = gains.iterations;
     // Reaching the best MEC, as a maximisation with non-negative stop values: for max,
     // y = g − gmin; for min, y = gmax − g.
     let gmin = g.iter().map(|v| v.0).fold(f64::INFINITY, f64::min);
@@ -382,39 +506,8 @@ pub(super) fn solve(
             (vec![(l + u) / 2.0; n], l, u)
         }
     };
-    // The policy: inside a MEC whose best is to stay, its own choices; elsewhere the best
-    // exit, steered to by an attractor inside the MEC.
     if let Some(a) = &sol_lo {
-        let y = &a.values;
-        let mut leave_best: Vec<Option<(f64, u32)>> = vec![None; mecs.count];
-        for (s, slot) in policy.iter_mut().enumerate() {
-            let m = mecs.of[s];
-            if m == u32::MAX {
-                let c = eq_lo.update(model, &zero, y, s).1;
-                *slot = if c == u32::MAX {
-                    model.choices(s).start as u32
-                } else {
-                    c
-                };
-                continue;
-            }
-            for c in model.choices(s) {
-                if mecs.inside[c] {
-                    continue;
-                }
-                let val: f64 = model.branches(c).map(|(t, p)| p * y[t as usize]).sum();
-                let stop = eq_lo.stop[s].unwrap_or(0.0);
-                if val > stop + 1e-12 * stop.abs().max(1.0)
-                    && leave_best[m as usize].is_none_or(|(b, _)| val > b)
-                {
-                    leave_best[m as usize] = Some((val, c as u32));
-                }
-            }
-        }
-        for (m, best) in leave_best.iter().enumerate() {
-            let Some((_, c)) = *best else { continue };
-            attract(model, &mecs, &members[m], c as usize, &mut policy);
-        }
+        exit_policy(model, &mecs, &members, &eq_lo, &a.values, &mut policy);
     }
     for (s, slot) in policy.iter_mut().enumerate() {
         if *slot == u32::MAX {

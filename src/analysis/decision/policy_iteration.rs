@@ -26,7 +26,7 @@ use super::lra::Mecs;
 use super::solve::{Algorithm, SolveOptions};
 use super::{DecisionError, DecisionModel, Kind, Rewards};
 use crate::analysis::linear::solve_block;
-use crate::analysis::scc::{Sccs, tarjan};
+use crate::analysis::scc::{Members, Sccs, tarjan};
 
 /// Most rounds before giving up (each round at least improves the bias).
 const MAX_ROUNDS: usize = 1000;
@@ -311,10 +311,63 @@ fn evaluate(
     sccs: &Sccs,
 ) -> Result<Vec<f64>, DecisionError> {
     let k = states.len();
-    // Per local state: the row's scale, its time flag and right-hand side, and the choice.
-    let row = |i: usize| {
-        let s = states[i] as usize;
-        let c = policy[s] as usize;
+    let members = sccs.members();
+    let mut pos = vec![0usize; k];
+    for comp in &members {
+        for (i, &v) in comp.iter().enumerate() {
+            pos[v as usize] = i;
+        }
+    }
+    let ev = Evaluation {
+        model,
+        rewards,
+        states,
+        local,
+        policy,
+        sccs,
+        members,
+        pos,
+    };
+    // The bias (h(reference) = 0) and the gain.
+    let mut h = vec![0.0f64; k];
+    let rc = sccs.component[reference] as usize;
+    let g = ev.bottom(reference, &mut h)?;
+    // The other components, sinks first: every branch leaving one leads to a component
+    // numbered below it, already solved.
+    let mut scratch = Scratch::default();
+    for ci in (0..ev.members.len()).filter(|&ci| ci != rc) {
+        ev.component(ci, g, &mut h, &mut scratch)?;
+    }
+    h[reference] = g;
+    if h.iter().all(|v| v.is_finite()) {
+        Ok(h)
+    } else {
+        Err(lu_failed(
+            k,
+            crate::analysis::linear::SolveError::Failed("singular matrix".into()),
+        ))
+    }
+}
+
+/// A policy evaluation's data: the MEC's states in local numbering, their components and
+/// each one's position in its component.
+struct Evaluation<'a> {
+    model: &'a DecisionModel,
+    rewards: &'a Rewards,
+    states: &'a [u32],
+    local: &'a [u32],
+    policy: &'a [u32],
+    sccs: &'a Sccs,
+    members: Members,
+    pos: Vec<usize>,
+}
+
+impl Evaluation<'_> {
+    /// Local state `i`'s row: its scale, its time flag and right-hand side, and its choice.
+    fn row(&self, i: usize) -> (f64, f64, f64, usize) {
+        let (model, rewards) = (self.model, self.rewards);
+        let s = self.states[i] as usize;
+        let c = self.policy[s] as usize;
         match model.kind(s) {
             Kind::Instant => (1.0, 0.0, rewards.impulse[c], c),
             Kind::Markovian => {
@@ -323,84 +376,81 @@ fn evaluate(
             }
             Kind::Dead => (1.0, 1.0, rewards.rate[s] + rewards.impulse[c], c),
         }
-    };
-    let members = sccs.members();
-    let mut pos = vec![0usize; k];
-    for comp in &members {
-        for (i, &v) in comp.iter().enumerate() {
-            pos[v as usize] = i;
-        }
     }
-    let fail = |size: usize, e: crate::analysis::linear::SolveError| {
-        DecisionError::Unsupported(format!(
-            "policy evaluation (LU of a component of {size} states): {e}"
-        ))
-    };
-    // The bias (h(reference) = 0) and the gain.
-    let mut h = vec![0.0f64; k];
-    let rc = sccs.component[reference] as usize;
-    let bottom = &members[rc];
-    let rp = pos[reference];
-    let at = |i: usize| if i > rp { i - 1 } else { i };
-    let m = bottom.len() - 1;
-    let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
-    let mut rhs = vec![0.0f64; 2 * m];
-    // The reference's row: (unknown, coefficient), its right-hand side and time flag.
-    let mut ref_row: Vec<(usize, f64)> = Vec::new();
-    let (mut b_ref, mut tau_ref) = (0.0, 1.0);
-    for (i, &v) in bottom.iter().enumerate() {
-        let (scale, tau, b, c) = row(v as usize);
-        if i == rp {
-            (b_ref, tau_ref) = (b, tau);
-        } else {
-            triplets.push((at(i), at(i), scale));
-            rhs[2 * at(i)] = b;
-            rhs[2 * at(i) + 1] = tau;
-        }
-        for (t, p) in model.branches(c) {
-            let j = local[t as usize] as usize;
-            if j == reference {
-                continue;
-            }
-            let entry = (at(pos[j]), -scale * p);
+
+    /// The reference's component: the bias of its states into `h` and the gain.
+    fn bottom(&self, reference: usize, h: &mut [f64]) -> Result<f64, DecisionError> {
+        let (pos, local) = (&self.pos, self.local);
+        let bottom = &self.members[self.sccs.component[reference] as usize];
+        let rp = pos[reference];
+        let at = |i: usize| if i > rp { i - 1 } else { i };
+        let m = bottom.len() - 1;
+        let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
+        let mut rhs = vec![0.0f64; 2 * m];
+        // The reference's row: (unknown, coefficient), its right-hand side and time flag.
+        let mut ref_row: Vec<(usize, f64)> = Vec::new();
+        let (mut b_ref, mut tau_ref) = (0.0, 1.0);
+        for (i, &v) in bottom.iter().enumerate() {
+            let (scale, tau, b, c) = self.row(v as usize);
             if i == rp {
-                ref_row.push(entry);
+                (b_ref, tau_ref) = (b, tau);
             } else {
-                triplets.push((at(i), entry.0, entry.1));
+                triplets.push((at(i), at(i), scale));
+                rhs[2 * at(i)] = b;
+                rhs[2 * at(i) + 1] = tau;
+            }
+            for (t, p) in self.model.branches(c) {
+                let j = local[t as usize] as usize;
+                if j == reference {
+                    continue;
+                }
+                let entry = (at(pos[j]), -scale * p);
+                if i == rp {
+                    ref_row.push(entry);
+                } else {
+                    triplets.push((at(i), entry.0, entry.1));
+                }
             }
         }
-    }
-    solve_block(m, &triplets, &mut rhs, 2).map_err(|e| fail(m, e))?;
-    // The reference's row, h(reference) = 0: g·τ + Σ a_j·(u_j − g·w_j) = b.
-    let (au, aw) = ref_row.iter().fold((0.0, 0.0), |(x, y), &(j, a)| {
-        (x + a * rhs[2 * j], y + a * rhs[2 * j + 1])
-    });
-    let g = (b_ref - au) / (tau_ref - aw);
-    for (i, &v) in bottom.iter().enumerate() {
-        if i != rp {
-            h[v as usize] = rhs[2 * at(i)] - g * rhs[2 * at(i) + 1];
+        solve_block(m, &triplets, &mut rhs, 2).map_err(|e| lu_failed(m, e))?;
+        // The reference's row, h(reference) = 0: g·τ + Σ a_j·(u_j − g·w_j) = b.
+        let (au, aw) = ref_row.iter().fold((0.0, 0.0), |(x, y), &(j, a)| {
+            (x + a * rhs[2 * j], y + a * rhs[2 * j + 1])
+        });
+        let g = (b_ref - au) / (tau_ref - aw);
+        for (i, &v) in bottom.iter().enumerate() {
+            if i != rp {
+                h[v as usize] = rhs[2 * at(i)] - g * rhs[2 * at(i) + 1];
+            }
         }
+        Ok(g)
     }
-    // The other components, sinks first: every branch leaving one leads to a component
-    // numbered below it, already solved.
-    for (ci, comp) in members.iter().enumerate() {
-        if ci == rc {
-            continue;
-        }
+
+    /// Component `ci` (not the reference's) under gain `g`, the bias of the components it
+    /// leads to already in `h`: its states' bias into `h`.
+    fn component(
+        &self,
+        ci: usize,
+        g: f64,
+        h: &mut [f64],
+        scratch: &mut Scratch,
+    ) -> Result<(), DecisionError> {
+        let comp = &self.members[ci];
+        let Scratch { triplets, rhs } = scratch;
         triplets.clear();
         rhs.clear();
         rhs.resize(comp.len(), 0.0);
         for (i, &v) in comp.iter().enumerate() {
-            let (scale, tau, b, c) = row(v as usize);
+            let (scale, tau, b, c) = self.row(v as usize);
             let mut diag = scale;
             let mut r = b - tau * g;
-            for (t, p) in model.branches(c) {
-                let j = local[t as usize] as usize;
-                if sccs.component[j] as usize == ci {
-                    if pos[j] == i {
+            for (t, p) in self.model.branches(c) {
+                let j = self.local[t as usize] as usize;
+                if self.sccs.component[j] as usize == ci {
+                    if self.pos[j] == i {
                         diag -= scale * p;
                     } else {
-                        triplets.push((i, pos[j], -scale * p));
+                        triplets.push((i, self.pos[j], -scale * p));
                     }
                 } else {
                     r += scale * p * h[j];
@@ -412,19 +462,26 @@ fn evaluate(
         if let [v] = comp[..] {
             h[v as usize] = rhs[0] / triplets[triplets.len() - 1].2;
         } else {
-            solve_block(comp.len(), &triplets, &mut rhs, 1).map_err(|e| fail(comp.len(), e))?;
+            solve_block(comp.len(), triplets, rhs, 1).map_err(|e| lu_failed(comp.len(), e))?;
             for (i, &v) in comp.iter().enumerate() {
                 h[v as usize] = rhs[i];
             }
         }
+        Ok(())
     }
-    h[reference] = g;
-    if h.iter().all(|v| v.is_finite()) {
-        Ok(h)
-    } else {
-        Err(fail(
-            k,
-            crate::analysis::linear::SolveError::Failed("singular matrix".into()),
-        ))
-    }
+}
+
+/// The buffers of one component's equations, kept from one component to the next (most
+/// have a state or two).
+#[derive(Default)]
+struct Scratch {
+    triplets: Vec<(usize, usize, f64)>,
+    rhs: Vec<f64>,
+}
+
+/// A component's LU failed.
+fn lu_failed(size: usize, e: crate::analysis::linear::SolveError) -> DecisionError {
+    DecisionError::Unsupported(format!(
+        "policy evaluation (LU of a component of {size} states): {e}"
+    ))
 }

@@ -140,125 +140,163 @@ pub fn solve(
     }
     match objective {
         Objective::Lra { .. } => lra::solve(model, rewards, max, opts),
-        Objective::Reach { goal, .. } => {
-            let mut eq = Equations::new(model, max);
-            // States whose optimum is 0 are fixed; what remains has one fixed point once the
-            // end components a maximiser could idle in are collapsed.
-            let zero = if max {
-                cannot_reach(model, goal)
-            } else {
-                avoidable(model, goal)
-            };
-            for s in 0..model.state_count() {
-                eq.fixed[s] = if goal[s] {
-                    Some(1.0)
-                } else if zero[s] {
-                    Some(0.0)
-                } else {
-                    None
-                };
-            }
-            if max {
-                eq.groups = Quotient::new(model, |s| eq.fixed[s].is_none(), |_| true);
-            }
-            let lo: Vec<f64> = eq.fixed.iter().map(|f| f.unwrap_or(0.0)).collect();
-            let up: Vec<f64> = eq.fixed.iter().map(|f| f.unwrap_or(1.0)).collect();
-            eq.solve_interval(model, &vec![0.0; model.choice_count()], lo, up, opts)
-        }
-        Objective::Total { goal, .. } => {
-            if rewards
-                .rate
-                .iter()
-                .chain(&rewards.impulse)
-                .any(|&r| r < 0.0)
-            {
-                return Err(DecisionError::Unsupported(
-                    "accumulated rewards must be ≥ 0".into(),
-                ));
-            }
-            let mut eq = Equations::new(model, max);
-            let infinite = if max {
-                min_below_one(model, goal)
-            } else {
-                not_max_one(model, goal)
-            };
-            for s in 0..model.state_count() {
-                eq.fixed[s] = if goal[s] {
-                    Some(0.0)
-                } else if infinite[s] {
-                    Some(f64::INFINITY)
-                } else {
-                    None
-                };
-            }
-            let r = sojourn_rewards(model, rewards, |_| 1.0);
-            if !max {
-                // A minimiser may idle for free in a zero-reward end component, which the
-                // least fixed point counts as 0 though it never reaches the goal: collapsed.
-                eq.groups = Quotient::new(model, |s| eq.fixed[s].is_none(), |c| r[c] == 0.0);
-            }
-            eq.solve(model, &r, opts, false)
-        }
-        Objective::Discounted { rate, .. } => {
-            if !(*rate > 0.0 && rate.is_finite()) {
-                return Err(DecisionError::Unsupported(format!(
-                    "the discount rate must be > 0, not {rate}"
-                )));
-            }
-            let mut eq = Equations::new(model, max);
-            let mut r = vec![0.0; model.choice_count()];
-            for s in 0..model.state_count() {
-                let e = model.exit_rate(s);
-                for c in model.choices(s) {
-                    if model.kind(s) == Kind::Instant {
-                        r[c] = rewards.impulse[c];
-                    } else {
-                        eq.scale[c] = e / (e + rate);
-                        r[c] = (rewards.rate[s] + e * rewards.impulse[c]) / (e + rate);
-                    }
-                }
-            }
-            let (lo, up) = discount_start(model, &eq, &r)?;
-            // A loop of instant steps that time never leaves (a Zeno end component) earns
-            // nothing (`discount_start` refuses one that earns): a policy may stay there
-            // for ever, worth 0, which the equations `x = x` do not say. Each maximal one
-            // becomes one state whose value is the best of its exits and staying.
-            eq.groups = Quotient::new(model, |s| model.kind(s) == Kind::Instant, |c| r[c] == 0.0);
-            eq.idle = Some(0.0);
-            eq.solve_interval(model, &r, lo, up, opts)
-        }
+        Objective::Reach { goal, .. } => reach(model, goal, max, opts),
+        Objective::Total { goal, .. } => total(model, rewards, goal, max, opts),
+        Objective::Discounted { rate, .. } => discounted(model, rewards, *rate, max, opts),
         Objective::DiscountedPerStep { gamma, .. } => {
-            if !(*gamma > 0.0 && *gamma < 1.0) {
-                return Err(DecisionError::Unsupported(format!(
-                    "the per-step discount must be in (0, 1), not {gamma}"
-                )));
-            }
-            let eta = model.eta();
-            let mut eq = Equations::new(model, max);
-            let mut r = vec![0.0; model.choice_count()];
-            for s in 0..model.state_count() {
-                let e = model.exit_rate(s);
-                match model.kind(s) {
-                    Kind::Dead => eq.fixed[s] = Some(0.0),
-                    Kind::Instant => {
-                        for c in model.choices(s) {
-                            eq.scale[c] = *gamma;
-                            r[c] = rewards.impulse[c];
-                        }
-                    }
-                    Kind::Markovian => {
-                        for c in model.choices(s) {
-                            eq.scale[c] = gamma * e / eta;
-                            eq.stay[c] = gamma * (1.0 - e / eta);
-                            r[c] = (rewards.rate[s] + e * rewards.impulse[c]) / eta;
-                        }
-                    }
-                }
-            }
-            let (lo, up) = discount_start(model, &eq, &r)?;
-            eq.solve_interval(model, &r, lo, up, opts)
+            discounted_per_step(model, rewards, *gamma, max, opts)
         }
     }
+}
+
+/// The optimal probability of reaching `goal`.
+fn reach(
+    model: &DecisionModel,
+    goal: &[bool],
+    max: bool,
+    opts: &SolveOptions,
+) -> Result<Solution, DecisionError> {
+    let mut eq = Equations::new(model, max);
+    // States whose optimum is 0 are fixed; what remains has one fixed point once the
+    // end components a maximiser could idle in are collapsed.
+    let zero = if max {
+        cannot_reach(model, goal)
+    } else {
+        avoidable(model, goal)
+    };
+    for s in 0..model.state_count() {
+        eq.fixed[s] = if goal[s] {
+            Some(1.0)
+        } else if zero[s] {
+            Some(0.0)
+        } else {
+            None
+        };
+    }
+    if max {
+        eq.groups = Quotient::new(model, |s| eq.fixed[s].is_none(), |_| true);
+    }
+    let lo: Vec<f64> = eq.fixed.iter().map(|f| f.unwrap_or(0.0)).collect();
+    let up: Vec<f64> = eq.fixed.iter().map(|f| f.unwrap_or(1.0)).collect();
+    eq.solve_interval(model, &vec![0.0; model.choice_count()], lo, up, opts)
+}
+
+/// The optimal reward accumulated until `goal` (infinite where the goal is not reached
+/// almost surely).
+fn total(
+    model: &DecisionModel,
+    rewards: &Rewards,
+    goal: &[bool],
+    max: bool,
+    opts: &SolveOptions,
+) -> Result<Solution, DecisionError> {
+    if rewards
+        .rate
+        .iter()
+        .chain(&rewards.impulse)
+        .any(|&r| r < 0.0)
+    {
+        return Err(DecisionError::Unsupported(
+            "accumulated rewards must be ≥ 0".into(),
+        ));
+    }
+    let mut eq = Equations::new(model, max);
+    let infinite = if max {
+        min_below_one(model, goal)
+    } else {
+        not_max_one(model, goal)
+    };
+    for s in 0..model.state_count() {
+        eq.fixed[s] = if goal[s] {
+            Some(0.0)
+        } else if infinite[s] {
+            Some(f64::INFINITY)
+        } else {
+            None
+        };
+    }
+    let r = sojourn_rewards(model, rewards, |_| 1.0);
+    if !max {
+        // A minimiser may idle for free in a zero-reward end component, which the
+        // least fixed point counts as 0 though it never reaches the goal: collapsed.
+        eq.groups = Quotient::new(model, |s| eq.fixed[s].is_none(), |c| r[c] == 0.0);
+    }
+    eq.solve(model, &r, opts, false)
+}
+
+/// The optimal reward discounted in time at `rate`.
+fn discounted(
+    model: &DecisionModel,
+    rewards: &Rewards,
+    rate: f64,
+    max: bool,
+    opts: &SolveOptions,
+) -> Result<Solution, DecisionError> {
+    if !(rate > 0.0 && rate.is_finite()) {
+        return Err(DecisionError::Unsupported(format!(
+            "the discount rate must be > 0, not {rate}"
+        )));
+    }
+    let mut eq = Equations::new(model, max);
+    let mut r = vec![0.0; model.choice_count()];
+    for s in 0..model.state_count() {
+        let e = model.exit_rate(s);
+        for c in model.choices(s) {
+            if model.kind(s) == Kind::Instant {
+                r[c] = rewards.impulse[c];
+            } else {
+                eq.scale[c] = e / (e + rate);
+                r[c] = (rewards.rate[s] + e * rewards.impulse[c]) / (e + rate);
+            }
+        }
+    }
+    let (lo, up) = discount_start(model, &eq, &r)?;
+    // A loop of instant steps that time never leaves (a Zeno end component) earns
+    // nothing (`discount_start` refuses one that earns): a policy may stay there
+    // for ever, worth 0, which the equations `x = x` do not say. Each maximal one
+    // becomes one state whose value is the best of its exits and staying.
+    eq.groups = Quotient::new(model, |s| model.kind(s) == Kind::Instant, |c| r[c] == 0.0);
+    eq.idle = Some(0.0);
+    eq.solve_interval(model, &r, lo, up, opts)
+}
+
+/// The optimal reward discounted by `gamma` per step (the GSPNR toolbox's objective).
+fn discounted_per_step(
+    model: &DecisionModel,
+    rewards: &Rewards,
+    gamma: f64,
+    max: bool,
+    opts: &SolveOptions,
+) -> Result<Solution, DecisionError> {
+    if !(gamma > 0.0 && gamma < 1.0) {
+        return Err(DecisionError::Unsupported(format!(
+            "the per-step discount must be in (0, 1), not {gamma}"
+        )));
+    }
+    let eta = model.eta();
+    let mut eq = Equations::new(model, max);
+    let mut r = vec![0.0; model.choice_count()];
+    for s in 0..model.state_count() {
+        let e = model.exit_rate(s);
+        match model.kind(s) {
+            Kind::Dead => eq.fixed[s] = Some(0.0),
+            Kind::Instant => {
+                for c in model.choices(s) {
+                    eq.scale[c] = gamma;
+                    r[c] = rewards.impulse[c];
+                }
+            }
+            Kind::Markovian => {
+                for c in model.choices(s) {
+                    eq.scale[c] = gamma * e / eta;
+                    eq.stay[c] = gamma * (1.0 - e / eta);
+                    r[c] = (rewards.rate[s] + e * rewards.impulse[c]) / eta;
+                }
+            }
+        }
+    }
+    let (lo, up) = discount_start(model, &eq, &r)?;
+    eq.solve_interval(model, &r, lo, up, opts)
 }
 
 /// Per choice: the reward of one step — the rate earned over the expected sojourn

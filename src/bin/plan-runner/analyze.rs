@@ -14,12 +14,17 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::Context;
+use gspn::analysis::ctmc::Limiting;
 use gspn::analysis::invariants::{Invariants, p_invariants, t_invariants};
-use gspn::analysis::measures::{Measures, Solver, SolverOptions, TransientOptions, bad_time};
+use gspn::analysis::measures::{
+    Measures, Solver, SolverOptions, TransientOptions, TransientPoint, bad_time,
+};
 use gspn::analysis::properties::Properties;
-use gspn::analysis::report::{MeasuresReport, Report, StateSpaceReport, transition_names};
+use gspn::analysis::report::{
+    MeasuresReport, QueryAnswer, Report, StateSpaceReport, transition_names,
+};
 use gspn::analysis::state_space::{AnalysisError, Monitor, Options, StateSpace};
-use gspn::analysis::under_policy::{PolicyAnalysisError, Regime, analyse};
+use gspn::analysis::under_policy::{PolicyAnalysisError, Regime, RewardRate, analyse};
 use gspn::io::prism::Explicit;
 use gspn::net::Net;
 use gspn::net::predicate::Predicate;
@@ -110,76 +115,18 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
                 .map_err(|e| BadInput(format!("--prob `{}`: {e}", gspn::io::excerpt(p, 80))))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let monitor = Arc::new(Monitor::new());
-    let opts = Options {
-        max_states: args.max_states,
-        threads: 0,
-        max_memory: args.max_memory.saturating_mul(1 << 20),
-        monitor: Some(Arc::clone(&monitor)),
-    };
     // `--transient T` asks for the distribution at T only (its --prob values included);
     // the steady state comes with --steady, or when no time is asked for.
     let want_steady = args.steady || times.is_empty();
-    let spinner = Spinner::start(!args.json && std::io::stderr().is_terminal(), &monitor);
-    let unbounded = |e: &AnalysisError| match e {
-        AnalysisError::Unbounded { places } => Some(places.clone()),
-        _ => None,
+    let Some((ss, analysed)) = explore(&args, &plan, regime, want_steady)? else {
+        return Ok(ExitCode::SUCCESS);
     };
-    // The steady state and the rewards through the library's analysis under the policy
-    // (the viewer and `conform` call the same function); the state space alone otherwise.
-    let (ss, analysed) = if want_steady {
-        match analyse(
-            net,
-            &plan.policy,
-            &plan.rewards,
-            &opts,
-            &SolverOptions::default(),
-        ) {
-            Ok(a) => (a.space, Some((a.limiting, a.measures, a.rewards))),
-            Err(PolicyAnalysisError::StateSpace(e)) => match unbounded(&e) {
-                Some(places) => {
-                    report_unbounded(&args, regime, &places);
-                    return Ok(ExitCode::SUCCESS);
-                }
-                None => return Err(e).context(format!("{}", args.file.display())),
-            },
-            Err(e) => return Err(e).context("steady state"),
-        }
-    } else {
-        match StateSpace::build_under_policy(net, &plan.policy, &opts) {
-            Ok(ss) => (ss, None),
-            Err(e) => match unbounded(&e) {
-                Some(places) => {
-                    report_unbounded(&args, regime, &places);
-                    return Ok(ExitCode::SUCCESS);
-                }
-                None => return Err(e).context(format!("{}", args.file.display())),
-            },
-        }
-    };
-    drop(spinner);
     let props = Properties::compute(net, &ss);
     let pinv = p_invariants(net, 10_000);
     let tinv = t_invariants(net, 10_000);
     let solver = Solver::new(net, &ss);
     if let Some(prefix) = &args.export_prism {
-        let markings: Vec<Vec<u32>> = (0..ss.tangible_count()).map(|s| ss.marking(s)).collect();
-        let names: Vec<&str> = net.places().iter().map(|p| p.name.as_str()).collect();
-        let initial: Vec<u32> = ss.initial().iter().map(|&(s, _)| s).collect();
-        let rewards = plan
-            .rewards
-            .iter()
-            .map(|r| {
-                (
-                    r.name.clone(),
-                    gspn::analysis::query::state_rewards(net, &ss, r),
-                )
-            })
-            .collect();
-        Explicit::new(&names, solver.chain(), &markings, &initial)
-            .with_rewards(rewards)
-            .write(prefix)
-            .with_context(|| format!("writing {}.tra/.sta/.lab", prefix.display()))?;
+        export_prism(&plan, &ss, &solver, prefix)?;
     }
     let limiting = analysed.as_ref().map(|(l, _, _)| l.clone());
     let steady = analysed.map(|(l, m, rewards)| {
@@ -223,7 +170,99 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     print_state_space(&args, regime, &plan, &props, &pinv, &tinv);
-    if let Some((ergodic, m, probs, rewards)) = &steady {
+    print_results(&args, regime, &plan, steady.as_ref(), &transient, &answers);
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The state space under the plan's policy, with its steady state and reward rates when
+/// `want_steady`; `None` when the net is unbounded (reported already: not an error).
+fn explore(
+    args: &Args,
+    plan: &Plan,
+    regime: Regime,
+    want_steady: bool,
+) -> anyhow::Result<Option<(StateSpace, Option<Steady>)>> {
+    let net = &plan.net;
+    let monitor = Arc::new(Monitor::new());
+    let opts = Options {
+        max_states: args.max_states,
+        threads: 0,
+        max_memory: args.max_memory.saturating_mul(1 << 20),
+        monitor: Some(Arc::clone(&monitor)),
+    };
+    let _spinner = Spinner::start(!args.json && std::io::stderr().is_terminal(), &monitor);
+    let unbounded = |e: AnalysisError| match e {
+        AnalysisError::Unbounded { places } => {
+            report_unbounded(args, regime, &places);
+            Ok(None)
+        }
+        e => Err(e).context(format!("{}", args.file.display())),
+    };
+    // The steady state and the rewards through the library's analysis under the policy
+    // (the viewer and `conform` call the same function); the state space alone otherwise.
+    if want_steady {
+        match analyse(
+            net,
+            &plan.policy,
+            &plan.rewards,
+            &opts,
+            &SolverOptions::default(),
+        ) {
+            Ok(a) => Ok(Some((a.space, Some((a.limiting, a.measures, a.rewards))))),
+            Err(PolicyAnalysisError::StateSpace(e)) => unbounded(e),
+            Err(e) => Err(e).context("steady state"),
+        }
+    } else {
+        match StateSpace::build_under_policy(net, &plan.policy, &opts) {
+            Ok(ss) => Ok(Some((ss, None))),
+            Err(e) => unbounded(e),
+        }
+    }
+}
+
+/// The limiting distribution, its measures and the reward rates.
+type Steady = (Limiting, Measures, Vec<RewardRate>);
+
+/// `--export-prism PREFIX`: the chain as PRISM's explicit files, with the plan's rewards.
+fn export_prism(
+    plan: &Plan,
+    ss: &StateSpace,
+    solver: &Solver,
+    prefix: &std::path::Path,
+) -> anyhow::Result<()> {
+    let net = &plan.net;
+    let markings: Vec<Vec<u32>> = (0..ss.tangible_count()).map(|s| ss.marking(s)).collect();
+    let names: Vec<&str> = net.places().iter().map(|p| p.name.as_str()).collect();
+    let initial: Vec<u32> = ss.initial().iter().map(|&(s, _)| s).collect();
+    let rewards = plan
+        .rewards
+        .iter()
+        .map(|r| {
+            (
+                r.name.clone(),
+                gspn::analysis::query::state_rewards(net, ss, r),
+            )
+        })
+        .collect();
+    Explicit::new(&names, solver.chain(), &markings, &initial)
+        .with_rewards(rewards)
+        .write(prefix)
+        .with_context(|| format!("writing {}.tra/.sta/.lab", prefix.display()))?;
+    Ok(())
+}
+
+/// The text report after the state space: steady state, rewards, transient points,
+/// queries, the files written.
+fn print_results(
+    args: &Args,
+    regime: Regime,
+    plan: &Plan,
+    steady: Option<&(bool, Measures, Vec<f64>, Vec<RewardRate>)>,
+    transient: &[TransientPoint],
+    answers: &[QueryAnswer],
+) {
+    let net = &plan.net;
+    if let Some((ergodic, m, probs, rewards)) = steady {
         println!(
             "\nsteady state ({}):",
             if *ergodic {
@@ -246,7 +285,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             }
         }
     }
-    for point in &transient {
+    for point in transient {
         println!("\nat t = {}:", point.t);
         print_measures(net, &point.measures, false);
         for (e, p) in args.prob.iter().zip(&point.probabilities) {
@@ -255,7 +294,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     }
     if !answers.is_empty() {
         println!("\nqueries ({regime}):");
-        for a in &answers {
+        for a in answers {
             println!("  {}  = {}", a.query, a.value);
         }
     }
@@ -269,7 +308,6 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             );
         }
     }
-    Ok(ExitCode::SUCCESS)
 }
 
 /// Prints a report as the CLI always has: a JSON value, so keys come out sorted.

@@ -324,9 +324,48 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         .collect();
     let compressed = compress(&table);
     check("compressing the policy")?;
-    let sol = &s.solution;
-    let (value, lower, upper) = shown(&goal, sol);
+    let policy = Synthesised {
+        s: &s,
+        shown: shown(&goal, &s.solution),
+        table: &table,
+        waits,
+        exact: &exact,
+        compressed: &compressed,
+    };
     if let Some(out) = &args.out {
+        let text = policy.file(&args, &input, out)?;
+        std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&policy.json(&args, net))?
+        );
+    } else {
+        policy.print(&args);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A solved model with its policy as rules, ready to be written and reported.
+struct Synthesised<'a> {
+    s: &'a Solved,
+    /// The value and its interval as printed ([`shown`]).
+    shown: (f64, f64, f64),
+    /// Each decision marking that fires a transition, and that transition.
+    table: &'a [(Vec<u32>, gspn::net::TransitionId)],
+    /// Decision markings that choose WAIT.
+    waits: usize,
+    exact: &'a [Rule],
+    compressed: &'a [Rule],
+}
+
+impl Synthesised<'_> {
+    /// `--out FILE`: the plan (or a plan naming the net) with the policy's rules, its paths
+    /// rebased to the file's directory, and a header saying what was solved.
+    fn file(&self, args: &Args, input: &input::Input, out: &Path) -> anyhow::Result<String> {
+        let (net, sol) = (&input.net, &self.s.solution);
+        let (value, lower, upper) = self.shown;
         let dir = out
             .parent()
             .filter(|d| !d.as_os_str().is_empty())
@@ -347,15 +386,16 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         let _ = writeln!(
             text,
             "# {} decision markings; {} exact rules, {} compressed rules{}",
-            table.len() + waits,
-            exact.len(),
-            compressed.len(),
+            self.table.len() + self.waits,
+            self.exact.len(),
+            self.compressed.len(),
             if args.compact { " (written here)" } else { "" }
         );
-        if waits > 0 {
+        if self.waits > 0 {
             let _ = writeln!(
                 text,
-                "# {waits} markings choose WAIT: no rule (run fires an immediate transition at once)"
+                "# {} markings choose WAIT: no rule (run fires an immediate transition at once)",
+                self.waits
             );
         }
         match &input.plan {
@@ -367,12 +407,21 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         }
         text.push_str(&rules_toml(
             net,
-            if args.compact { &compressed } else { &exact },
+            if args.compact {
+                self.compressed
+            } else {
+                self.exact
+            },
         ));
-        std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+        Ok(text)
     }
-    if args.json {
-        let rules: Vec<serde_json::Value> = table
+
+    /// `--json`: the value, the model's size, the timings and the exact rules.
+    fn json(&self, args: &Args, net: &Net) -> serde_json::Value {
+        let (s, sol) = (self.s, &self.s.solution);
+        let (value, lower, upper) = self.shown;
+        let rules: Vec<serde_json::Value> = self
+            .table
             .iter()
             .map(|(m, t)| {
                 let marking: serde_json::Map<String, serde_json::Value> = m
@@ -384,7 +433,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
                 json!({ "marking": marking, "choose": net.transition(*t).name })
             })
             .collect();
-        let v = json!({
+        json!({
             "objective": args.objective,
             "value": finite(value),
             "lower": finite(lower),
@@ -400,11 +449,15 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
             "build_s": s.build_s,
             "solve_s": s.solve_s,
             "rules": rules,
-            "compressed_rules": compressed.len(),
+            "compressed_rules": self.compressed.len(),
             "net_hash": gspn::runtime::journal::net_hash(net),
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
+        })
+    }
+
+    /// The text report.
+    fn print(&self, args: &Args) {
+        let (s, sol) = (self.s, &self.s.solution);
+        let (value, lower, upper) = self.shown;
         println!(
             "{} states ({} markings, {} WAIT copies, {} eliminated), {} choices",
             s.model.state_count(),
@@ -419,11 +472,10 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         );
         println!(
             "policy: {} decision markings, {} exact rules, {} compressed rules",
-            table.len() + waits,
-            exact.len(),
-            compressed.len()
+            self.table.len() + self.waits,
+            self.exact.len(),
+            self.compressed.len()
         );
         println!("build {:.3} s, solve {:.3} s", s.build_s, s.solve_s);
     }
-    Ok(ExitCode::SUCCESS)
 }
