@@ -206,6 +206,12 @@ impl LoadError {
         }
     }
 
+    /// The file is empty (or only whitespace): blamed on its first line and column, where
+    /// its content should start.
+    pub fn empty(path: impl Into<PathBuf>) -> Self {
+        LoadError::at(path, Span { line: 1, column: 1 }, LoadErrorKind::Empty)
+    }
+
     /// An error about the file as a whole.
     pub fn file(path: impl Into<PathBuf>, kind: LoadErrorKind) -> Self {
         LoadError {
@@ -408,7 +414,7 @@ pub fn read_net(path: &Path, opts: &ReadOptions) -> Result<Loaded, LoadError> {
     let bytes =
         std::fs::read(path).map_err(|e| LoadError::file(path, LoadErrorKind::Io(e.into())))?;
     if bytes.iter().all(u8::is_ascii_whitespace) {
-        return Err(LoadError::file(path, LoadErrorKind::Empty));
+        return Err(LoadError::empty(path));
     }
     let ext = path
         .extension()

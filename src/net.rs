@@ -37,6 +37,7 @@ mod id;
 mod marking;
 pub mod predicate;
 
+pub(crate) use builder::overflowing_arc;
 pub use builder::{NetBuilder, NetError};
 pub use element::{Arc, ArcKind, Place, Position, Servers, Timing, Transition};
 pub use id::{PlaceId, TransitionId};

@@ -275,7 +275,7 @@ pub(crate) fn read_plan_with(
         )
     })?;
     if text.trim().is_empty() {
-        return Err(LoadError::file(path, LoadErrorKind::Empty));
+        return Err(LoadError::empty(path));
     }
     let file = PlanFile::parse(path, &text)?;
     let net_path = file.net_path(path);
@@ -341,14 +341,12 @@ fn read_plan_net(
         }
         // A file that is no net at all (`net = "/etc/passwd"`: unknown kind, empty, a plan or
         // a DOT file, unreadable) is the plan's mistake too: its `net = …` line, naming it.
-        let not_a_net = e.span.is_none()
-            && match &e.kind {
-                LoadErrorKind::UnknownFormat(_) | LoadErrorKind::Empty | LoadErrorKind::Io(_) => {
-                    true
-                }
-                LoadErrorKind::Invalid(why) => why.ends_with("is not a net file"),
-                _ => false,
-            };
+        let not_a_net = match &e.kind {
+            LoadErrorKind::Empty => true,
+            LoadErrorKind::UnknownFormat(_) | LoadErrorKind::Io(_) => e.span.is_none(),
+            LoadErrorKind::Invalid(why) => e.span.is_none() && why.ends_with("is not a net file"),
+            _ => false,
+        };
         if not_a_net {
             return LoadError::at(
                 path,

@@ -31,7 +31,8 @@
 //! | `POST /api/edit/undo`, `POST /api/edit/redo` | back to the version before the last edit, on to the one after; as `POST /api/edit`; 409 when there is nothing to undo or redo |
 //! | `POST /api/edit/export {format: "pnpro"\|"pipe", places, transitions}` | `{text, file}`: the current net (with the page's positions) as a GreatSPN project or a PIPE net, to download |
 //! | `POST /api/edit/save {places, transitions}` | writes the current net to the file of `serve --save-to PATH` ([`WebState::saving_to`]) in its format; `{saved, format, bytes}`; 409 without one |
-//! | `GET /api/replay` | `{"frames": [{time, transition, tokens}], "robots": [{robot, stays: [{t0, t1, place, agent}]}]}` of a journal, and `world: {map, radius, robots, frames: [{time, robots: [{id, agent, x, y}]}]}` when it recorded a simulated world |
+//! | `GET /api/replay` | a journal's outline: `{"firings", "end", "window": frames per window, "starts": [each window's first time], "robots": [{robot, stays: [{t0, t1, place, agent}]}]}`, `world: {map, radius, robots}` when it recorded a simulated world, `conform: [{time, rows}]` |
+//! | `GET /api/replay/window?k=K` | window K of the run: `{"k", "first", "frames": [{time, transition, tokens}], "poses": [{time, robots: [{id, agent, x, y}]}]}`, read from the journal when asked |
 //! | `GET /api/live/state` | the live run's snapshot: `tokens, marking, time, firings, stopped, agents {place: {state: n}}, log`, and `world` with a world feed |
 //! | `GET /api/live/world` | the latest value of the run's simulated world ([`LiveRun::with_world`]: map and robots, metres, y up); 404 without a feed |
 //! | `POST /api/live/stop` | asks the live run to stop |
@@ -335,12 +336,29 @@ impl WebState {
         state
     }
 
+    /// A viewer of the journal at `path`, its header read by `journal`: the time slider over
+    /// its firings on the net as it ran (and its world's map), read from the file a window
+    /// at a time as the page asks — the memory held is the index of the windows and what the
+    /// panels show for the whole run (the robots' stays, the conformance table's snapshots),
+    /// not the file. With the last line if it was cut short (a warning: the run was killed
+    /// while writing it).
+    pub fn for_journal(
+        path: &std::path::Path,
+        journal: crate::runtime::journal::JournalReader<std::io::BufReader<std::fs::File>>,
+    ) -> Result<
+        (WebState, Option<crate::runtime::journal::JournalError>),
+        crate::runtime::journal::JournalError,
+    > {
+        let net = journal.net().clone();
+        let (replay, torn) = replay::Replay::of_journal(path, journal)?;
+        let state = WebState::new(net, None, 0);
+        let _ = state.inner.replay.set(Arc::new(replay));
+        Ok((state, torn))
+    }
+
     /// The firings of the recorded run (0 unless this is a replay).
     pub fn replay_firings(&self) -> usize {
-        self.inner
-            .replay
-            .get()
-            .map_or(0, |r| r.frames.len().saturating_sub(1))
+        self.inner.replay.get().map_or(0, |r| r.firings())
     }
 
     /// The net came from `path`: when that is a GreatSPN project whose page is this net, the
@@ -470,7 +488,8 @@ fn routes(state: WebState, bound: guard::Bound) -> Router {
         .route("/api/edit/redo", post(edit::routes::redo))
         .route("/api/edit/export", post(edit::routes::export))
         .route("/api/edit/save", post(edit::routes::save))
-        .route("/api/replay", get(replay::frames))
+        .route("/api/replay", get(replay::outline_route))
+        .route("/api/replay/window", get(replay::window))
         .route("/api/live/state", get(live::state))
         .route("/api/live/world", get(live::world))
         .route("/api/live/stop", post(live::stop))

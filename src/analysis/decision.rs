@@ -227,6 +227,15 @@ pub struct RewardSpec {
 }
 
 impl RewardSpec {
+    /// The impulse each transition of `net` earns when it fires (repeated entries add up).
+    pub fn impulses(&self, net: &Net) -> Vec<f64> {
+        let mut v = vec![0.0; net.transition_count()];
+        for &(t, r) in &self.transitions {
+            v[t.index()] += r;
+        }
+        v
+    }
+
     /// The rate its places earn per unit of time in marking `m` (where time passes).
     pub fn place_rate(&self, m: &[u32]) -> f64 {
         self.places

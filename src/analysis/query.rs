@@ -52,6 +52,7 @@ use thiserror::Error;
 
 pub use eval::{Evaluator, state_rewards};
 
+use crate::analysis::ctmc::SolveError;
 use crate::analysis::decision::DecisionError;
 use crate::net::predicate::Predicate;
 
@@ -155,9 +156,9 @@ pub enum QueryError {
     /// A well-formed query this engine does not answer, and why.
     #[error("{0}")]
     Unsupported(String),
-    /// A linear system of the answer could not be solved.
-    #[error("{0}")]
-    Solve(String),
+    /// A linear system of the answer could not be solved, or the solver was stopped.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
     /// The decision model of a `max`/`min` query failed.
     #[error(transparent)]
     Decision(#[from] DecisionError),

@@ -55,7 +55,7 @@ use crate::net::Net;
 /// Reads the page `opts.page` (default: the first) of the project in `bytes`.
 pub fn read(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Loaded, LoadError> {
     if bytes.iter().all(u8::is_ascii_whitespace) {
-        return Err(LoadError::file(path, LoadErrorKind::Empty));
+        return Err(LoadError::empty(path));
     }
     let text = utf8(path, bytes)?;
     let scanned = scan::scan(path, text, opts)?;

@@ -387,6 +387,31 @@ fn arc_lists(
     Ok(ArcLists { pre, post, inhib })
 }
 
+/// The index of the first of `arcs` (kind, place, transition, weight) whose weight takes the
+/// sum of its parallel arcs past the largest token count: the arc [`arc_lists`]'s
+/// [`NetError::WeightOverflow`] is about (which names only its ends), for the readers to
+/// point at it in the file.
+pub(crate) fn overflowing_arc(
+    arcs: impl IntoIterator<Item = (ArcKind, PlaceId, TransitionId, u32)>,
+) -> Option<usize> {
+    let mut sums: rustc_hash::FxHashMap<(ArcKind, PlaceId, TransitionId), u32> = Default::default();
+    arcs.into_iter()
+        .enumerate()
+        .find_map(|(i, (kind, p, t, w))| {
+            if kind == ArcKind::Inhibitor {
+                return None;
+            }
+            let sum = sums.entry((kind, p, t)).or_insert(0);
+            match sum.checked_add(w) {
+                Some(s) => {
+                    *sum = s;
+                    None
+                }
+                None => Some(i),
+            }
+        })
+}
+
 /// Per transition, the change of each place it touches (outputs minus inputs; zeros
 /// dropped), sorted by place.
 fn deltas(pre: &[Vec<(PlaceId, u32)>], post: &[Vec<(PlaceId, u32)>]) -> Vec<Vec<(PlaceId, i64)>> {

@@ -146,7 +146,7 @@ pub fn read_input(path: &Path) -> Result<ThesisInput, LoadError> {
 pub fn parse_input(path: &Path, bytes: &[u8]) -> Result<ThesisInput, LoadError> {
     let bytes = bytes.to_vec();
     if bytes.iter().all(u8::is_ascii_whitespace) {
-        return Err(LoadError::file(path, LoadErrorKind::Empty));
+        return Err(LoadError::empty(path));
     }
     let text = String::from_utf8(bytes).map_err(|e| {
         let at = Span::locate(e.as_bytes(), e.utf8_error().valid_up_to());

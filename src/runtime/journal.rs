@@ -3,8 +3,9 @@
 //!
 //! The supervisor hands every event, serialised, to a writer thread as it happens, so the
 //! journal never misses an event and never blocks the run on the disk. The writer thread
-//! holds at most [`FLUSH_EVENTS`] events or [`FLUSH_AFTER`] of them before it writes them to
-//! the file, and flushes (and syncs) when the run stops, whatever stopped it. After a
+//! holds at most [`FLUSH_EVENTS`] events or 25 ms of them before it writes them to the file
+//! (so each is there within the [`FLUSH_AFTER`] bound, the thread's wake-up on a loaded
+//! machine included), and flushes (and syncs) when the run stops, whatever stopped it. After a
 //! `SIGKILL` the file holds every event up to the last write, with at most one line cut
 //! short at the end, which `replay` skips with a warning (see docs/reliability.md).
 //!
@@ -22,8 +23,9 @@ use serde::{Deserialize, Serialize};
 mod lines;
 mod writer;
 
+pub(crate) use lines::entry;
 pub use lines::{Entry, JournalReader};
-pub use writer::{FLUSH_AFTER, FLUSH_EVENTS, JournalTap};
+pub use writer::{FLUSH_AFTER, FLUSH_EVENTS, HANDOVERS_ENV, JournalTap};
 pub(crate) use writer::{Journal, RunFacts};
 
 use super::event::Event;

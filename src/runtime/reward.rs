@@ -52,16 +52,7 @@ pub(crate) struct Meter {
 
 impl Meter {
     pub(crate) fn new(net: &Net, specs: Vec<RewardSpec>, m: &[u32]) -> Meter {
-        let impulse = specs
-            .iter()
-            .map(|s| {
-                let mut v = vec![0.0; net.transition_count()];
-                for &(t, r) in &s.transitions {
-                    v[t.index()] += r;
-                }
-                v
-            })
-            .collect();
+        let impulse = specs.iter().map(|s| s.impulses(net)).collect();
         let rate = specs.iter().map(|s| s.place_rate(m)).collect();
         let n = specs.len();
         Meter {

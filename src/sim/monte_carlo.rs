@@ -292,16 +292,7 @@ struct Meter<'n> {
 
 impl<'n> Meter<'n> {
     fn new(net: &Net, specs: &'n [RewardSpec]) -> Self {
-        let impulse = specs
-            .iter()
-            .map(|s| {
-                let mut v = vec![0.0; net.transition_count()];
-                for &(t, r) in &s.transitions {
-                    v[t.index()] += r;
-                }
-                v
-            })
-            .collect();
+        let impulse = specs.iter().map(|s| s.impulses(net)).collect();
         Meter { specs, impulse }
     }
 

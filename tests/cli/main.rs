@@ -14,6 +14,7 @@ mod full_disk_stops_the_run;
 mod journal_survives_signals;
 mod program_actions;
 mod readme;
+mod refusals_name_their_place;
 mod replay_finds_its_net;
 mod replay_robots;
 mod replay_streams_the_journal;

@@ -146,7 +146,8 @@ fn truncated_xml_is_refused_at_the_end_of_the_file() {
 fn empty_file_is_refused() {
     let e = refused(&bad("empty.xml"), &["empty"]);
     assert_eq!(e.kind, LoadErrorKind::Empty);
-    assert_eq!(e.span, None);
+    // At its first character, where the content should start (issue 32).
+    assert_eq!(e.span.map(|s| (s.line, s.column)), Some((1, 1)));
 }
 
 #[test]

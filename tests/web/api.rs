@@ -374,6 +374,7 @@ async fn the_page_is_served_from_the_binary_and_loads_nothing_from_elsewhere() {
         "/api/live/ws",
         "/api/live/stop",
         "/api/replay",
+        "/api/replay/window",
     ] {
         assert!(js.contains(api), "the page never calls {api}");
     }

@@ -140,8 +140,11 @@ async fn a_journal_plays_back_as_the_markings_of_the_run() {
     let server = tokio::spawn(serve(listener, WebState::for_replay(cyc3(), frames)));
     assert_eq!(http_get(addr, "/api/mode").await["replay"], true);
     let v = http_get(addr, "/api/replay").await;
-    assert_eq!(v["frames"].as_array().unwrap().len(), 13);
-    assert_eq!(v["frames"][0]["transition"], Value::Null);
+    assert_eq!(v["firings"], 12);
+    assert_eq!(v["starts"], json!([0.0]));
+    let w = http_get(addr, "/api/replay/window?k=0").await;
+    assert_eq!(w["frames"].as_array().unwrap().len(), 13);
+    assert_eq!(w["frames"][0]["transition"], Value::Null);
     server.abort();
 }
 

@@ -18,6 +18,7 @@ mod navigate;
 mod questions;
 mod readable;
 mod replay_robots;
+mod replay_windows;
 mod replay_world;
 mod security;
 mod share;

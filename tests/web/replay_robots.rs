@@ -60,6 +60,13 @@ async fn slide_to(b: &Browser, t: f64) {
         vec![json!(t)],
     )
     .await;
+    // The run comes a window of 256 firings at a time: the one at t may still be on its way.
+    b.wait_js(
+        "return window.gspnReplay.settled();",
+        crate::browser::WAIT,
+        "the replay's window at the slider's time",
+    )
+    .await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -22,7 +22,7 @@ fn bin() -> Command {
 }
 
 /// The `plan-runner replay --web` child, killed when the test ends (it serves until Ctrl-C).
-struct Serving(Child);
+pub(crate) struct Serving(pub(crate) Child);
 
 impl Drop for Serving {
     fn drop(&mut self) {
@@ -33,7 +33,7 @@ impl Drop for Serving {
 
 /// `plan-runner replay JOURNAL --net PLAN --web 127.0.0.1:0`: the child and the viewer's
 /// address (from its "replay of … at" line).
-fn replay_with_viewer(journal: &Path, plan: &Path) -> (Serving, SocketAddr) {
+pub(crate) fn replay_with_viewer(journal: &Path, plan: &Path) -> (Serving, SocketAddr) {
     let mut child = bin()
         .args(["replay", journal.to_str().unwrap(), "--net"])
         .arg(plan)

@@ -20,6 +20,12 @@ pub(crate) enum LuError {
     Singular,
 }
 
+impl From<LuError> for super::SolveError {
+    fn from(e: LuError) -> Self {
+        super::SolveError::Factorization(e.to_string())
+    }
+}
+
 /// Solves `A X = B` in place of `b` (row-major, `w` columns) for the `k × k` matrix given by
 /// `(row, column, value)` triplets (repeated entries add up). Non-finite numbers in the
 /// answer are [`LuError::Singular`].

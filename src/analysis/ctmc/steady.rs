@@ -164,8 +164,7 @@ impl Ctmc {
                 triplets.push((i, i, -out));
             }
         }
-        let x = lu::solve(last, &triplets, &rhs)
-            .map_err(|e| SolveError::Factorization(e.to_string()))?;
+        let x = lu::solve(last, &triplets, &rhs)?;
         let mut pi: Vec<f64> = x.into_iter().chain(std::iter::once(1.0)).collect();
         for v in pi.iter_mut() {
             if *v < 0.0 {

@@ -7,12 +7,10 @@
 //! solved per strongly connected component by a sparse LU (faer) with one right-hand side
 //! per way out.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
 use rustc_hash::FxHashMap;
 
 use super::QueryError;
-use crate::analysis::ctmc::Ctmc;
+use crate::analysis::ctmc::{Ctmc, SolveError, lu};
 use crate::analysis::scc::tarjan;
 use crate::analysis::state_space::StateSpace;
 
@@ -182,10 +180,10 @@ fn solve_loop(
         local.insert(v, i);
     }
     let mut exits: FxHashMap<u32, usize> = FxHashMap::default();
-    let mut a = Vec::new();
+    let mut a: Vec<(usize, usize, f64)> = Vec::new();
     let mut b: Vec<(usize, usize, f64)> = Vec::new();
     for (i, &v) in members.iter().enumerate() {
-        a.push(Triplet::new(i, i, 1.0));
+        a.push((i, i, 1.0));
         for mv in space.arcs(n + v as usize) {
             if mv.prob <= 0.0 {
                 continue;
@@ -200,7 +198,7 @@ fn solve_loop(
                 None => {
                     let w = mv.to - n as u32;
                     if component[w as usize] == c {
-                        a.push(Triplet::new(i, local[&w], -mv.prob));
+                        a.push((i, local[&w], -mv.prob));
                     } else {
                         for &(s, q) in &dist[w as usize] {
                             out(s, mv.prob * q);
@@ -218,30 +216,23 @@ fn solve_loop(
             k * e
         )));
     }
-    let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(k, k, &a)
-        .map_err(|err| QueryError::Solve(format!("{err:?}")))?;
-    let lu = matrix
-        .sp_lu()
-        .map_err(|err| QueryError::Solve(format!("vanishing loop: {err:?}")))?;
-    let mut rhs = faer::Mat::<f64>::zeros(k, e);
+    // X (k × e, row-major): the probability of leaving the loop from each member by
+    // each way out. A singular loop (non-finite X) is refused by the LU itself.
+    let mut x = vec![0.0f64; k * e];
     for (i, col, p) in b {
-        rhs[(i, col)] += p;
+        x[i * e + col] += p;
     }
-    let x = lu.solve(&rhs);
+    lu::solve_columns(k, &a, &mut x, e)
+        .map_err(|err| SolveError::Factorization(format!("a loop of vanishing markings: {err}")))?;
     let mut by_col: Vec<u32> = vec![0; e];
     for (&s, &col) in &exits {
         by_col[col] = s;
     }
     for (i, &v) in members.iter().enumerate() {
         let mut row: Vec<(u32, f64)> = (0..e)
-            .map(|col| (by_col[col], x[(i, col)]))
+            .map(|col| (by_col[col], x[i * e + col]))
             .filter(|&(_, p)| p > 1e-300)
             .collect();
-        if row.iter().any(|&(_, p)| !p.is_finite()) {
-            return Err(QueryError::Solve(
-                "a loop of vanishing markings could not be solved (singular)".into(),
-            ));
-        }
         row.sort_unstable_by_key(|e| e.0);
         dist[v as usize] = row;
     }

@@ -167,8 +167,7 @@ impl<'a> Evaluator<'a> {
         let goal = abs.goal() as usize;
         let at = abs
             .chain
-            .transient(&abs.initial, times, &TransientOptions::default())
-            .map_err(|e| QueryError::Solve(e.to_string()))?;
+            .transient(&abs.initial, times, &TransientOptions::default())?;
         Ok(at.iter().map(|pi| pi[goal].min(1.0)).collect())
     }
 
@@ -177,7 +176,7 @@ impl<'a> Evaluator<'a> {
             .get_or_init(|| {
                 Solver::new(self.net, self.space)
                     .steady_state(&SolverOptions::default())
-                    .map_err(|e| QueryError::Solve(e.to_string()))
+                    .map_err(QueryError::from)
             })
             .as_ref()
             .map_err(Clone::clone)
@@ -190,10 +189,7 @@ impl<'a> Evaluator<'a> {
 /// query and PRISM's `.srew` ([`Explicit::with_rewards`](crate::io::prism::Explicit::with_rewards)).
 pub fn state_rewards(net: &Net, space: &StateSpace, spec: &RewardSpec) -> Vec<f64> {
     let n = space.tangible_count();
-    let mut impulse = vec![0.0; net.transition_count()];
-    for &(t, r) in &spec.transitions {
-        impulse[t.index()] += r;
-    }
+    let impulse = spec.impulses(net);
     let mut m = vec![0u32; net.place_count()];
     let mut rho: Vec<f64> = (0..n)
         .map(|s| {
@@ -267,7 +263,7 @@ fn solve_on(chain: &Ctmc, keep: &[bool], b: &[f64]) -> Result<Vec<f64>, QueryErr
         return Ok(x);
     }
     let sol = crate::analysis::ctmc::lu::solve(states.len(), &triplets, &rhs)
-        .map_err(|e| QueryError::Solve(e.to_string()))?;
+        .map_err(crate::analysis::ctmc::SolveError::from)?;
     for (k, &s) in states.iter().enumerate() {
         x[s] = sol[k];
     }

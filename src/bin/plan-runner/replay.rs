@@ -21,7 +21,7 @@ use anyhow::Context as _;
 use gspn::net::Net;
 use gspn::plan::open;
 use gspn::runtime::EventKind;
-use gspn::runtime::journal::{Entry, JournalError, JournalHeader, JournalReader, Recording};
+use gspn::runtime::journal::{Entry, JournalError, JournalHeader, JournalReader};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -61,13 +61,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         .net;
     let journal = read_journal(&args.journal, &net, Some(&named))?;
     match args.web {
-        Some(addr) => {
-            let (recording, torn) = journal
-                .into_recording()
-                .map_err(|e| BadInput(format!("{}: {e}", args.journal.display())))?;
-            warn_torn(&args.journal, torn.as_ref());
-            viewer(addr, &args.journal, recording)
-        }
+        Some(addr) => viewer(addr, &args.journal, journal),
         None => print_firings(&args.journal, journal),
     }
 }
@@ -189,17 +183,22 @@ fn print_firings(
 
 /// Without the viewer compiled in, `--web` is refused (exit code 2).
 #[cfg(not(feature = "web"))]
-fn viewer(_: SocketAddr, _: &std::path::Path, _: Recording) -> anyhow::Result<ExitCode> {
+fn viewer(_: SocketAddr, _: &Path, _: JournalReader<BufReader<File>>) -> anyhow::Result<ExitCode> {
     Err(BadInput("--web needs plan-runner built with the `web` feature".into()).into())
 }
 
+/// Serves the journal at `path` (its header read by `journal`): the viewer reads it once
+/// for the index of its windows, then a window at a time as the page asks.
 #[cfg(feature = "web")]
 fn viewer(
     addr: SocketAddr,
-    journal: &std::path::Path,
-    recording: Recording,
+    path: &Path,
+    journal: JournalReader<BufReader<File>>,
 ) -> anyhow::Result<ExitCode> {
     use gspn::web::{WebState, serve};
+    let (state, torn) = WebState::for_journal(path, journal)
+        .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
+    warn_torn(path, torn.as_ref());
     let mut signals = crate::common::StopSignals::new()?;
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -209,10 +208,9 @@ fn viewer(
         let listener = tokio::net::TcpListener::bind(addr)
             .await
             .with_context(|| format!("cannot listen on {addr}"))?;
-        let state = WebState::for_recording(recording);
         println!(
             "replay of {} ({} firings) at http://{}/",
-            journal.display(),
+            path.display(),
             state.replay_firings(),
             listener.local_addr()?
         );

@@ -11,6 +11,7 @@ use crate::io::expr::{EvalError, Expr, ExprError};
 use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span};
 use crate::net::{
     ArcKind, NetBuilder, Place, PlaceId, Position, Servers, Timing, Transition, TransitionId,
+    overflowing_arc,
 };
 
 /// How many constants may stand in a chain, each defined by the next (`A = B + 1`,
@@ -281,13 +282,18 @@ pub(super) fn build(
     };
     let (transitions, transition_at) = transitions(&env, &mut b, &scanned.records)?;
     let ids = Ids { transitions, ..ids };
+    let mut arcs = Vec::new();
     for r in scanned.records.iter().filter(|r| r.kind == Kind::Arc) {
         let (kind, p, t, weight, points) = arc(&env, r, &ids)?;
         b.arc(kind, p, t, weight, points);
+        arcs.push((kind, p, t, weight, r.at));
     }
+    // Parallel arcs adding past the maximum: the arc that did it; otherwise the page.
+    let blamed = overflowing_arc(arcs.iter().map(|a| (a.0, a.1, a.2, a.3)))
+        .map_or(scanned.page_at, |i| arcs[i].4);
     let net = b
         .build()
-        .map_err(|e| LoadError::at(path, env.span(scanned.page_at), LoadErrorKind::Net(e)))?;
+        .map_err(|e| LoadError::at(path, env.span(blamed), LoadErrorKind::Net(e)))?;
     let mut warnings = Vec::new();
     if scanned.pages.len() > 1 {
         warnings.push(format!(

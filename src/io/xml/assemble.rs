@@ -10,7 +10,8 @@ use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::io::{Format, LoadError, LoadErrorKind, Loaded, ReadOptions, Span};
 use crate::net::{
-    ArcKind, NetBuilder, Place, PlaceId, Position, Servers, Timing, Transition, TransitionId,
+    ArcKind, NetBuilder, NetError, Place, PlaceId, Position, Servers, Timing, Transition,
+    TransitionId, overflowing_arc,
 };
 
 use super::nodes::{ArcRecord, NodeRecord, Record, RecordKind, Value, collect};
@@ -99,12 +100,18 @@ pub(crate) fn read(
     for a in deferred {
         arcs.push(resolve_arc(&x, &ids, &a, true)?.expect("final resolution errs or resolves"));
     }
-    for (kind, p, t, w, points) in arcs {
+    let overflow = overflowing_arc(
+        arcs.iter()
+            .map(|a| (a.0, PlaceId(a.1), TransitionId(a.2), a.3)),
+    )
+    .map(|i| arcs[i].5);
+    for (kind, p, t, w, points, _) in arcs {
         b.arc(kind, PlaceId(p), TransitionId(t), w, points);
     }
-    let net = b
-        .build()
-        .map_err(|e| LoadError::file(path, LoadErrorKind::Net(e)))?;
+    let net = b.build().map_err(|e| match (&e, overflow) {
+        (NetError::WeightOverflow { .. }, Some(at)) => x.error(at, LoadErrorKind::Net(e)),
+        _ => LoadError::file(path, LoadErrorKind::Net(e)),
+    })?;
     let format = match dialect {
         Dialect::Pipe => Format::Pipe,
         Dialect::Pnml => Format::Pnml,
@@ -372,7 +379,9 @@ fn transition(x: &XmlStream<'_>, n: &NodeRecord, name: &str) -> Result<Transitio
 }
 
 /// An arc ready for the builder: kind, place, transition, weight, bend points.
-type Resolved = (ArcKind, u32, u32, u32, Vec<Position>);
+/// An arc with its ends resolved: kind, place, transition, weight, points, and the offset
+/// of its element.
+type Resolved = (ArcKind, u32, u32, u32, Vec<Position>, usize);
 
 /// Resolves an arc's ends and checks its weight and type. `Ok(None)` when an end is not
 /// known yet and `last` is false; when `last`, an unknown end is an error.
@@ -475,7 +484,7 @@ fn resolve_arc(
             ));
         }
     };
-    Ok(Some((kind, p, t, weight, points)))
+    Ok(Some((kind, p, t, weight, points, a.at)))
 }
 
 /// The value of `what` (`"rate"`, `"arc weight"`…) of the node `name`, for errors naming both.

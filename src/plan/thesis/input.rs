@@ -110,8 +110,11 @@ impl Reader<'_> {
             (has_policy, "`policy_dictionary`"),
         ] {
             if !has {
-                return Err(LoadError::file(
-                    self.path,
+                // Blamed on the object's closing `}`, where the key is missing from (the
+                // object parsed, so it is the last character but whitespace).
+                let close = self.text.trim_end().len().saturating_sub(1);
+                return Err(self.err(
+                    close,
                     LoadErrorKind::Missing {
                         what: what.into(),
                         name: None,

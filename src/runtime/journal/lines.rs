@@ -90,6 +90,9 @@ pub struct JournalReader<R> {
     robots: Vec<String>,
     /// 1-based number of the last line read.
     line: usize,
+    /// Bytes read so far, and where the last line read starts ([`JournalReader::line_start`]).
+    offset: u64,
+    line_start: u64,
     buf: String,
     torn: Option<JournalError>,
     done: bool,
@@ -100,12 +103,14 @@ impl<R: BufRead> JournalReader<R> {
     pub fn new(mut input: R, net: &Net) -> Result<JournalReader<R>, JournalError> {
         let mut buf = String::new();
         let mut line = 0;
+        let mut offset = 0;
         loop {
             buf.clear();
             line += 1;
             let n = input
                 .read_line(&mut buf)
                 .map_err(|e| read_error(line, &e))?;
+            offset += n as u64;
             if n == 0 {
                 return Err(JournalError::BadLine {
                     line: 1,
@@ -129,10 +134,28 @@ impl<R: BufRead> JournalReader<R> {
             robots: header.robots.iter().map(|r| r.to_string()).collect(),
             input,
             line,
+            offset,
+            line_start: offset,
             buf: String::new(),
             torn: None,
             done: false,
         })
+    }
+
+    /// The byte offset of the start of the last line read (after the iterator returned an
+    /// entry: that entry's line; before: the first line after the header).
+    pub(crate) fn line_start(&self) -> u64 {
+        self.line_start
+    }
+
+    /// The bytes read so far: where the last line read ends.
+    pub(crate) fn offset(&self) -> u64 {
+        self.offset
+    }
+
+    /// The 1-based number of the last line read.
+    pub(crate) fn line(&self) -> usize {
+        self.line
     }
 
     /// The net as it ran: the net given, or it with the journal's initial marking.
@@ -210,6 +233,8 @@ impl<R: BufRead> Iterator for JournalReader<R> {
                 self.done = true;
                 break;
             }
+            self.line_start = self.offset;
+            self.offset += n as u64;
             let whole = self.buf.ends_with('\n');
             let text = self.buf.trim_end();
             if text.trim().is_empty() {

@@ -19,8 +19,16 @@ use crate::net::Net;
 /// Most events the writer holds before it writes them to the file.
 pub const FLUSH_EVENTS: usize = 100;
 
-/// Longest time an event waits in the writer before it is written to the file.
+/// The journal's durability bound: an event handed to the writer is in the file (written:
+/// in the kernel's hands, so it survives a `SIGKILL` of the process) at most this long after,
+/// on a loaded machine too. The writer's own timer is 25 ms; the rest is the margin
+/// for the writer thread to get a CPU to wake on (issue 32: with a 100 ms timer, 3 of 20
+/// kills at load 8–9 lost events 100.0–104.0 ms old; docs/reliability.md).
 pub const FLUSH_AFTER: Duration = Duration::from_millis(100);
+
+/// Longest time an event waits in the writer before the writer writes it to the file (a
+/// quarter of [`FLUSH_AFTER`]: at most 40 writes a second while events trickle in).
+const WRITE_AFTER: Duration = Duration::from_millis(25);
 
 /// What the supervisor (and the taps) send the writer thread.
 enum Msg {
@@ -56,7 +64,7 @@ impl JournalTap {
 }
 
 /// A JSON Lines writer for one run's events: a thread that writes through a buffer it
-/// flushes every [`FLUSH_EVENTS`] events or [`FLUSH_AFTER`], whichever comes first.
+/// flushes every [`FLUSH_EVENTS`] events or [`WRITE_AFTER`], whichever comes first.
 #[derive(Debug)]
 pub(crate) struct Journal {
     tx: Option<mpsc::Sender<Msg>>,
@@ -66,6 +74,38 @@ pub(crate) struct Journal {
     /// the run on it ([`Journal::broken`]).
     broken: Arc<OnceLock<String>>,
     names: Names,
+    handovers: Option<Handovers>,
+}
+
+/// The environment variable naming a file to which every event's handover to the writer is
+/// appended as `SEQ UNIX_NANOS` (unbuffered: a line per event, in the kernel's hands before
+/// the event is sent, so a `SIGKILL` loses none of them). A measurement hook, not a
+/// feature: `benches/journal_kill.py` compares it with the journal after killing the run,
+/// which gives the age of every event the kill lost (docs/reliability.md).
+pub const HANDOVERS_ENV: &str = "GSPN_JOURNAL_HANDOVERS";
+
+/// The handover log ([`HANDOVERS_ENV`]).
+#[derive(Debug)]
+struct Handovers(File);
+
+impl Handovers {
+    fn from_env() -> Option<Handovers> {
+        let path = std::env::var_os(HANDOVERS_ENV)?;
+        File::options()
+            .create(true)
+            .append(true)
+            .open(path)
+            .ok()
+            .map(Handovers)
+    }
+
+    fn log(&mut self, seq: u64) {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos());
+        // One write per line (formatting straight into the file would write it in pieces).
+        let _ = self.0.write_all(format!("{seq} {nanos}\n").as_bytes());
+    }
 }
 
 /// Place and transition names as JSON strings, added to each event line beside the ids
@@ -178,6 +218,7 @@ impl Journal {
             failed: None,
             broken,
             names,
+            handovers: Handovers::from_env(),
         })
     }
 
@@ -203,6 +244,9 @@ impl Journal {
         } else {
             Msg::Line(line)
         };
+        if let Some(h) = &mut self.handovers {
+            h.log(e.seq);
+        }
         if tx.send(msg).is_err() {
             // The writer ended early: it failed, and says why when joined.
             self.tx = None;
@@ -345,7 +389,7 @@ fn io_message(e: &std::io::Error) -> String {
 }
 
 /// The writer thread: lines in, written to the file at most [`FLUSH_EVENTS`] lines or
-/// [`FLUSH_AFTER`] after they arrived; a final flush and sync at [`Msg::End`] or when every
+/// [`WRITE_AFTER`] after they arrived; a final flush and sync at [`Msg::End`] or when every
 /// sender went away.
 fn write_through(mut out: LineWriter, rx: mpsc::Receiver<Msg>) -> Option<String> {
     let mut pending = 0usize;
@@ -359,7 +403,7 @@ fn write_through(mut out: LineWriter, rx: mpsc::Receiver<Msg>) -> Option<String>
             Ok(Msg::Line(line)) => {
                 out.push(&line);
                 pending += 1;
-                deadline.get_or_insert_with(|| Instant::now() + FLUSH_AFTER);
+                deadline.get_or_insert_with(|| Instant::now() + WRITE_AFTER);
                 if pending >= FLUSH_EVENTS {
                     out.flush();
                     pending = 0;

@@ -109,17 +109,18 @@ const REPLAY_SPEEDS = [0.1, 1, 10, 100, 1000];
 // robots' stays (from the journal's events) put their ids on the places that hold them and
 // fill the robot timeline; a journal with a simulated world shows its map, the robots moving
 // between their recorded poses.
+//
+// The run comes a window of firings at a time (`/api/replay/window?k=`), fetched when the
+// slider, a step or the playback reaches it (the next one ahead while playing), a few kept:
+// the page and the server hold the window shown, not the run (issue 32). The trace lists the
+// window's firings.
 async function startReplay() {
   for (const id of ['step', 'step-n', 'reset', 'n', 'seed']) {
     const e = $(id);
     (e.closest('label') || e).classList.add('hidden');
   }
   $('speed').closest('label').classList.add('hidden');
-  const { frames, world, conform, robots } = await api('GET', '/api/replay');
-  const times = frames.map((f) => f.time);
-  const poses = world ? world.frames : [];
-  const poseTimes = poses.map((w) => w.time);
-  const end = Math.max(times[times.length - 1] || 0, poseTimes[poseTimes.length - 1] || 0);
+  const { firings, end, window: size, starts, world, conform, robots } = await api('GET', '/api/replay');
   // The last entry of the sorted `ts` at or before t (0 if none).
   const lastAtOrBefore = (ts, t0) => {
     const t = t0 + 1e-12 * Math.max(1, end);
@@ -132,10 +133,53 @@ async function startReplay() {
     }
     return lo;
   };
+  // Windows fetched (k -> {first, frames, times, poses, poseTimes}), most recently used last.
+  const KEPT = 4;
+  const windows = new Map();
+  const pending = new Map();
+  const fetchWindow = (k) => {
+    if (windows.has(k)) return Promise.resolve(windows.get(k));
+    if (!pending.has(k)) {
+      pending.set(k, api('GET', '/api/replay/window?k=' + k).then((w) => {
+        pending.delete(k);
+        w.times = w.frames.map((f) => f.time);
+        w.poseTimes = w.poses.map((p) => p.time);
+        windows.set(k, w);
+        while (windows.size > KEPT) windows.delete(windows.keys().next().value);
+        return w;
+      }, (e) => {
+        pending.delete(k);
+        throw e;
+      }));
+    }
+    return pending.get(k);
+  };
+  // Runs `then` with window k: at once when it is here, else once fetched unless a later
+  // request came meanwhile (the latest wins).
+  let wanted = 0;
+  let done = 0;
+  const withWindow = (k, then) => {
+    const ticket = ++wanted;
+    const w = windows.get(k);
+    if (w) {
+      windows.delete(k);
+      windows.set(k, w);
+      done = ticket;
+      then(w);
+      return;
+    }
+    fetchWindow(k).then((got) => {
+      if (ticket !== wanted) return;
+      done = ticket;
+      then(got);
+    }, () => {});
+  };
+  const windowOf = (i) => Math.floor(i / size);
   // The robots at t: between two recorded poses, on the straight line between them.
-  const showWorld = (t) => {
+  const showWorld = (w, t) => {
+    const poses = w.poses;
     if (!world || poses.length === 0) return;
-    const k = lastAtOrBefore(poseTimes, t);
+    const k = lastAtOrBefore(w.poseTimes, t);
     const a = poses[k];
     const b = poses[k + 1];
     const u = b && b.time > a.time ? Math.min(1, Math.max(0, (t - a.time) / (b.time - a.time))) : 0;
@@ -180,51 +224,66 @@ async function startReplay() {
   $('timeline-end').textContent = fmtTime(end) + ' s';
   $('timeline-end').title = timeTitle(end);
   $('timeline-end').dataset.t = String(end);
+  const ol = $('trace');
+  $('trace-count').textContent = firings + ' firings';
+  // The trace lists the firings of the window shown (its first frame's number: `listed`).
+  let listed = -1;
+  const listWindow = (w) => {
+    if (listed === w.first) return;
+    listed = w.first;
+    ol.textContent = '';
+    w.frames.forEach((f, j) => {
+      const i = w.first + j;
+      if (i === 0) return;
+      const li = listItem(i, fmtTime(f.time) + '  ' + f.transition);
+      li.title = timeTitle(f.time);
+      li.addEventListener('click', () => show(i));
+      ol.appendChild(li);
+    });
+  };
   let at = 0;
   let now = 0;
-  // Frame i; the map at model time t (the frame's time unless the slider picked another).
-  const show = (i, t) => {
-    const f = frames[i];
-    now = t === undefined ? f.time : t;
+  // Frame i of window w; the map at model time t (the frame's time unless the slider picked
+  // another).
+  // What model time t shows whatever the window: the robots, the table, the cursor.
+  const showTime = (t) => {
+    now = t;
     slider.value = String(now);
-    showWorld(now);
     showRobots(now);
     if (conform) showConformAt(conform, now);
     $('timeline-time').textContent = 't = ' + fmtTime(now) + ' s';
     $('timeline-time').dataset.t = String(now);
     $('timeline-time').title = timeTitle(now);
     scheduleFollowDraw();
+  };
+  const render = (w, i, t) => {
+    const f = w.frames[i - w.first];
+    showTime(t === undefined ? f.time : t);
+    showWorld(w, now);
     if (i === at && t !== undefined && $('frame').textContent) return;
     at = i;
     f.tokens.forEach((k, p) => setTokens(p, k));
     setFired(f.transition ? transitionIndex(f.transition) : -1);
     recordTokens(f.time, f.tokens);
-    for (const li of $('trace').querySelectorAll('li.current')) li.classList.remove('current');
-    const li = i > 0 ? $('trace').children[i - 1] : null;
+    listWindow(w);
+    for (const li of ol.querySelectorAll('li.current')) li.classList.remove('current');
+    const li = i > 0 ? ol.children[i - Math.max(1, w.first)] : null;
     if (li) {
       li.classList.add('current');
       li.scrollIntoView({ block: 'nearest' });
     }
-    $('frame').textContent = i + '/' + (frames.length - 1);
+    $('frame').textContent = i + '/' + firings;
     $('clock').textContent = 'time ' + fmtTime(f.time) + ', ' + i + ' firings' +
       (f.transition ? ' — ' + f.transition + ' fired' : '');
   };
+  const show = (i, t) => withWindow(windowOf(i), (w) => render(w, i, t));
   // The frame shown at model time t: the last firing at or before it (the range input
   // keeps its value to about 15 digits: a hair's tolerance).
-  const frameAt = (t) => lastAtOrBefore(times, t);
-  slider.addEventListener('input', () => {
-    const t = Number(slider.value);
-    show(frameAt(t), t);
-  });
-  const ol = $('trace');
-  ol.textContent = '';
-  frames.slice(1).forEach((f, i) => {
-    const li = listItem(i + 1, fmtTime(f.time) + '  ' + f.transition);
-    li.title = timeTitle(f.time);
-    li.addEventListener('click', () => show(i + 1));
-    ol.appendChild(li);
-  });
-  $('trace-count').textContent = (frames.length - 1) + ' firings';
+  const showAt = (t) => {
+    showTime(t);
+    withWindow(lastAtOrBefore(starts, t), (w) => render(w, w.first + lastAtOrBefore(w.times, t), t));
+  };
+  slider.addEventListener('input', () => showAt(Number(slider.value)));
   const speedBox = $('replay-speed');
   speedBox.textContent = '';
   for (const v of REPLAY_SPEEDS) {
@@ -252,13 +311,20 @@ async function startReplay() {
     let t = now + dt * (Number(speedBox.value) || 1);
     if (t >= end) {
       if (!$('loop').checked) {
-        show(frames.length - 1, end);
+        show(firings, end);
         pause();
         return;
       }
       t = 0;
     }
-    show(frameAt(t), t);
+    // Playing on: the window after this one, fetched ahead.
+    const k = lastAtOrBefore(starts, t);
+    if (k + 1 < starts.length) fetchWindow(k + 1).catch(() => {});
+    if (windows.has(k)) showAt(t);
+    else {
+      fetchWindow(k).catch(() => {});
+      now = t;
+    }
     frame = requestAnimationFrame(tick);
   };
   const play = () => {
@@ -274,7 +340,7 @@ async function startReplay() {
   };
   const stepBy = (d) => {
     pause();
-    show(Math.min(frames.length - 1, Math.max(0, at + d)));
+    show(Math.min(firings, Math.max(0, at + d)));
   };
   $('run').addEventListener('click', play);
   $('play').addEventListener('click', play);
@@ -282,6 +348,9 @@ async function startReplay() {
   $('step-forward').addEventListener('click', () => stepBy(1));
   // `tick`: the animation frame's timestamp (ms) that set `time`, so a test can read the
   // model time advanced per wall second without timing the page from outside.
-  window.gspnReplay = { playing, at: () => at, time: () => now, tick: () => wall };
+  // `settled`: the last window asked for is shown (a test waits for it after moving the
+  // slider; the frames of a window not yet fetched come when it arrives).
+  window.gspnReplay = { playing, at: () => at, time: () => now, tick: () => wall, settled: () => done === wanted };
+  await fetchWindow(0);
   show(0);
 }
