@@ -33,26 +33,57 @@ pub use supervisor::ZenohBackend;
 
 /// What went wrong in the Zenoh transport.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ZenohError {
     /// Zenoh refused a configuration or a declaration.
     #[error("zenoh: {0}")]
-    Zenoh(String),
-    /// Robots (or subscribers) did not show up in time.
-    #[error("{0}")]
-    Startup(String),
-    /// The plan asks for what the Zenoh transport does not do.
-    #[error("{0}")]
-    Unsupported(String),
+    Zenoh(#[source] ::zenoh::Error),
+    /// Robots did not show up in time: those missing, by id.
+    #[error(
+        "no liveliness token from {} robot(s) ({}) within {within:?} via {endpoint} (domain {domain}): are `plan-runner robot --zenoh` or `fleet` processes running?",
+        missing.len(),
+        shown(missing)
+    )]
+    RobotsMissing {
+        /// The robots not seen.
+        missing: Vec<String>,
+        /// How long the supervisor waited.
+        within: Duration,
+        /// The router it connected to.
+        endpoint: String,
+        /// The domain.
+        domain: u16,
+    },
+    /// Nobody subscribed to `/gspn/firings` in time (`--ros2-wait-subscribers`).
+    #[error("no subscriber of /gspn/firings within {0:?}")]
+    NoSubscriber(Duration),
+    /// A robot of the plan has no presence watch (a bug).
+    #[error("robot `{0}` is not watched")]
+    Unwatched(String),
+    /// A Nav2 place (`server = "navigate_to_pose"`), by name: Nav2 goals go over DDS only.
+    #[error(
+        "place `{0}` is a Nav2 place (server = \"navigate_to_pose\"): Nav2 goals go over DDS only; use transport = \"dds\""
+    )]
+    Nav2Place(String),
     /// A type hash could not be computed (a bug in the interfaces' definitions).
     #[error(transparent)]
     Type(#[from] type_hash::TypeError),
 }
 
 impl ZenohError {
-    /// A Zenoh error (its errors are boxed `dyn Error`).
-    pub fn zenoh(e: impl std::fmt::Display) -> ZenohError {
-        ZenohError::Zenoh(e.to_string())
+    /// A Zenoh error, kept as the source.
+    pub fn zenoh(e: ::zenoh::Error) -> ZenohError {
+        ZenohError::Zenoh(e)
     }
+}
+
+/// The first ten of `ids`, then `…` if there are more.
+fn shown(ids: &[String]) -> String {
+    let mut s = ids.iter().take(10).cloned().collect::<Vec<_>>().join(", ");
+    if ids.len() > 10 {
+        s.push_str(", …");
+    }
+    s
 }
 
 /// How the processes of a fleet meet over Zenoh.

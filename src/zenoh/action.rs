@@ -1,14 +1,16 @@
-//! The ExecPlace action's services as ROS 2 generates them for any action
+//! The ExecPlace action's services and topics as ROS 2 generates them for any action
 //! (`action_msgs`, `unique_identifier_msgs`): the messages in field order, so their CDR is
 //! what an rclcpp/rclpy action client or server sends.
 
 use serde::{Deserialize, Serialize};
 
-use crate::ros2::msgs::{ExecPlaceGoal, ExecPlaceResult, Time};
+use crate::ros2::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, Time};
 
 /// `unique_identifier_msgs/msg/UUID`: a goal's id.
 pub type GoalId = [u8; 16];
 
+/// `action_msgs/msg/GoalStatus` STATUS_EXECUTING.
+pub const STATUS_EXECUTING: i8 = 2;
 /// `action_msgs/msg/GoalStatus` STATUS_SUCCEEDED.
 pub const STATUS_SUCCEEDED: i8 = 4;
 /// `action_msgs/msg/GoalStatus` STATUS_CANCELED.
@@ -77,6 +79,31 @@ pub struct CancelGoalResponse {
     pub return_code: i8,
     /// The goals now cancelling.
     pub goals_canceling: Vec<GoalInfo>,
+}
+
+/// `ExecPlace_FeedbackMessage`: a goal's feedback on the action's feedback topic.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct FeedbackMessage {
+    /// The goal.
+    pub goal_id: GoalId,
+    /// Its feedback.
+    pub feedback: ExecPlaceFeedback,
+}
+
+/// `action_msgs/msg/GoalStatus`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GoalStatus {
+    /// The goal and when it was accepted.
+    pub goal_info: GoalInfo,
+    /// `STATUS_EXECUTING`, `STATUS_SUCCEEDED`, …
+    pub status: i8,
+}
+
+/// `action_msgs/msg/GoalStatusArray`: the goals of a server, on the action's status topic.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GoalStatusArray {
+    /// One per goal.
+    pub status_list: Vec<GoalStatus>,
 }
 
 #[cfg(test)]

@@ -11,6 +11,8 @@
 //!
 //! A `*/gspn/firings/**` subscriber (any domain, any type hash) gets every firing.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use super::type_hash::{TypeError, hash_of};
 use crate::ros2::msgs;
 
@@ -70,11 +72,7 @@ pub fn exec_place(
     server: &str,
     service: ActionService,
 ) -> Result<String, TypeError> {
-    let (sub, ty) = match service {
-        ActionService::SendGoal => ("send_goal", "gspn_msgs/action/ExecPlace_SendGoal"),
-        ActionService::GetResult => ("get_result", "gspn_msgs/action/ExecPlace_GetResult"),
-        ActionService::CancelGoal => ("cancel_goal", "action_msgs/srv/CancelGoal"),
-    };
+    let (sub, ty) = service.parts();
     let hash = hash_of(ty)?.0;
     Ok(format!(
         "{domain}/{robot}/{server}/_action/{sub}/{}/{hash}",
@@ -93,12 +91,22 @@ pub enum ActionService {
     CancelGoal,
 }
 
-/// A node's liveliness token: session `zid`, node id `node` within it.
-pub fn node_token(domain: u16, zid: &str, node: u32, namespace: &str, name: &str) -> String {
-    format!(
-        "{ADMIN_SPACE}/{domain}/{zid}/{node}/{node}/NN/%/{}/{name}",
-        mangle(namespace)
-    )
+impl ActionService {
+    /// The three, in the order rclcpp's action server creates them.
+    pub const ALL: [ActionService; 3] = [
+        ActionService::SendGoal,
+        ActionService::CancelGoal,
+        ActionService::GetResult,
+    ];
+
+    /// The service's name under `_action/` and its ROS 2 type.
+    fn parts(self) -> (&'static str, &'static str) {
+        match self {
+            ActionService::SendGoal => ("send_goal", "gspn_msgs/action/ExecPlace_SendGoal"),
+            ActionService::GetResult => ("get_result", "gspn_msgs/action/ExecPlace_GetResult"),
+            ActionService::CancelGoal => ("cancel_goal", "action_msgs/srv/CancelGoal"),
+        }
+    }
 }
 
 /// The tokens of every node of `domain`, to subscribe to.
@@ -172,11 +180,258 @@ impl Topic {
         }
     }
 
+    /// Its QoS, as the DDS backend's.
+    pub fn qos(self) -> Qos {
+        match self {
+            Topic::Firings | Topic::Drift => Qos::KEEP_ALL,
+            Topic::Marking | Topic::Run => Qos::LATCHED,
+        }
+    }
+
     /// The key expression in `domain`.
     pub fn key(self, domain: u16) -> Result<String, TypeError> {
         let hash = hash_of(self.ty())?.0;
         Ok(topic(domain, self.name(), &dds_type(self.ty()), &hash))
     }
+}
+
+/// What a liveliness token announces: rmw_zenoh's entity kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EntityKind {
+    /// `NN`: a node.
+    Node,
+    /// `MP`: a publisher.
+    Publisher,
+    /// `MS`: a subscription.
+    Subscription,
+    /// `SS`: a service server.
+    Service,
+    /// `SC`: a service client.
+    Client,
+}
+
+impl EntityKind {
+    /// The token's chunk.
+    pub fn code(self) -> &'static str {
+        match self {
+            EntityKind::Node => "NN",
+            EntityKind::Publisher => "MP",
+            EntityKind::Subscription => "MS",
+            EntityKind::Service => "SS",
+            EntityKind::Client => "SC",
+        }
+    }
+}
+
+/// An endpoint's QoS as rmw_zenoh writes it into its token: each policy that differs from
+/// rmw_zenoh's default (reliable, volatile, keep last 42, no deadline, lifespan or lease,
+/// automatic liveliness) by its `rmw_qos_*_policy` number, the others left empty:
+/// `<reliability>:<durability>:<history>,<depth>:<deadline s>,<ns>:<lifespan s>,<ns>:<liveliness>,<lease s>,<ns>`.
+/// Every endpoint here is reliable, with no deadline, lifespan or lease.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Qos {
+    /// Transient local (late joiners get the last samples) rather than volatile.
+    pub transient_local: bool,
+    /// Keep all rather than keep last `depth`.
+    pub keep_all: bool,
+    /// The depth of keep last (0 = rmw_zenoh's default, 42).
+    pub depth: u32,
+}
+
+impl Qos {
+    /// `/gspn/firings`, `/gspn/drift`: reliable, volatile, keep all.
+    pub const KEEP_ALL: Qos = Qos {
+        transient_local: false,
+        keep_all: true,
+        depth: 0,
+    };
+    /// `/gspn/marking`, `/gspn/run`, an action's status: transient local, depth 1.
+    pub const LATCHED: Qos = Qos {
+        transient_local: true,
+        keep_all: false,
+        depth: 1,
+    };
+    /// Services and an action's feedback: ROS 2's defaults (volatile, keep last 10).
+    pub const DEFAULT: Qos = Qos {
+        transient_local: false,
+        keep_all: false,
+        depth: 10,
+    };
+
+    /// The token's QoS chunk.
+    pub fn chunk(self) -> String {
+        let durability = if self.transient_local { "1" } else { "" };
+        let history = if self.keep_all { "2" } else { "" };
+        let depth = match self.depth {
+            0 | 42 => String::new(),
+            d => d.to_string(),
+        };
+        format!(":{durability}:{history},{depth}:,:,:,,")
+    }
+}
+
+/// A node as its tokens name it: the session, the node's id in it, its namespace and name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NodeKey {
+    /// The ROS domain id.
+    pub domain: u16,
+    /// The Zenoh session id.
+    pub zid: String,
+    /// The node's id within the session.
+    pub id: u32,
+    /// `/r7`, `/gspn`.
+    pub namespace: String,
+    /// `gspn_robot`, `supervisor`.
+    pub name: String,
+}
+
+impl NodeKey {
+    /// The node's own token: `@ros2_lv/<domain>/<zid>/<id>/<id>/NN/%/<namespace>/<name>`.
+    pub fn token(&self) -> String {
+        self.prefix(self.id, EntityKind::Node)
+    }
+
+    /// `@ros2_lv/<domain>/<zid>/<node id>/<entity id>/<kind>/%/<namespace>/<name>`.
+    fn prefix(&self, entity: u32, kind: EntityKind) -> String {
+        format!(
+            "{ADMIN_SPACE}/{}/{}/{}/{entity}/{}/%/{}/{}",
+            self.domain,
+            self.zid,
+            self.id,
+            kind.code(),
+            mangle(&self.namespace),
+            self.name
+        )
+    }
+
+    /// The token of endpoint `entity` of the node (its id in the session): a `kind` on the
+    /// topic or service `name` (`/gspn/firings`) of ROS 2 type `ty` (`gspn_msgs/msg/Firing`,
+    /// a service's type for a service) with `qos`.
+    pub fn endpoint(
+        &self,
+        entity: u32,
+        kind: EntityKind,
+        name: &str,
+        ty: &str,
+        qos: Qos,
+    ) -> Result<String, TypeError> {
+        Ok(format!(
+            "{}/{}/{}/{}/{}",
+            self.prefix(entity, kind),
+            mangle(name),
+            dds_type(ty),
+            hash_of(ty)?.0,
+            qos.chunk()
+        ))
+    }
+}
+
+/// The ids of a session's nodes and endpoints, one counter for both, as rmw_zenoh numbers
+/// the entities of a context.
+#[derive(Debug, Default)]
+pub struct EntityIds(AtomicU32);
+
+impl EntityIds {
+    /// The next id.
+    pub fn next(&self) -> u32 {
+        self.0.fetch_add(1, Ordering::Relaxed)
+    }
+}
+
+/// The topics an action server publishes besides its services.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ActionTopic {
+    /// `_action/feedback`, `<pkg>/action/<Name>_FeedbackMessage`.
+    Feedback,
+    /// `_action/status`, `action_msgs/msg/GoalStatusArray`.
+    Status,
+}
+
+impl ActionTopic {
+    fn parts(self) -> (&'static str, &'static str, Qos) {
+        match self {
+            ActionTopic::Feedback => (
+                "feedback",
+                "gspn_msgs/action/ExecPlace_FeedbackMessage",
+                Qos::DEFAULT,
+            ),
+            ActionTopic::Status => ("status", "action_msgs/msg/GoalStatusArray", Qos::LATCHED),
+        }
+    }
+}
+
+/// The key expression of topic `topic` of the ExecPlace action `/<robot>/<server>`.
+pub fn exec_place_topic(
+    domain: u16,
+    robot: &str,
+    server: &str,
+    topic: ActionTopic,
+) -> Result<String, TypeError> {
+    let (sub, ty, _) = topic.parts();
+    Ok(self::topic(
+        domain,
+        &format!("/{robot}/{server}/_action/{sub}"),
+        &dds_type(ty),
+        &hash_of(ty)?.0,
+    ))
+}
+
+/// The tokens of the ExecPlace action server `/<robot>/<server>` of `node`, as rclcpp's
+/// action server declares them over rmw_zenoh: its three services (`SS`), its feedback and
+/// status publishers (`MP`).
+pub fn action_server_tokens(
+    node: &NodeKey,
+    ids: &EntityIds,
+    robot: &str,
+    server: &str,
+) -> Result<Vec<String>, TypeError> {
+    let base = format!("/{robot}/{server}/_action");
+    let mut out = Vec::new();
+    for s in ActionService::ALL {
+        let (sub, ty) = s.parts();
+        out.push(node.endpoint(
+            ids.next(),
+            EntityKind::Service,
+            &format!("{base}/{sub}"),
+            ty,
+            Qos::DEFAULT,
+        )?);
+    }
+    for t in [ActionTopic::Feedback, ActionTopic::Status] {
+        let (sub, ty, qos) = t.parts();
+        out.push(node.endpoint(
+            ids.next(),
+            EntityKind::Publisher,
+            &format!("{base}/{sub}"),
+            ty,
+            qos,
+        )?);
+    }
+    Ok(out)
+}
+
+/// The tokens of `node`'s client of the ExecPlace action `/<robot>/<server>`: its three
+/// service clients (`SC`; it reads neither feedback nor status, so it declares no
+/// subscription).
+pub fn action_client_tokens(
+    node: &NodeKey,
+    ids: &EntityIds,
+    robot: &str,
+    server: &str,
+) -> Result<Vec<String>, TypeError> {
+    ActionService::ALL
+        .iter()
+        .map(|s| {
+            let (sub, ty) = s.parts();
+            node.endpoint(
+                ids.next(),
+                EntityKind::Client,
+                &format!("/{robot}/{server}/_action/{sub}"),
+                ty,
+                Qos::DEFAULT,
+            )
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -214,7 +469,14 @@ mod tests {
 
     #[test]
     fn a_node_token_reads_back() {
-        let t = node_token(0, "a1b2", 4, "/r7", ROBOT_NODE);
+        let node = NodeKey {
+            domain: 0,
+            zid: "a1b2".into(),
+            id: 4,
+            namespace: "/r7".into(),
+            name: ROBOT_NODE.into(),
+        };
+        let t = node.token();
         assert_eq!(t, "@ros2_lv/0/a1b2/4/4/NN/%/%r7/gspn_robot");
         assert_eq!(
             parse_node_token(&t),
@@ -223,6 +485,75 @@ mod tests {
         assert_eq!(parse_node_token("0/gspn/firings/x/y"), None);
         assert_eq!(mangle(""), "%");
         assert_eq!(unmangle("%"), "");
+    }
+
+    #[test]
+    fn endpoint_tokens_carry_name_type_hash_and_qos() {
+        let node = NodeKey {
+            domain: 0,
+            zid: "z9".into(),
+            id: 1,
+            namespace: SUPERVISOR_NS.into(),
+            name: SUPERVISOR_NODE.into(),
+        };
+        let firing = hash_of("gspn_msgs/msg/Firing").unwrap().0;
+        assert_eq!(
+            node.endpoint(
+                2,
+                EntityKind::Publisher,
+                "/gspn/firings",
+                "gspn_msgs/msg/Firing",
+                Topic::Firings.qos()
+            )
+            .unwrap(),
+            format!(
+                "@ros2_lv/0/z9/1/2/MP/%/%gspn/supervisor/%gspn%firings/gspn_msgs::msg::dds_::Firing_/{firing}/::2,:,:,:,,"
+            )
+        );
+        // rmw_zenoh's own default (reliable, volatile, keep last 42): every chunk empty.
+        let default = Qos {
+            transient_local: false,
+            keep_all: false,
+            depth: 42,
+        };
+        assert_eq!(default.chunk(), "::,:,:,:,,");
+        assert_eq!(Qos::LATCHED.chunk(), ":1:,1:,:,:,,");
+        assert_eq!(Qos::DEFAULT.chunk(), "::,10:,:,:,,");
+        let ids = EntityIds::default();
+        let robot = NodeKey {
+            id: ids.next(),
+            namespace: "/r1".into(),
+            name: ROBOT_NODE.into(),
+            ..node.clone()
+        };
+        let server = action_server_tokens(&robot, &ids, "r1", "exec_place").unwrap();
+        let kinds: Vec<(&str, &str, &str)> = server
+            .iter()
+            .map(|t| {
+                let c: Vec<&str> = t.split('/').collect();
+                (c[4], c[5], c[9])
+            })
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                ("1", "SS", "%r1%exec_place%_action%send_goal"),
+                ("2", "SS", "%r1%exec_place%_action%cancel_goal"),
+                ("3", "SS", "%r1%exec_place%_action%get_result"),
+                ("4", "MP", "%r1%exec_place%_action%feedback"),
+                ("5", "MP", "%r1%exec_place%_action%status"),
+            ]
+        );
+        assert!(server[4].ends_with(
+            "/action_msgs::msg::dds_::GoalStatusArray_/RIHS01_6c1684b00f177d37438febe6e709fc4e2b0d4248dca4854946f9ed8b30cda83e/:1:,1:,:,:,,"
+        ));
+        let client = action_client_tokens(&node, &ids, "r1", "exec_place").unwrap();
+        assert_eq!(client.len(), 3);
+        assert!(client[1].contains("/1/7/SC/%/%gspn/supervisor/%r1%exec_place%_action%cancel_goal/action_msgs::srv::dds_::CancelGoal_/RIHS01_573d8b0a"));
+        assert_eq!(
+            exec_place_topic(0, "r1", "exec_place", ActionTopic::Status).unwrap(),
+            "0/r1/exec_place/_action/status/action_msgs::msg::dds_::GoalStatusArray_/RIHS01_6c1684b00f177d37438febe6e709fc4e2b0d4248dca4854946f9ed8b30cda83e"
+        );
     }
 
     #[test]

@@ -17,7 +17,7 @@
 //! when the goal ends.
 
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -33,7 +33,7 @@ use super::action::{
 use super::keys::{self, ActionService};
 use super::presence::Liveness;
 use super::type_hash::TypeError;
-use super::wire::{self, Attachment};
+use super::wire::{self, Source, WireError};
 use crate::net::PlaceId;
 use crate::ros2::msgs::{ExecPlaceGoal, Time};
 use crate::ros2::remote_place::{goal, succeeded};
@@ -50,39 +50,48 @@ const GONE_GRACE: Duration = Duration::from_secs(1);
 /// own timeout, applied by the runtime, bounds it when the plan has one).
 const RESULT_WAIT: Duration = Duration::from_secs(7 * 24 * 3600);
 
-/// A service client's identity: its GID and the sequence number of its next request. The
-/// GID is derived from the client's name and the process (no random draw): unique enough
-/// to pair replies, the same for the same run.
+/// A service client's identity ([`Source`]: its GID and the sequence number of its next
+/// request) and the goal ids it makes.
 #[derive(Debug)]
 pub struct ClientId {
-    gid: [u8; 16],
-    seq: AtomicI64,
+    source: Source,
+    goals: AtomicU32,
 }
 
 impl ClientId {
     /// The client named `name` (`/<robot>/<server>`) of this process.
     pub fn new(name: &str) -> ClientId {
-        let h = crate::ros2::robot::id_hash(name);
-        let mut gid = [0; 16];
-        gid[..8].copy_from_slice(&h.to_le_bytes());
-        gid[8..12].copy_from_slice(&std::process::id().to_le_bytes());
         ClientId {
-            gid,
-            seq: AtomicI64::new(1),
+            source: Source::new(name),
+            goals: AtomicU32::new(1),
         }
-    }
-
-    fn next(&self) -> Attachment {
-        Attachment::now(self.seq.fetch_add(1, Ordering::Relaxed), self.gid)
     }
 
     /// A fresh goal id: the GID's first 12 bytes and a counter.
     fn goal_id(&self) -> GoalId {
-        let mut id = self.gid;
-        let n = self.seq.fetch_add(1, Ordering::Relaxed) as u32;
+        let mut id = self.source.gid();
+        let n = self.goals.fetch_add(1, Ordering::Relaxed);
         id[12..].copy_from_slice(&n.to_le_bytes());
         id
     }
+}
+
+/// Why a call to a robot's action service failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum CallError {
+    /// Zenoh refused the query.
+    #[error("zenoh: {0}")]
+    Zenoh(#[source] zenoh::Error),
+    /// The query ended without a reply (no server, or it went away).
+    #[error("no reply (is the robot's server up?)")]
+    NoReply,
+    /// The server replied with an error (its payload, as text).
+    #[error("the server answered an error: {0}")]
+    Server(String),
+    /// The reply is not the response expected.
+    #[error(transparent)]
+    Decode(#[from] WireError),
 }
 
 /// Calls service `key` with `req`; the first reply, decoded.
@@ -92,25 +101,35 @@ pub async fn call<Req: Serialize, Resp: DeserializeOwned>(
     key: &str,
     req: &Req,
     wait: Duration,
-) -> Result<Resp, String> {
+) -> Result<Resp, CallError> {
     let replies = session
         .get(key)
         .payload(wire::encode(req))
-        .attachment(client.next().to_bytes())
+        .attachment(client.source.next().to_bytes())
         .timeout(wait)
         .await
-        .map_err(|e| e.to_string())?;
-    let reply = replies
-        .recv_async()
-        .await
-        .map_err(|_| "no reply (is the robot's server up?)".to_string())?;
+        .map_err(CallError::Zenoh)?;
+    let reply = replies.recv_async().await.map_err(|_| CallError::NoReply)?;
     match reply.result() {
-        Ok(sample) => wire::decode(&sample.payload().to_bytes()),
-        Err(e) => Err(format!(
-            "the server answered an error: {}",
-            String::from_utf8_lossy(&e.payload().to_bytes())
+        Ok(sample) => Ok(wire::decode(&sample.payload().to_bytes())?),
+        Err(e) => Err(CallError::Server(
+            String::from_utf8_lossy(&e.payload().to_bytes()).into_owned(),
         )),
     }
+}
+
+/// Why a goal came to nothing.
+#[derive(Debug, thiserror::Error)]
+enum GoalError {
+    /// The goal did not reach the robot.
+    #[error("sending the goal to robot `{0}`: {1}")]
+    Send(String, #[source] CallError),
+    /// The robot said no.
+    #[error("robot `{0}` rejected the goal")]
+    Rejected(String),
+    /// The result did not come back.
+    #[error("result from robot `{0}`: {1}")]
+    Result(String, #[source] CallError),
 }
 
 /// One robot's ExecPlace server as the supervisor reaches it.
@@ -167,7 +186,10 @@ impl RobotLink {
     }
 
     /// `send_goal`, made again whenever it failed because the robot was away.
-    async fn send_goal_until_back(&self, goal: &ExecPlaceGoal) -> Result<(GoalId, bool), String> {
+    async fn send_goal_until_back(
+        &self,
+        goal: &ExecPlaceGoal,
+    ) -> Result<(GoalId, bool), CallError> {
         loop {
             match self.send_goal(goal.clone()).await {
                 Err(_) if self.back_after_absence().await => continue,
@@ -178,7 +200,7 @@ impl RobotLink {
 
     /// `get_result`, asked again whenever it failed because the robot was away (a robot
     /// that kept running still has the goal; a restarted one answers "unknown goal").
-    async fn result_until_back(&self, goal_id: GoalId) -> Result<GetResultResponse, String> {
+    async fn result_until_back(&self, goal_id: GoalId) -> Result<GetResultResponse, CallError> {
         loop {
             match self.result(goal_id).await {
                 Err(_) if self.back_after_absence().await => continue,
@@ -187,7 +209,7 @@ impl RobotLink {
         }
     }
 
-    async fn send_goal(&self, goal: ExecPlaceGoal) -> Result<(GoalId, bool), String> {
+    async fn send_goal(&self, goal: ExecPlaceGoal) -> Result<(GoalId, bool), CallError> {
         let goal_id = self.client.goal_id();
         let req = SendGoalRequest { goal_id, goal };
         let r: SendGoalResponse =
@@ -195,7 +217,7 @@ impl RobotLink {
         Ok((goal_id, r.accepted))
     }
 
-    async fn result(&self, goal_id: GoalId) -> Result<GetResultResponse, String> {
+    async fn result(&self, goal_id: GoalId) -> Result<GetResultResponse, CallError> {
         let req = GetResultRequest { goal_id };
         call(
             &self.session,
@@ -214,7 +236,7 @@ impl RobotLink {
                 stamp: Time::default(),
             },
         };
-        let r: Result<super::action::CancelGoalResponse, String> =
+        let r: Result<super::action::CancelGoalResponse, CallError> =
             call(&self.session, &self.client, &self.keys[2], &req, CALL_WAIT).await;
         if let Err(e) = r {
             tracing::warn!("cancelling a goal of robot `{}`: {e}", self.robot);
@@ -303,7 +325,7 @@ impl Drop for GoalGuard {
 }
 
 enum Ended {
-    Result(Result<GetResultResponse, String>),
+    Result(Result<GetResultResponse, GoalError>),
     Lost,
     Cancel,
 }
@@ -323,14 +345,14 @@ async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> 
         let (id, accepted) = link
             .send_goal_until_back(&goal)
             .await
-            .map_err(|e| format!("sending the goal to robot `{robot}`: {e}"))?;
+            .map_err(|e| GoalError::Send(robot.clone(), e))?;
         if !accepted {
-            return Err(format!("robot `{robot}` rejected the goal"));
+            return Err(GoalError::Rejected(robot.clone()));
         }
         guard.set(Some(id));
         link.result_until_back(id)
             .await
-            .map_err(|e| format!("result from robot `{robot}`: {e}"))
+            .map_err(|e| GoalError::Result(robot.clone(), e))
     };
     let ended = tokio::select! {
         r = work => Ended::Result(r),
@@ -346,7 +368,7 @@ async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> 
                     "robot `{robot}` ended the goal with status {}: {}",
                     r.status, r.result.message
                 )),
-                Err(e) => Outcome::Failed(e),
+                Err(e) => Outcome::Failed(e.to_string()),
             }
         }
         Ended::Lost => {

@@ -1,9 +1,12 @@
 //! Robots over Zenoh: `plan-runner robot --zenoh` (one) and `plan-runner fleet` (many in one
 //! process, on one session). Each robot serves the ExecPlace action at `/<id>/<server>` for
-//! the plan's `ros2` places as three queryables (send_goal, get_result, cancel_goal), with
-//! the DDS robot's net-timed decisions ([`crate::ros2::robot::decide`], the same seeded
-//! stream per robot), and declares its node's liveliness token once its queryables are
-//! there: the supervisor counts a robot ready when it sees the token.
+//! the plan's `ros2` places as an rclcpp action server does over rmw_zenoh: three
+//! queryables (send_goal, get_result, cancel_goal), a feedback topic (each running goal's
+//! elapsed time, every second) and a status topic (the goals' states when one changes).
+//! Its decisions are the DDS robot's net-timed ones ([`crate::ros2::robot::decide`], the
+//! same seeded stream per robot). It declares a liveliness token per endpoint, as rmw_zenoh
+//! does, and its node's token last: the supervisor counts a robot ready when it sees that
+//! one.
 //!
 //! The robots leave when the supervisor says its run is over on `/gspn/run`, or when its
 //! token has been gone for `lost_after` (both ignored with `stay`).
@@ -15,24 +18,33 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use rand::SeedableRng;
+use serde::Serialize;
 use tokio::sync::{oneshot, watch};
 use zenoh::Session;
+use zenoh::liveliness::LivelinessToken;
 use zenoh::query::Query;
 
 use super::action::{
-    CANCEL_NONE, CANCEL_UNKNOWN_GOAL, CancelGoalRequest, CancelGoalResponse, GetResultRequest,
-    GetResultResponse, GoalId, STATUS_CANCELED, STATUS_SUCCEEDED, SendGoalRequest,
+    CANCEL_NONE, CANCEL_UNKNOWN_GOAL, CancelGoalRequest, CancelGoalResponse, FeedbackMessage,
+    GetResultRequest, GetResultResponse, GoalId, GoalInfo, GoalStatus, GoalStatusArray,
+    STATUS_ABORTED, STATUS_CANCELED, STATUS_EXECUTING, STATUS_SUCCEEDED, SendGoalRequest,
     SendGoalResponse,
 };
-use super::keys::{self, ActionService, Topic};
+use super::keys::{self, ActionService, ActionTopic, EntityIds, NodeKey, Topic};
 use super::presence::{Liveness, Presence};
-use super::wire::{self, Attachment};
+use super::wire::{self, Attachment, Source, WireError};
 use super::{ZenohConfig, ZenohError};
 use crate::net::Net;
-use crate::ros2::msgs::{ExecPlaceResult, RunState, Time};
+use crate::ros2::msgs::{ExecPlaceFeedback, ExecPlaceResult, RunState, Time};
 use crate::ros2::robot::{Leave, RobotStats, decide, id_hash};
 use crate::ros2::settings::{NAV2_SERVER, Ros2Settings};
 use crate::sample::Rng;
+
+/// How often a running goal's feedback is published (as the DDS robot does).
+const FEEDBACK_EVERY: Duration = Duration::from_secs(1);
+
+/// How long an ended goal's result is kept for a late `get_result`.
+const RESULT_KEPT: Duration = Duration::from_secs(60);
 
 /// How the robots of a process run.
 #[derive(Clone, Debug)]
@@ -58,18 +70,53 @@ pub struct FleetStats {
     pub left: Option<Leave>,
 }
 
-/// A goal being run: how to cancel it, and its result once it ended.
+/// A goal being run: how to cancel it, when it was accepted, and its result once it ended.
 struct Goal {
     cancel: Option<oneshot::Sender<()>>,
+    accepted: Time,
     result: watch::Receiver<Option<GetResultResponse>>,
 }
 
+/// What a robot's action servers share: its draws and its counts.
 struct Robot {
     net: Arc<Net>,
     rng: Mutex<Rng>,
     time_scale: f64,
     stats: Mutex<RobotStats>,
+}
+
+/// A topic written with `Session::put`, with its rmw_zenoh attachment (no declared
+/// publisher: a fleet process has thousands of these topics).
+struct Writer {
+    key: String,
+    source: Source,
+}
+
+impl Writer {
+    fn new(key: String) -> Writer {
+        let source = Source::new(&key);
+        Writer { key, source }
+    }
+
+    async fn put<M: Serialize>(&self, session: &Session, m: &M) {
+        let r = session
+            .put(&self.key, wire::encode(m))
+            .attachment(self.source.next().to_bytes())
+            .await;
+        if let Err(e) = r {
+            tracing::warn!("publishing on {}: {e}", self.key);
+        }
+    }
+}
+
+/// One robot's ExecPlace action server `/<robot>/<server>`: its goals and the writers of
+/// its feedback and status topics.
+struct Server {
+    robot: Arc<Robot>,
+    session: Session,
     goals: Mutex<HashMap<GoalId, Goal>>,
+    feedback: Writer,
+    status: Writer,
 }
 
 /// Serves the robots `opts.ids` through `session` until `stop` completes or they leave.
@@ -110,50 +157,73 @@ pub async fn serve(
         })
     };
     let supervisor = Presence::supervisor(session, d, cfg.lost_after).await?;
-    let zid = session.zid().to_string();
+    let ids = EntityIds::default();
     let mut robots = Vec::new();
+    let mut action_servers = Vec::new();
     let mut tasks = Vec::new();
     let mut tokens = Vec::new();
-    for (i, id) in opts.ids.iter().enumerate() {
+    for id in &opts.ids {
+        let node = NodeKey {
+            domain: d,
+            zid: session.zid().to_string(),
+            id: ids.next(),
+            namespace: keys::robot_namespace(id),
+            name: keys::ROBOT_NODE.to_string(),
+        };
         let robot = Arc::new(Robot {
             net: Arc::clone(&net),
             rng: Mutex::new(Rng::seed_from_u64(opts.seed ^ id_hash(id))),
             time_scale: opts.time_scale,
             stats: Mutex::new(RobotStats::default()),
-            goals: Mutex::new(HashMap::new()),
         });
+        let mut endpoints = Vec::new();
         for &server in &servers {
-            for service in [
-                ActionService::SendGoal,
-                ActionService::GetResult,
-                ActionService::CancelGoal,
-            ] {
+            let s = Arc::new(Server {
+                robot: Arc::clone(&robot),
+                session: session.clone(),
+                goals: Mutex::new(HashMap::new()),
+                feedback: Writer::new(keys::exec_place_topic(
+                    d,
+                    id,
+                    server,
+                    ActionTopic::Feedback,
+                )?),
+                status: Writer::new(keys::exec_place_topic(d, id, server, ActionTopic::Status)?),
+            });
+            for service in ActionService::ALL {
                 let q = session
                     .declare_queryable(keys::exec_place(d, id, server, service)?)
                     .await
                     .map_err(ZenohError::zenoh)?;
-                let robot = Arc::clone(&robot);
+                let s = Arc::clone(&s);
                 tasks.push(tokio::spawn(async move {
                     while let Ok(query) = q.recv_async().await {
-                        answer(&robot, service, query).await;
+                        answer(&s, service, query).await;
                     }
                 }));
             }
+            endpoints.extend(keys::action_server_tokens(&node, &ids, id, server)?);
+            action_servers.push(s);
         }
-        // Last: the token says the robot is ready.
-        let node = u32::try_from(i + 1).unwrap_or(u32::MAX);
-        let token = session
-            .liveliness()
-            .declare_token(keys::node_token(
-                d,
-                &zid,
-                node,
-                &keys::robot_namespace(id),
-                keys::ROBOT_NODE,
-            ))
-            .await
-            .map_err(ZenohError::zenoh)?;
-        tokens.push(token);
+        endpoints.push(node.endpoint(
+            ids.next(),
+            keys::EntityKind::Subscription,
+            Topic::Run.name(),
+            Topic::Run.ty(),
+            Topic::Run.qos(),
+        )?);
+        endpoints.push(node.endpoint(
+            ids.next(),
+            keys::EntityKind::Subscription,
+            Topic::Firings.name(),
+            Topic::Firings.ty(),
+            Topic::Firings.qos(),
+        )?);
+        // Last: the node's token says the robot is ready.
+        endpoints.push(node.token());
+        for key in endpoints {
+            tokens.push(declare_token(session, key).await?);
+        }
         robots.push((id.clone(), robot));
     }
     let left = tokio::select! {
@@ -162,8 +232,8 @@ pub async fn serve(
     };
     drop(tokens);
     // Goals still running end cancelled (their results are still answered).
-    for (_, r) in &robots {
-        if let Ok(mut goals) = r.goals.lock() {
+    for s in &action_servers {
+        if let Ok(mut goals) = s.goals.lock() {
             for g in goals.values_mut() {
                 if let Some(c) = g.cancel.take() {
                     let _ = c.send(());
@@ -187,6 +257,18 @@ pub async fn serve(
         firings: received.load(Ordering::Relaxed),
         left,
     })
+}
+
+/// Declares the liveliness token `key`.
+pub(super) async fn declare_token(
+    session: &Session,
+    key: String,
+) -> Result<LivelinessToken, ZenohError> {
+    session
+        .liveliness()
+        .declare_token(key)
+        .await
+        .map_err(ZenohError::zenoh)
 }
 
 /// Completes when the robots should leave: the run is over, or the supervisor (once seen)
@@ -216,7 +298,7 @@ async fn leave(
 }
 
 /// Replies `resp` to `query`, echoing its attachment's sequence number and GID.
-async fn reply<M: serde::Serialize>(query: &Query, resp: &M) {
+async fn reply<M: Serialize>(query: &Query, resp: &M) {
     let mut r = query.reply(query.key_expr().clone(), wire::encode(resp));
     if let Some(a) = query
         .attachment()
@@ -229,7 +311,7 @@ async fn reply<M: serde::Serialize>(query: &Query, resp: &M) {
     }
 }
 
-fn request<M: serde::de::DeserializeOwned>(query: &Query) -> Result<M, String> {
+fn request<M: serde::de::DeserializeOwned>(query: &Query) -> Result<M, WireError> {
     let b = query
         .payload()
         .map(|p| p.to_bytes().into_owned())
@@ -237,14 +319,14 @@ fn request<M: serde::de::DeserializeOwned>(query: &Query) -> Result<M, String> {
     wire::decode(&b)
 }
 
-async fn answer(robot: &Arc<Robot>, service: ActionService, query: Query) {
+async fn answer(server: &Arc<Server>, service: ActionService, query: Query) {
     match service {
         ActionService::SendGoal => match request::<SendGoalRequest>(&query) {
             Ok(req) => {
-                let accepted = start_goal(robot, req);
+                let accepted = start_goal(server, req).await;
                 let resp = SendGoalResponse {
-                    accepted,
-                    stamp: Time::now(),
+                    accepted: accepted.is_some(),
+                    stamp: accepted.unwrap_or_default(),
                 };
                 reply(&query, &resp).await;
             }
@@ -252,7 +334,7 @@ async fn answer(robot: &Arc<Robot>, service: ActionService, query: Query) {
         },
         ActionService::GetResult => match request::<GetResultRequest>(&query) {
             Ok(req) => {
-                let result = robot
+                let result = server
                     .goals
                     .lock()
                     .ok()
@@ -266,7 +348,7 @@ async fn answer(robot: &Arc<Robot>, service: ActionService, query: Query) {
                             r.unwrap_or_default()
                         }
                         None => GetResultResponse {
-                            status: super::action::STATUS_ABORTED,
+                            status: STATUS_ABORTED,
                             result: ExecPlaceResult {
                                 outcome: ExecPlaceResult::FAILED,
                                 transition: String::new(),
@@ -283,7 +365,7 @@ async fn answer(robot: &Arc<Robot>, service: ActionService, query: Query) {
             Ok(req) => {
                 let id = req.goal_info.goal_id;
                 let found =
-                    robot.goals.lock().ok().and_then(|mut g| {
+                    server.goals.lock().ok().and_then(|mut g| {
                         g.get_mut(&id).map(|g| g.cancel.take().map(|c| c.send(())))
                     });
                 let resp = CancelGoalResponse {
@@ -301,54 +383,130 @@ async fn answer(robot: &Arc<Robot>, service: ActionService, query: Query) {
     }
 }
 
-/// Accepts and starts a goal (false: its place is unknown, rejected).
-fn start_goal(robot: &Arc<Robot>, req: SendGoalRequest) -> bool {
+/// Publishes the server's status: its running goals and the one that just ended (ROS 2's
+/// servers also list ended goals until their result expires; a fleet of busy robots would
+/// publish long lists for nothing).
+async fn publish_status(server: &Server, ended: Option<GoalStatus>) {
+    let mut status_list: Vec<GoalStatus> = server
+        .goals
+        .lock()
+        .map(|goals| {
+            goals
+                .iter()
+                .filter(|(_, g)| g.result.borrow().is_none())
+                .map(|(id, g)| GoalStatus {
+                    goal_info: GoalInfo {
+                        goal_id: *id,
+                        stamp: g.accepted,
+                    },
+                    status: STATUS_EXECUTING,
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    status_list.extend(ended);
+    status_list.sort_by_key(|s| s.goal_info.goal_id);
+    server
+        .status
+        .put(&server.session, &GoalStatusArray { status_list })
+        .await;
+}
+
+/// Accepts and starts a goal: when it was accepted, or `None` when its place is unknown
+/// (rejected).
+async fn start_goal(server: &Arc<Server>, req: SendGoalRequest) -> Option<Time> {
+    let robot = &server.robot;
     let Some(place) = robot.net.place_by_name(&req.goal.place) else {
         tracing::warn!("goal for unknown place `{}`: rejected", req.goal.place);
-        return false;
+        return None;
     };
     let decision = match robot.rng.lock() {
         Ok(mut rng) => decide(&robot.net, place, robot.time_scale, &mut rng),
-        Err(_) => return false,
+        Err(_) => return None,
     };
     if let Ok(mut s) = robot.stats.lock() {
         s.goals += 1;
     }
     let (cancel, cancelled) = oneshot::channel();
     let (done, result) = watch::channel(None);
-    if let Ok(mut g) = robot.goals.lock() {
+    let accepted = Time::now();
+    if let Ok(mut g) = server.goals.lock() {
         g.insert(
             req.goal_id,
             Goal {
                 cancel: Some(cancel),
+                accepted,
                 result,
             },
         );
     }
-    let robot = Arc::clone(robot);
-    tokio::spawn(async move {
-        let wait = tokio::time::sleep(crate::limits::duration(decision.delay));
-        let resp = tokio::select! {
-            _ = wait => GetResultResponse {
+    publish_status(server, None).await;
+    tokio::spawn(run_goal(
+        Arc::clone(server),
+        req.goal_id,
+        accepted,
+        decision,
+        cancelled,
+        done,
+    ));
+    Some(accepted)
+}
+
+/// Runs goal `id` to its end (its delay, or a cancel request), publishing its feedback
+/// every [`FEEDBACK_EVERY`] meanwhile, then its result and the status.
+async fn run_goal(
+    server: Arc<Server>,
+    id: GoalId,
+    accepted: Time,
+    decision: crate::ros2::robot::Decision,
+    mut cancelled: oneshot::Receiver<()>,
+    done: watch::Sender<Option<GetResultResponse>>,
+) {
+    let start = tokio::time::Instant::now();
+    let wait = tokio::time::sleep(crate::limits::duration(decision.delay));
+    tokio::pin!(wait);
+    let mut feedback = tokio::time::interval_at(start + FEEDBACK_EVERY, FEEDBACK_EVERY);
+    // Open until cancelled, or until nobody can cancel any more.
+    let mut cancellable = true;
+    let resp = loop {
+        tokio::select! {
+            _ = &mut wait => break GetResultResponse {
                 status: STATUS_SUCCEEDED,
                 result: ExecPlaceResult::fire_or_decide(decision.transition, "net-timed"),
             },
-            Ok(()) = cancelled => {
-                if let Ok(mut s) = robot.stats.lock() {
+            c = &mut cancelled, if cancellable => {
+                if c.is_err() {
+                    cancellable = false;
+                    continue;
+                }
+                if let Ok(mut s) = server.robot.stats.lock() {
                     s.cancelled += 1;
                 }
-                GetResultResponse {
+                break GetResultResponse {
                     status: STATUS_CANCELED,
                     result: ExecPlaceResult::cancelled(),
-                }
+                };
             }
-        };
-        let _ = done.send(Some(resp));
-        // Kept a while for a late get_result, then forgotten.
-        tokio::time::sleep(Duration::from_secs(60)).await;
-        if let Ok(mut g) = robot.goals.lock() {
-            g.remove(&req.goal_id);
+            _ = feedback.tick() => {
+                let elapsed = start.elapsed().as_secs_f64();
+                let msg = FeedbackMessage { goal_id: id, feedback: ExecPlaceFeedback { elapsed } };
+                server.feedback.put(&server.session, &msg).await;
+            }
         }
-    });
-    true
+    };
+    let status = resp.status;
+    let _ = done.send(Some(resp));
+    let ended = GoalStatus {
+        goal_info: GoalInfo {
+            goal_id: id,
+            stamp: accepted,
+        },
+        status,
+    };
+    publish_status(&server, Some(ended)).await;
+    // Kept a while for a late get_result, then forgotten.
+    tokio::time::sleep(RESULT_KEPT).await;
+    if let Ok(mut g) = server.goals.lock() {
+        g.remove(&id);
+    }
 }

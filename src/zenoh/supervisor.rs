@@ -17,7 +17,6 @@
 
 use std::collections::HashMap;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::Duration;
 
 use serde::Serialize;
@@ -27,10 +26,11 @@ use zenoh::liveliness::LivelinessToken;
 use zenoh::pubsub::Publisher;
 use zenoh::qos::CongestionControl;
 
-use super::keys::{self, Topic};
+use super::keys::{self, EntityIds, EntityKind, NodeKey, Topic};
 use super::presence::Presence;
 use super::remote_place::{RobotLink, ZenohPlaces};
-use super::wire::{self, Attachment};
+use super::robot::declare_token;
+use super::wire::{self, Source};
 use super::{ZenohConfig, ZenohError};
 use crate::net::Net;
 use crate::ros2::firings::{Published, drift_message};
@@ -41,8 +41,7 @@ use crate::runtime::{EventKind, Events, Received, RuntimeBuilder};
 /// A publisher and its rmw_zenoh attachment (GID, sequence numbers).
 struct TopicPublisher {
     publisher: Publisher<'static>,
-    gid: [u8; 16],
-    seq: AtomicI64,
+    source: Source,
 }
 
 impl TopicPublisher {
@@ -52,21 +51,16 @@ impl TopicPublisher {
             .congestion_control(CongestionControl::Block)
             .await
             .map_err(ZenohError::zenoh)?;
-        let mut gid = [0; 16];
-        gid[..8].copy_from_slice(&crate::ros2::robot::id_hash(topic.name()).to_le_bytes());
-        gid[8..12].copy_from_slice(&std::process::id().to_le_bytes());
         Ok(TopicPublisher {
             publisher,
-            gid,
-            seq: AtomicI64::new(1),
+            source: Source::new(topic.name()),
         })
     }
 
     async fn put<M: Serialize>(&self, m: &M) -> bool {
-        let att = Attachment::now(self.seq.fetch_add(1, Ordering::Relaxed), self.gid);
         self.publisher
             .put(wire::encode(m))
-            .attachment(att.to_bytes())
+            .attachment(self.source.next().to_bytes())
             .await
             .is_ok()
     }
@@ -151,7 +145,8 @@ impl RunTopics {
 /// The supervisor's Zenoh side: its session, links to the robots and the publishers.
 pub struct ZenohBackend {
     session: Session,
-    _token: LivelinessToken,
+    /// The node's and its endpoints' liveliness tokens, withdrawn when it is dropped.
+    _tokens: Vec<LivelinessToken>,
     topics: Arc<RunTopics>,
     task: Option<JoinHandle<Published>>,
     places: ZenohPlaces,
@@ -181,22 +176,18 @@ impl ZenohBackend {
     ) -> Result<ZenohBackend, ZenohError> {
         let d = cfg.domain;
         if let Some((p, _)) = settings.servers.iter().find(|(_, s)| s == NAV2_SERVER) {
-            return Err(ZenohError::Unsupported(format!(
-                "place `{}` is a Nav2 place (server = \"{NAV2_SERVER}\"): Nav2 goals go over DDS only; use transport = \"dds\"",
-                net.place(*p).name
-            )));
+            return Err(ZenohError::Nav2Place(net.place(*p).name.clone()));
         }
-        let token = session
-            .liveliness()
-            .declare_token(keys::node_token(
-                d,
-                &session.zid().to_string(),
-                0,
-                keys::SUPERVISOR_NS,
-                keys::SUPERVISOR_NODE,
-            ))
-            .await
-            .map_err(ZenohError::zenoh)?;
+        // The node's token first, as rmw_zenoh declares a node before its endpoints.
+        let ids = EntityIds::default();
+        let node = NodeKey {
+            domain: d,
+            zid: session.zid().to_string(),
+            id: ids.next(),
+            namespace: keys::SUPERVISOR_NS.to_string(),
+            name: keys::SUPERVISOR_NODE.to_string(),
+        };
+        let mut tokens = vec![declare_token(&session, node.token()).await?];
         let presence = Presence::robots(&session, d, robots, cfg.lost_after).await?;
         let topics = RunTopics {
             firings: TopicPublisher::new(&session, d, Topic::Firings).await?,
@@ -205,6 +196,16 @@ impl ZenohBackend {
             drift: TopicPublisher::new(&session, d, Topic::Drift).await?,
             net: Arc::new(net.clone()),
         };
+        for topic in [Topic::Firings, Topic::Marking, Topic::Run, Topic::Drift] {
+            let key = node.endpoint(
+                ids.next(),
+                EntityKind::Publisher,
+                topic.name(),
+                topic.ty(),
+                topic.qos(),
+            )?;
+            tokens.push(declare_token(&session, key).await?);
+        }
         let mut servers: Vec<&str> = settings.servers.iter().map(|(_, s)| s.as_str()).collect();
         servers.sort_unstable();
         servers.dedup();
@@ -212,9 +213,7 @@ impl ZenohBackend {
         for robot in robots {
             let (Some(live), Some(present)) = (presence.liveness(robot), presence.present(robot))
             else {
-                return Err(ZenohError::Startup(format!(
-                    "robot `{robot}` is not watched"
-                )));
+                return Err(ZenohError::Unwatched(robot.clone()));
             };
             for &server in &servers {
                 let link = RobotLink::new(
@@ -226,19 +225,21 @@ impl ZenohBackend {
                     present.clone(),
                 )?;
                 links.push((server.to_string(), Arc::new(link)));
+                for key in keys::action_client_tokens(&node, &ids, robot, server)? {
+                    tokens.push(declare_token(&session, key).await?);
+                }
             }
         }
         let startup = cfg.startup;
-        presence.all_alive(startup).await.map_err(|missing| {
-            let shown: Vec<&str> = missing.iter().take(10).map(String::as_str).collect();
-            ZenohError::Startup(format!(
-                "no liveliness token from {} robot(s) ({}{}) within {startup:?} via {} (domain {d}): are `plan-runner robot --zenoh` or `fleet` processes running?",
-                missing.len(),
-                shown.join(", "),
-                if missing.len() > shown.len() { ", …" } else { "" },
-                cfg.endpoint
-            ))
-        })?;
+        presence
+            .all_alive(startup)
+            .await
+            .map_err(|missing| ZenohError::RobotsMissing {
+                missing,
+                within: startup,
+                endpoint: cfg.endpoint.clone(),
+                domain: d,
+            })?;
         if subscribers > 0 {
             let matched = async {
                 loop {
@@ -250,15 +251,15 @@ impl ZenohBackend {
                     tokio::time::sleep(Duration::from_millis(20)).await;
                 }
             };
-            tokio::time::timeout(startup, matched).await.map_err(|_| {
-                ZenohError::Startup(format!("no subscriber of /gspn/firings within {startup:?}"))
-            })?;
+            tokio::time::timeout(startup, matched)
+                .await
+                .map_err(|_| ZenohError::NoSubscriber(startup))?;
         }
         let servers: HashMap<_, _> = settings.servers.iter().cloned().collect();
         let args: HashMap<_, _> = settings.args.iter().cloned().collect();
         Ok(ZenohBackend {
             session,
-            _token: token,
+            _tokens: tokens,
             topics: Arc::new(topics),
             task: None,
             places: ZenohPlaces::new(servers, args, links),

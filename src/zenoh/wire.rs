@@ -4,6 +4,8 @@
 //! source GID ([`Attachment`]); the key expression names the type by its ROS 2 type hash
 //! ([`super::type_hash`]).
 
+use std::sync::atomic::{AtomicI64, Ordering};
+
 use byteorder::LittleEndian;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -19,18 +21,66 @@ pub fn encode<M: Serialize>(m: &M) -> Vec<u8> {
     out
 }
 
+/// Why a payload could not be read as a message.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum WireError {
+    /// Fewer bytes than the 4-byte encapsulation header.
+    #[error("{0} bytes: shorter than a CDR header")]
+    Short(usize),
+    /// An encapsulation other than plain CDR (big or little endian).
+    #[error("CDR encapsulation kind {0} is not plain CDR")]
+    Encapsulation(u8),
+    /// The body does not hold the message.
+    #[error("CDR: {0}")]
+    Cdr(#[from] cdr_encoding::Error),
+}
+
 /// A message from CDR bytes (big- or little-endian encapsulation).
-pub fn decode<M: DeserializeOwned>(bytes: &[u8]) -> Result<M, String> {
+pub fn decode<M: DeserializeOwned>(bytes: &[u8]) -> Result<M, WireError> {
     if bytes.len() < 4 {
-        return Err(format!("{} bytes: shorter than a CDR header", bytes.len()));
+        return Err(WireError::Short(bytes.len()));
     }
     let body = &bytes[4..];
     let r = match bytes[1] {
         1 => cdr_encoding::from_bytes::<M, LittleEndian>(body),
         0 => cdr_encoding::from_bytes::<M, byteorder::BigEndian>(body),
-        k => return Err(format!("CDR encapsulation kind {k} is not plain CDR")),
+        k => return Err(WireError::Encapsulation(k)),
     };
-    r.map(|(m, _)| m).map_err(|e| format!("CDR: {e}"))
+    Ok(r?.0)
+}
+
+/// A writer's identity on the wire: its GID and the sequence number of its next sample, as
+/// rmw_zenoh numbers each publisher's samples and each client's requests from 1. The GID
+/// is the writer's name hashed, and the process id (no random draw): unique enough to pair
+/// replies, the same for the same run.
+#[derive(Debug)]
+pub struct Source {
+    gid: [u8; 16],
+    seq: AtomicI64,
+}
+
+impl Source {
+    /// The writer named `name` (a topic's or a client's) of this process.
+    pub fn new(name: &str) -> Source {
+        let mut gid = [0; 16];
+        gid[..8].copy_from_slice(&crate::ros2::robot::id_hash(name).to_le_bytes());
+        gid[8..12].copy_from_slice(&std::process::id().to_le_bytes());
+        Source {
+            gid,
+            seq: AtomicI64::new(1),
+        }
+    }
+
+    /// The GID.
+    pub fn gid(&self) -> [u8; 16] {
+        self.gid
+    }
+
+    /// The attachment of the next sample, stamped now.
+    pub fn next(&self) -> Attachment {
+        Attachment::now(self.seq.fetch_add(1, Ordering::Relaxed), self.gid)
+    }
 }
 
 /// rmw_zenoh's attachment: the writer's sequence number (1, 2, … per publisher or client),
@@ -114,7 +164,24 @@ mod tests {
             ]
         );
         assert_eq!(decode::<M>(&b).unwrap(), m);
-        assert!(decode::<M>(&b[..3]).unwrap_err().contains("shorter"));
+        assert!(matches!(decode::<M>(&b[..3]), Err(WireError::Short(3))));
+        assert!(matches!(decode::<M>(&b[..10]), Err(WireError::Cdr(_))));
+        let mut odd = b.clone();
+        odd[1] = 7;
+        assert!(matches!(
+            decode::<M>(&odd),
+            Err(WireError::Encapsulation(7))
+        ));
+    }
+
+    #[test]
+    fn a_source_numbers_its_samples_from_1_under_one_gid() {
+        let (a, b) = (Source::new("/r1/exec_place"), Source::new("/r2/exec_place"));
+        let (first, second) = (a.next(), a.next());
+        assert_eq!((first.seq, second.seq), (1, 2));
+        assert_eq!((first.gid, second.gid), (a.gid(), a.gid()));
+        assert_ne!(a.gid(), b.gid());
+        assert_eq!(&a.gid()[8..12], &std::process::id().to_le_bytes());
     }
 
     #[test]

@@ -120,6 +120,7 @@ async fn terminate(mut p: Proc, limit: Duration) -> String {
     p.log()
 }
 
+mod graph;
 mod netns;
 
 const PATROL: &str = "plans/temperature_patrol_ros2.toml";
