@@ -64,146 +64,167 @@ pub(super) fn resolve_ros2(
 ) -> Result<Ros2Settings, LoadError> {
     let mut s = Ros2Settings::default();
     if let Some(f) = file {
-        if let Some(d) = &f.domain_id {
-            if *d.get_ref() > 232 {
-                return Err(at(
-                    d.span(),
-                    out_of_range(
-                        "domain_id",
-                        "ros2",
-                        f64::from(*d.get_ref()),
-                        "must be in 0..=232",
-                    ),
-                ));
-            }
-            s.domain_id = Some(*d.get_ref());
-        }
-        for n in f.networks.iter().flatten() {
-            let ip = n.get_ref().trim().parse().map_err(|_| {
-                at(
-                    n.span(),
-                    LoadErrorKind::Invalid(format!(
-                        "ros2.networks: `{}` is not an IP address",
-                        n.get_ref()
-                    )),
-                )
-            })?;
-            s.networks.push(ip);
-        }
-        if let Some(m) = &f.service_mapping {
-            s.service_mapping = ServiceMapping::parse(m.get_ref()).ok_or_else(|| {
-                at(
-                    m.span(),
-                    LoadErrorKind::Invalid(format!(
-                        "ros2.service_mapping: `{}` is not \"enhanced\" or \"cyclone\"",
-                        m.get_ref()
-                    )),
-                )
-            })?;
-        }
-        s.rosout = f.rosout;
-        if let Some(t) = &f.transport {
-            s.transport = Transport::parse(t.get_ref()).ok_or_else(|| {
-                at(
-                    t.span(),
-                    LoadErrorKind::Invalid(format!(
-                        "ros2.transport: `{}` is not \"dds\" or \"zenoh\"",
-                        t.get_ref()
-                    )),
-                )
-            })?;
-        }
-        s.zenoh.clone_from(&f.zenoh);
-        for (key, v, slot) in [
-            ("heartbeat", &f.heartbeat, &mut s.heartbeat),
-            ("lost_after", &f.lost_after, &mut s.lost_after),
-            ("startup", &f.startup, &mut s.startup),
-        ] {
-            if let Some(v) = v {
-                let x = *v.get_ref();
-                // `heartbeat = 0`: robots send none (the supervisor sees them through
-                // discovery).
-                let valid = if key == "heartbeat" {
-                    crate::limits::valid_wait(x)
-                } else {
-                    crate::limits::valid_seconds(x)
-                };
-                if !valid {
-                    return Err(at(
-                        v.span(),
-                        out_of_range(key, "ros2", x, crate::limits::SECONDS_EXPECTED),
-                    ));
-                }
-                *slot = Some(x);
-            }
-        }
+        ros2_table(f, &mut s, at)?;
     }
     for (name, role) in places {
-        let f = role.get_ref();
-        let is_ros2 = f.action.as_ref().and_then(|a| a.get_ref().name()) == Some(ROS2_ACTION);
-        let server = match &f.server {
-            Some(srv) if !is_ros2 => {
-                return Err(at(
-                    srv.span(),
-                    LoadErrorKind::Invalid(format!(
-                        "place `{}`: `server` applies to places with action = \"{ROS2_ACTION}\" only",
-                        name.get_ref()
-                    )),
-                ));
-            }
-            Some(srv) => {
-                let v = srv.get_ref();
-                let ok = v.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
-                    && v.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-                    && !v.contains("__");
-                if !ok {
-                    return Err(at(
-                        srv.span(),
-                        LoadErrorKind::Invalid(format!(
-                            "place `{}`: server `{v}` is not a ROS 2 name (letters, digits and single underscores, starting with a letter)",
-                            name.get_ref()
-                        )),
-                    ));
-                }
-                v.clone()
-            }
-            None => DEFAULT_SERVER.to_string(),
-        };
-        let args = place_args(name.get_ref(), f, is_ros2, at)?;
-        if let Some(srv) = &f.server
-            && srv.get_ref() == NAV2_SERVER
-            && args.target.is_none()
-        {
-            return Err(at(
-                srv.span(),
-                LoadErrorKind::Invalid(format!(
-                    "place `{}`: server \"{NAV2_SERVER}\" sends Nav2 goals: it needs a `target = [x, y]` or `[x, y, yaw]` (frame map)",
-                    name.get_ref()
-                )),
-            ));
-        }
-        if let Some(srv) = &f.server
-            && srv.get_ref() == NAV2_SERVER
-            && s.transport == Transport::Zenoh
-        {
-            return Err(at(
-                srv.span(),
-                LoadErrorKind::Invalid(format!(
-                    "place `{}`: server \"{NAV2_SERVER}\" sends Nav2 goals over DDS only, and the plan says transport = \"zenoh\"",
-                    name.get_ref()
-                )),
-            ));
-        }
-        if is_ros2 && let Some(p) = net.place_by_name(name.get_ref()) {
-            s.servers.push((p, server));
-            if args != PlaceArgs::default() {
-                s.args.push((p, args));
-            }
-        }
+        place_server(net, name, role.get_ref(), &mut s, at)?;
     }
     s.servers.sort_by_key(|&(p, _)| p);
     s.args.sort_by_key(|&(p, _)| p);
     Ok(s)
+}
+
+/// The `[ros2]` table's keys into `s`.
+fn ros2_table(
+    f: &Ros2File,
+    s: &mut Ros2Settings,
+    at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+) -> Result<(), LoadError> {
+    if let Some(d) = &f.domain_id {
+        if *d.get_ref() > 232 {
+            return Err(at(
+                d.span(),
+                out_of_range(
+                    "domain_id",
+                    "ros2",
+                    f64::from(*d.get_ref()),
+                    "must be in 0..=232",
+                ),
+            ));
+        }
+        s.domain_id = Some(*d.get_ref());
+    }
+    for n in f.networks.iter().flatten() {
+        let ip = n.get_ref().trim().parse().map_err(|_| {
+            at(
+                n.span(),
+                LoadErrorKind::Invalid(format!(
+                    "ros2.networks: `{}` is not an IP address",
+                    n.get_ref()
+                )),
+            )
+        })?;
+        s.networks.push(ip);
+    }
+    if let Some(m) = &f.service_mapping {
+        s.service_mapping = ServiceMapping::parse(m.get_ref()).ok_or_else(|| {
+            at(
+                m.span(),
+                LoadErrorKind::Invalid(format!(
+                    "ros2.service_mapping: `{}` is not \"enhanced\" or \"cyclone\"",
+                    m.get_ref()
+                )),
+            )
+        })?;
+    }
+    s.rosout = f.rosout;
+    if let Some(t) = &f.transport {
+        s.transport = Transport::parse(t.get_ref()).ok_or_else(|| {
+            at(
+                t.span(),
+                LoadErrorKind::Invalid(format!(
+                    "ros2.transport: `{}` is not \"dds\" or \"zenoh\"",
+                    t.get_ref()
+                )),
+            )
+        })?;
+    }
+    s.zenoh.clone_from(&f.zenoh);
+    for (key, v, slot) in [
+        ("heartbeat", &f.heartbeat, &mut s.heartbeat),
+        ("lost_after", &f.lost_after, &mut s.lost_after),
+        ("startup", &f.startup, &mut s.startup),
+    ] {
+        if let Some(v) = v {
+            let x = *v.get_ref();
+            // `heartbeat = 0`: robots send none (the supervisor sees them through
+            // discovery).
+            let valid = if key == "heartbeat" {
+                crate::limits::valid_wait(x)
+            } else {
+                crate::limits::valid_seconds(x)
+            };
+            if !valid {
+                return Err(at(
+                    v.span(),
+                    out_of_range(key, "ros2", x, crate::limits::SECONDS_EXPECTED),
+                ));
+            }
+            *slot = Some(x);
+        }
+    }
+    Ok(())
+}
+
+/// Place `name`'s `server`, `target` and `args` keys into `s` (`ros2` places only).
+fn place_server(
+    net: &Net,
+    name: &Spanned<String>,
+    f: &PlaceFile,
+    s: &mut Ros2Settings,
+    at: &impl Fn(Range<usize>, LoadErrorKind) -> LoadError,
+) -> Result<(), LoadError> {
+    let is_ros2 = f.action.as_ref().and_then(|a| a.get_ref().name()) == Some(ROS2_ACTION);
+    let server = match &f.server {
+        Some(srv) if !is_ros2 => {
+            return Err(at(
+                srv.span(),
+                LoadErrorKind::Invalid(format!(
+                    "place `{}`: `server` applies to places with action = \"{ROS2_ACTION}\" only",
+                    name.get_ref()
+                )),
+            ));
+        }
+        Some(srv) => {
+            let v = srv.get_ref();
+            let ok = v.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+                && v.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                && !v.contains("__");
+            if !ok {
+                return Err(at(
+                    srv.span(),
+                    LoadErrorKind::Invalid(format!(
+                        "place `{}`: server `{v}` is not a ROS 2 name (letters, digits and single underscores, starting with a letter)",
+                        name.get_ref()
+                    )),
+                ));
+            }
+            v.clone()
+        }
+        None => DEFAULT_SERVER.to_string(),
+    };
+    let args = place_args(name.get_ref(), f, is_ros2, at)?;
+    if let Some(srv) = &f.server
+        && srv.get_ref() == NAV2_SERVER
+        && args.target.is_none()
+    {
+        return Err(at(
+            srv.span(),
+            LoadErrorKind::Invalid(format!(
+                "place `{}`: server \"{NAV2_SERVER}\" sends Nav2 goals: it needs a `target = [x, y]` or `[x, y, yaw]` (frame map)",
+                name.get_ref()
+            )),
+        ));
+    }
+    if let Some(srv) = &f.server
+        && srv.get_ref() == NAV2_SERVER
+        && s.transport == Transport::Zenoh
+    {
+        return Err(at(
+            srv.span(),
+            LoadErrorKind::Invalid(format!(
+                "place `{}`: server \"{NAV2_SERVER}\" sends Nav2 goals over DDS only, and the plan says transport = \"zenoh\"",
+                name.get_ref()
+            )),
+        ));
+    }
+    if is_ros2 && let Some(p) = net.place_by_name(name.get_ref()) {
+        s.servers.push((p, server));
+        if args != PlaceArgs::default() {
+            s.args.push((p, args));
+        }
+    }
+    Ok(())
 }
 
 /// The `target` and `args` keys of place `name`: for `ros2` places only; a target is

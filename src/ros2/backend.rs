@@ -27,8 +27,9 @@ use super::config::DdsConfig;
 use super::firings::{FiringPublisher, Published, RunStatePublisher};
 use super::heartbeat::{self, Liveness, RobotWatch};
 use super::msgs::{ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, exec_place_type};
+use super::nav2::Nav2Client;
 use super::presence::{Presence, ServerCounter};
-use super::remote_place::{Nav2Link, RemotePlaces, RobotLink};
+use super::remote_place::{ExecPlaceClient, Nav2Link, RemotePlaces, RobotLink};
 use super::settings::{NAV2_SERVER, ROS2_ACTION, Ros2Settings};
 use crate::net::Net;
 use crate::runtime::{Events, RuntimeBuilder};
@@ -105,102 +106,11 @@ impl Ros2Backend {
         let watch = RobotWatch::start(&mut node, robots, cfg.lost_after)?;
         let publisher = FiringPublisher::new(&mut node, Arc::new(net.clone()))?;
         let run_state = RunStatePublisher::new(&mut node)?;
-        // Nav2 places go to the robots' own Nav2 (`navigate_to_pose`), the rest to ExecPlace.
-        let mut servers: Vec<&str> = settings
-            .servers
-            .iter()
-            .map(|(_, s)| s.as_str())
-            .filter(|&s| s != NAV2_SERVER)
-            .collect();
-        servers.sort_unstable();
-        servers.dedup();
-        let mut nav2_clients = Vec::new();
-        if settings.servers.iter().any(|(_, s)| s == NAV2_SERVER) {
-            for robot in robots {
-                let client = super::nav2::client(&mut node, cfg, robot)?;
-                nav2_clients.push((robot.clone(), Arc::new(client)));
-            }
-        }
-        let mut clients = Vec::new();
-        for robot in robots {
-            for &server in &servers {
-                let name = super::names::action(&node, robot, server)?;
-                let client = node
-                    .create_action_client::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
-                        cfg.service_mapping,
-                        &name,
-                        &exec_place_type(),
-                        client_qos(),
-                    )
-                    .map_err(Ros2Error::dds)?;
-                clients.push((robot.clone(), server.to_string(), client));
-            }
-        }
-        // A robot is there when its ExecPlace servers are: heartbeats are optional.
+        let clients = Clients::create(&mut node, settings, robots, cfg)?;
+        clients.wait_for_servers(&node, cfg).await?;
+        let presence = clients.presence(&node, robots, &watch, cfg);
+        let (links, nav2) = clients.links(&presence)?;
         let startup = cfg.startup;
-        let deadline = tokio::time::Instant::now() + startup;
-        let mut missing = Vec::new();
-        for (robot, server, c) in &clients {
-            let found = RobotLink::wait_for_server(c, &node);
-            if tokio::time::timeout_at(deadline, found).await.is_err() {
-                missing.push(format!("/{robot}/{server}"));
-            }
-        }
-        for (robot, c) in &nav2_clients {
-            let found = super::nav2::wait_for_server(c, &node);
-            if tokio::time::timeout_at(deadline, found).await.is_err() {
-                missing.push(format!("/{robot}/{NAV2_SERVER} (Nav2)"));
-            }
-        }
-        if !missing.is_empty() {
-            return Err(Ros2Error::Startup(format!(
-                "no ExecPlace server at {} within {startup:?} (domain {}): are the robots running (`plan-runner robot`, or any ROS 2 node serving gspn_msgs/action/ExecPlace)?",
-                missing.join(", "),
-                cfg.domain_id
-            )));
-        }
-        let presence = Presence::start(
-            robots
-                .iter()
-                .map(|r| {
-                    let heartbeat = watch
-                        .liveness(r)
-                        .unwrap_or_else(|| tokio::sync::watch::channel(Liveness::Unknown).1);
-                    let mut counters: Vec<ServerCounter> = clients
-                        .iter()
-                        .filter(|(robot, _, _)| robot == r)
-                        .map(|(_, _, c)| {
-                            Box::new(c.goal_client().server_counter(&node)) as ServerCounter
-                        })
-                        .collect();
-                    counters.extend(nav2_clients.iter().filter(|(robot, _)| robot == r).map(
-                        |(_, c)| Box::new(c.goal_client().server_counter(&node)) as ServerCounter,
-                    ));
-                    (r.clone(), heartbeat, counters)
-                })
-                .collect(),
-            (cfg.lost_after / 4).max(Duration::from_millis(10)),
-        );
-        let mut links = Vec::new();
-        for (robot, server, client) in clients {
-            let live = presence
-                .liveness(&robot)
-                .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))?;
-            links.push((server, Arc::new(RobotLink::new(robot, client, live))));
-        }
-        let mut nav2 = HashMap::new();
-        for (robot, client) in nav2_clients {
-            let live = presence
-                .liveness(&robot)
-                .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))?;
-            nav2.insert(
-                robot,
-                Nav2Link {
-                    client,
-                    liveness: live,
-                },
-            );
-        }
         let subs = async {
             while publisher.firing_subscribers(&node) < subscribers {
                 tokio::time::sleep(Duration::from_millis(20)).await;
@@ -322,5 +232,140 @@ struct AbortOnDrop(JoinHandle<()>);
 impl Drop for AbortOnDrop {
     fn drop(&mut self) {
         self.0.abort();
+    }
+}
+
+/// The supervisor's action clients: one ExecPlace client per (robot, server), and one Nav2
+/// client per robot when a place is served by Nav2 (`navigate_to_pose`).
+struct Clients {
+    exec: Vec<(String, String, ExecPlaceClient)>,
+    nav2: Vec<(String, Arc<Nav2Client>)>,
+}
+
+impl Clients {
+    fn create(
+        node: &mut Node,
+        settings: &Ros2Settings,
+        robots: &[String],
+        cfg: &DdsConfig,
+    ) -> Result<Clients, Ros2Error> {
+        // Nav2 places go to the robots' own Nav2 (`navigate_to_pose`), the rest to ExecPlace.
+        let mut servers: Vec<&str> = settings
+            .servers
+            .iter()
+            .map(|(_, s)| s.as_str())
+            .filter(|&s| s != NAV2_SERVER)
+            .collect();
+        servers.sort_unstable();
+        servers.dedup();
+        let mut nav2 = Vec::new();
+        if settings.servers.iter().any(|(_, s)| s == NAV2_SERVER) {
+            for robot in robots {
+                let client = super::nav2::client(node, cfg, robot)?;
+                nav2.push((robot.clone(), Arc::new(client)));
+            }
+        }
+        let mut exec = Vec::new();
+        for robot in robots {
+            for &server in &servers {
+                let name = super::names::action(node, robot, server)?;
+                let client = node
+                    .create_action_client::<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>(
+                        cfg.service_mapping,
+                        &name,
+                        &exec_place_type(),
+                        client_qos(),
+                    )
+                    .map_err(Ros2Error::dds)?;
+                exec.push((robot.clone(), server.to_string(), client));
+            }
+        }
+        Ok(Clients { exec, nav2 })
+    }
+
+    /// Waits (at most `cfg.startup` in all) until every client's server is matched: a
+    /// robot is there when its servers are (heartbeats are optional).
+    async fn wait_for_servers(&self, node: &Node, cfg: &DdsConfig) -> Result<(), Ros2Error> {
+        let startup = cfg.startup;
+        let deadline = tokio::time::Instant::now() + startup;
+        let mut missing = Vec::new();
+        for (robot, server, c) in &self.exec {
+            let found = RobotLink::wait_for_server(c, node);
+            if tokio::time::timeout_at(deadline, found).await.is_err() {
+                missing.push(format!("/{robot}/{server}"));
+            }
+        }
+        for (robot, c) in &self.nav2 {
+            let found = super::nav2::wait_for_server(c, node);
+            if tokio::time::timeout_at(deadline, found).await.is_err() {
+                missing.push(format!("/{robot}/{NAV2_SERVER} (Nav2)"));
+            }
+        }
+        if missing.is_empty() {
+            return Ok(());
+        }
+        Err(Ros2Error::Startup(format!(
+            "no ExecPlace server at {} within {startup:?} (domain {}): are the robots running (`plan-runner robot`, or any ROS 2 node serving gspn_msgs/action/ExecPlace)?",
+            missing.join(", "),
+            cfg.domain_id
+        )))
+    }
+
+    /// Follows each robot's presence: its heartbeat (when it sends one) and the discovery
+    /// of its servers.
+    fn presence(
+        &self,
+        node: &Node,
+        robots: &[String],
+        watch: &RobotWatch,
+        cfg: &DdsConfig,
+    ) -> Presence {
+        Presence::start(
+            robots
+                .iter()
+                .map(|r| {
+                    let heartbeat = watch
+                        .liveness(r)
+                        .unwrap_or_else(|| tokio::sync::watch::channel(Liveness::Unknown).1);
+                    let mut counters: Vec<ServerCounter> = self
+                        .exec
+                        .iter()
+                        .filter(|(robot, _, _)| robot == r)
+                        .map(|(_, _, c)| {
+                            Box::new(c.goal_client().server_counter(node)) as ServerCounter
+                        })
+                        .collect();
+                    counters.extend(self.nav2.iter().filter(|(robot, _)| robot == r).map(
+                        |(_, c)| Box::new(c.goal_client().server_counter(node)) as ServerCounter,
+                    ));
+                    (r.clone(), heartbeat, counters)
+                })
+                .collect(),
+            (cfg.lost_after / 4).max(Duration::from_millis(10)),
+        )
+    }
+
+    /// The clients as the remote places use them, each with its robot's presence.
+    #[allow(clippy::type_complexity)]
+    fn links(
+        self,
+        presence: &Presence,
+    ) -> Result<(Vec<(String, Arc<RobotLink>)>, HashMap<String, Nav2Link>), Ros2Error> {
+        let live = |robot: &str| {
+            presence
+                .liveness(robot)
+                .ok_or_else(|| Ros2Error::Other(format!("robot `{robot}` is not watched")))
+        };
+        let mut links = Vec::new();
+        for (robot, server, client) in self.exec {
+            let liveness = live(&robot)?;
+            links.push((server, Arc::new(RobotLink::new(robot, client, liveness))));
+        }
+        let mut nav2 = HashMap::new();
+        for (robot, client) in self.nav2 {
+            let liveness = live(&robot)?;
+            nav2.insert(robot, Nav2Link { client, liveness });
+        }
+        Ok((links, nav2))
     }
 }
