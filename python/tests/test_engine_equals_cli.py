@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -58,15 +59,18 @@ def test_cyc3_known_answers():
     assert (r.state_space["reachable"], r.state_space["tangible"]) == (5, 3)
 
 
-def test_synthesize_equals_the_cli():
+def test_synthesize_equals_the_cli(tmp_path):
     plan = REPO / "plans" / "home-cleaning" / "plan.toml"
     ours = gspn.synthesize(plan)
-    theirs = cli_json("synthesize", str(plan), "--json")
+    rules = tmp_path / "rules.json"
+    theirs = cli_json("synthesize", str(plan), "--json", "--rules-json", str(rules))
     assert math.isclose(ours.value, theirs["value"], rel_tol=1e-9, abs_tol=1e-12)
     assert ours.lower <= ours.value <= ours.upper
     assert ours.states == theirs["states"] and ours.choices == theirs["choices"]
+    written = json.loads(rules.read_text())["rules"]
+    assert theirs["exact_rules"] == len(written)
     assert [(r["marking"], r["choose"]) for r in ours.rules] == [
-        (r["marking"], r["choose"]) for r in theirs["rules"]
+        (r["marking"], r["choose"]) for r in written
     ]
 
 

@@ -52,6 +52,8 @@ mod build;
 mod evaluate;
 mod interval;
 mod lra;
+mod objectives;
+mod policy_graph;
 mod policy_iteration;
 mod quotient;
 mod solve;

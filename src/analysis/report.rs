@@ -14,6 +14,7 @@ use serde::Serialize;
 use super::invariants::Invariants;
 use super::measures::{Measures, TransientPoint};
 use super::properties::{DeadMarking, Liveness, Properties};
+use super::state_space::Census;
 use super::under_policy::{Regime, RewardRate};
 use crate::net::{Net, TransitionId};
 
@@ -173,6 +174,40 @@ impl StateSpaceReport {
             dead_transitions: Some(transition_names(net, &p.dead_transitions())),
             p_invariants: Some(p_invariants),
             t_invariants: Some(t_invariants),
+        }
+    }
+
+    /// The report of a search that stored no arc ([`Census`]): counts, bounds and dead
+    /// markings; what needs the arcs (reversibility, liveness) and the invariants are left
+    /// out. `edges` is the labelled arcs when there are no vanishing markings (then it is
+    /// [`Properties::edges`]); with vanishing markings that count needs them eliminated, so
+    /// it is left out and `successor_pairs` counts the full graph.
+    pub fn census(net: &Net, c: &Census) -> Self {
+        let max_tokens_in_place = c.place_bounds.iter().copied().max().unwrap_or(0);
+        StateSpaceReport {
+            reachable: Some(c.reachable),
+            tangible: Some(c.tangible),
+            vanishing: Some(c.vanishing),
+            edges: (c.vanishing == 0).then_some(c.arcs),
+            successor_pairs: Some(c.successor_pairs),
+            dead_markings: Some(
+                c.dead_markings
+                    .iter()
+                    .map(|d| net.format_marking(&d.marking))
+                    .collect(),
+            ),
+            bounded: true,
+            unbounded_places: Vec::new(),
+            place_bounds: Some(by_place(net, &c.place_bounds)),
+            max_tokens_in_place: Some(max_tokens_in_place),
+            max_tokens_per_marking: Some(c.max_tokens_per_marking),
+            safe: max_tokens_in_place <= 1,
+            reversible: None,
+            deadlock_free: Some(c.dead_markings.is_empty()),
+            live_transitions: None,
+            dead_transitions: None,
+            p_invariants: None,
+            t_invariants: None,
         }
     }
 

@@ -28,6 +28,7 @@
 //! assert_eq!(ss.marking(0), vec![2, 0, 0]);
 //! ```
 
+mod census;
 pub(crate) mod explore;
 pub(crate) mod packing;
 pub(crate) mod table;
@@ -42,6 +43,7 @@ use crate::analysis::invariants::structural_bounds;
 use crate::analysis::vanishing::eliminate;
 use crate::net::{MAX_TOKENS, Net, TransitionId};
 use crate::policy::Policy;
+pub use census::Census;
 use packing::{Layout, MarkingStore};
 use table::MoveTable;
 
@@ -312,12 +314,14 @@ fn km_limit(places: usize) -> usize {
 
 /// Searches every reachable marking of `net` (structural bounds first, Karp–Miller when they
 /// do not bound every place). With `wait`, vanishing markings also list their enabled
-/// exponential transitions and those targets are searched ([`explore::explore_with`]).
+/// exponential transitions and those targets are searched ([`explore::explore_with`]);
+/// `arcs` says whether the arcs are stored or only counted.
 pub(crate) fn search(
     net: &Net,
     opts: &Options,
     monitor: &Monitor,
     wait: bool,
+    arcs: explore::Arcs,
 ) -> Result<explore::Raw, AnalysisError> {
     if monitor.is_cancelled() {
         return Err(AnalysisError::Cancelled { markings: 0 });
@@ -366,6 +370,7 @@ pub(crate) fn search(
             threads,
             monitor,
             wait,
+            arcs,
         },
     )
 }
@@ -373,7 +378,7 @@ pub(crate) fn search(
 impl StateSpace {
     /// Builds the state space of `net`, reporting to [`Options::monitor`] if there is one.
     pub fn build(net: &Net, opts: &Options) -> Result<StateSpace, AnalysisError> {
-        let raw = search(net, opts, &opts.watcher(), false)?;
+        let raw = search(net, opts, &opts.watcher(), false, explore::Arcs::Store)?;
         Self::from_raw(net, raw)
     }
 
@@ -387,7 +392,7 @@ impl StateSpace {
         policy: &Policy,
         opts: &Options,
     ) -> Result<StateSpace, AnalysisError> {
-        let mut raw = search(net, opts, &opts.watcher(), false)?;
+        let mut raw = search(net, opts, &opts.watcher(), false, explore::Arcs::Store)?;
         if !policy.is_empty() {
             let mut m = vec![0u32; net.place_count()];
             let mut firable = Vec::new();

@@ -270,3 +270,78 @@ fn transient_alone_prints_no_steady_state() {
     ]);
     assert!(close(&j["steady_state"]["mean_tokens"]["P1"], 10.0 / 7.0));
 }
+
+/// Issue 33: `--states-only` answers the cheapest question (counts, bounds, dead markings)
+/// from a search that stores no arc: FMS-PT-00002's oracle (3,444 states, 16,311
+/// transitions, at most 3 tokens in a place and 12 in a marking), and on Eratosthenes-PT-010
+/// the same successor pairs, bounds and dead markings as the full analysis.
+#[test]
+fn states_only_gives_the_oracles_counts_without_storing_arcs() {
+    let f = fixture("mcc/FMS-PT-00002/model.pnml");
+    let oracle =
+        std::fs::read_to_string(fixture("mcc/FMS-PT-00002/StateSpace-oracle-2021.out")).unwrap();
+    assert!(oracle.contains("STATE_SPACE STATES 3444 "), "{oracle}");
+    assert!(oracle.contains("STATE_SPACE TRANSITIONS 16311 "), "{oracle}");
+    let (code, j, err) = analyze(&[f.to_str().unwrap(), "--states-only", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let ss = &j["state_space"];
+    assert_eq!(ss["reachable"], 3444);
+    assert_eq!(ss["vanishing"], 0);
+    assert_eq!(ss["edges"], 16311);
+    assert_eq!(ss["max_tokens_in_place"], 3);
+    assert_eq!(ss["max_tokens_per_marking"], 12);
+    assert_eq!(j["steady_state"], Value::Null);
+    assert_eq!(ss["reversible"], Value::Null);
+    let f = fixture("mcc/Eratosthenes-PT-010/model.pnml");
+    let (code, only, err) = analyze(&[f.to_str().unwrap(), "--states-only", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, full, err) = analyze(&[f.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let (only, full) = (&only["state_space"], &full["state_space"]);
+    for key in [
+        "reachable",
+        "edges",
+        "successor_pairs",
+        "place_bounds",
+        "dead_markings",
+        "deadlock_free",
+        "max_tokens_per_marking",
+    ] {
+        assert_eq!(only[key], full[key], "{key}");
+    }
+    assert_eq!(only["successor_pairs"], 80);
+    let out = Command::cargo_bin("plan-runner")
+        .unwrap()
+        .args(["analyze", f.to_str().unwrap(), "--states-only"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("32 reachable markings (32 tangible, 0 vanishing), 120 labelled arcs (80 distinct successor pairs)"),
+        "{text}"
+    );
+}
+
+/// A net with immediate transitions: the census counts the full graph (vanishing markings
+/// included) and leaves out the edges after elimination, which need the arcs; what needs
+/// a solver is refused with exit code 2.
+#[test]
+fn states_only_counts_vanishing_markings_and_refuses_solver_options() {
+    let f = fixture("greatspn/cyc3/cyc3_ss.PNPRO");
+    let (code, only, err) = analyze(&[f.to_str().unwrap(), "--states-only", "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, full, err) = analyze(&[f.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let (only, full) = (&only["state_space"], &full["state_space"]);
+    assert_eq!((&only["reachable"], &only["tangible"]), (&Value::from(5), &Value::from(3)));
+    for key in ["vanishing", "successor_pairs", "place_bounds", "dead_markings"] {
+        assert_eq!(only[key], full[key], "{key}");
+    }
+    assert_eq!(only["edges"], Value::Null);
+    let (code, _, err) = analyze(&[f.to_str().unwrap(), "--states-only", "--steady", "--prob", "P1>0"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--states-only stores no arc and solves nothing: --steady, --prob cannot be answered with it"),
+        "{err}"
+    );
+}

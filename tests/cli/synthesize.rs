@@ -32,6 +32,7 @@ fn home_plan() -> String {
 fn the_home_plan_gives_an_optimal_policy_that_loads_back_as_a_plan() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("policy.toml");
+    let rules_json = dir.path().join("rules.json");
     let (code, stdout, err) = synthesize(&[
         &home_plan(),
         "--objective",
@@ -39,6 +40,8 @@ fn the_home_plan_gives_an_optimal_policy_that_loads_back_as_a_plan() {
         "--json",
         "--out",
         out.to_str().unwrap(),
+        "--rules-json",
+        rules_json.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
     let j: Value = serde_json::from_str(&stdout).unwrap();
@@ -50,8 +53,20 @@ fn the_home_plan_gives_an_optimal_policy_that_loads_back_as_a_plan() {
     assert!(lo <= v && v <= hi && hi - lo <= 1e-9 * v, "{j}");
     // 3 robots without WAIT: the toolbox's count for N = 3.
     assert_eq!(j["toolbox_states"], 389);
-    let rules = j["rules"].as_array().unwrap();
+    // The summary counts the rules; the rules themselves are in --rules-json's file.
+    assert!(j.get("rules").is_none(), "{j}");
+    let written: Value =
+        serde_json::from_str(&std::fs::read_to_string(&rules_json).unwrap()).unwrap();
+    assert_eq!(written["net_hash"], j["net_hash"]);
+    let rules = written["rules"].as_array().unwrap();
+    assert_eq!(j["exact_rules"].as_u64().unwrap(), rules.len() as u64);
+    assert_eq!(
+        j["decision_markings"].as_u64().unwrap(),
+        rules.len() as u64 + j["wait_markings"].as_u64().unwrap()
+    );
     assert!(!rules.is_empty());
+    assert!(rules.iter().all(|r| r["choose"].is_string()
+        && r["marking"].as_object().is_some_and(|m| !m.is_empty())));
     assert!(j["compressed_rules"].as_u64().unwrap() < rules.len() as u64);
     // The written file is a plan with one exact rule per decision marking, and it loads.
     let text = std::fs::read_to_string(&out).unwrap();
@@ -117,6 +132,55 @@ fn drn_export_names_the_model_type_and_every_state() {
     let text = std::fs::read_to_string(&drn).unwrap();
     assert!(text.contains("@type: Markov Automaton"));
     assert_eq!(text.matches("\nstate ").count(), 3);
+}
+
+/// Issue 33: `--sweep` with `--export-drn F` writes one model per robot count, named by it;
+/// the options that write a policy are refused with exit code 2 (they used to write nothing).
+#[test]
+fn a_sweep_exports_one_drn_per_robot_count_and_refuses_policy_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let net = fixture("gspnr/home_n01/net.PNPRO");
+    let rewards = fixture("gspnr/home_n01/rewards.toml");
+    let drn = dir.path().join("home.drn");
+    let (code, stdout, err) = synthesize(&[
+        net.to_str().unwrap(),
+        "--rewards",
+        rewards.to_str().unwrap(),
+        "--sweep",
+        "robots=1..2",
+        "--export-drn",
+        drn.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let rows: Vec<Value> = serde_json::from_str(&stdout).unwrap();
+    assert!(!drn.exists());
+    for (row, (n, states)) in rows.iter().zip([(1, 13), (2, 86)]) {
+        let file = dir.path().join(format!("home-n{n}.drn"));
+        assert_eq!(row["drn"], file.display().to_string());
+        let text = std::fs::read_to_string(&file).unwrap();
+        assert!(text.contains("@type: Markov Automaton"));
+        assert_eq!(text.matches("\nstate ").count(), states, "{n} robots");
+    }
+    let out = dir.path().join("policy.toml");
+    let (code, stdout, err) = synthesize(&[
+        net.to_str().unwrap(),
+        "--rewards",
+        rewards.to_str().unwrap(),
+        "--sweep",
+        "robots=1..2",
+        "--out",
+        out.to_str().unwrap(),
+        "--rules-json",
+        dir.path().join("r.json").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(stdout.is_empty(), "{stdout}");
+    assert!(
+        err.contains("--sweep writes no policy, so --out and --rules-json would write nothing"),
+        "{err}"
+    );
+    assert!(!out.exists());
 }
 
 #[test]

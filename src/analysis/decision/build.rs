@@ -2,7 +2,7 @@
 
 use super::{Action, BuildOptions, Controls, DecisionError, DecisionModel, Kind};
 use crate::analysis::absorbing::{Absorbed, Target, absorb};
-use crate::analysis::state_space::explore::Raw;
+use crate::analysis::state_space::explore::{Arcs, Raw};
 use crate::analysis::state_space::packing::MarkingStore;
 use crate::analysis::state_space::{Move, Options, search};
 use crate::net::{Net, Timing};
@@ -60,7 +60,13 @@ pub(super) fn build(
         monitor: opts.monitor.clone(),
         ..Options::default()
     };
-    let raw = search(net, &sopts, &sopts.watcher(), controls.wait)?;
+    let raw = search(
+        net,
+        &sopts,
+        &sopts.watcher(),
+        controls.wait,
+        Arcs::Store,
+    )?;
     let (class, hybrid) = classify(&raw, controls);
     let numbering = Numbering::new(&class, &hybrid);
     let ctrl = &controls.controllable;

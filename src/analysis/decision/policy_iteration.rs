@@ -8,6 +8,8 @@
 //! - `h(ref) = 0` for one recurrent Markovian state,
 //!
 //! solved one strongly connected component of the policy's graph at a time, sinks first
+//! (the components are kept from round to round and updated where the policy changed:
+//! [`PolicyGraph::update`])
 //! ([`evaluate`]: dense LU for small components, sparse LU for large ones; the GSPNR models'
 //! policies have components of at most a few states, so a round is a few passes over the
 //! branches, where one LU of the whole system filled in to hundreds of MB at 8 robots),
@@ -23,10 +25,11 @@
 //! `min(Tv − v)·Λ ≤ g ≤ max(Tv − v)·Λ` — tight at once when the policy is optimal.
 
 use super::lra::Mecs;
+use super::policy_graph::{Components, Graph, PolicyGraph};
 use super::solve::{Algorithm, SolveOptions};
 use super::{DecisionError, DecisionModel, Kind, Rewards};
 use crate::analysis::linear::solve_block;
-use crate::analysis::scc::{Members, Sccs, tarjan};
+use crate::analysis::scc::{Members, Sccs};
 
 /// Most rounds before giving up (each round at least improves the bias).
 const MAX_ROUNDS: usize = 1000;
@@ -71,6 +74,14 @@ pub(super) fn mec_policy_iteration(
             })
             .unwrap_or(first) as u32;
     }
+    let g = Graph {
+        model,
+        states,
+        local: &local,
+    };
+    // The components of the last round's graph, and the local states switched since.
+    let mut kept: Option<PolicyGraph> = None;
+    let mut switched: Vec<u32> = Vec::new();
     let mut rounds = 0;
     loop {
         if opts.cancelled() {
@@ -84,22 +95,24 @@ pub(super) fn mec_policy_iteration(
             });
         }
         rounds += 1;
-        let (reference, sccs) = make_unichain(model, rewards, mecs, states, &local, max, policy)?;
+        let successors = |v: u32, out: &mut Vec<u32>| g.successors(policy, v, out);
+        let graph = kept
+            .take()
+            .and_then(|mut graph| graph.update(successors, &switched).then_some(graph))
+            .unwrap_or_else(|| PolicyGraph::compute(states.len(), successors));
+        let (reference, graph) = make_unichain(rewards, mecs, g, max, policy, graph)?;
         if opts.algorithm == Algorithm::Auto
-            && sccs
-                .members()
-                .iter()
-                .any(|c| c.len() > Algorithm::AUTO_COMPONENT_LIMIT)
+            && graph.comps.largest() > Algorithm::AUTO_COMPONENT_LIMIT
         {
             return Ok(None);
         }
-        let x = evaluate(model, rewards, states, &local, policy, reference, &sccs)?;
+        let x = evaluate(model, rewards, states, &local, policy, reference, &graph.comps)?;
         for (i, &s) in states.iter().enumerate() {
             h[s as usize] = if i == reference { 0.0 } else { x[i] };
         }
         // Improvement: instant states only (a Markovian state has one choice).
-        let mut changed = false;
-        for &s in states {
+        switched.clear();
+        for (i, &s) in states.iter().enumerate() {
             let s = s as usize;
             if model.kind(s) != Kind::Instant || model.choices(s).len() < 2 {
                 continue;
@@ -125,67 +138,54 @@ pub(super) fn mec_policy_iteration(
             }
             if best.1 != policy[s] as usize {
                 policy[s] = best.1 as u32;
-                changed = true;
+                switched.push(i as u32);
             }
         }
-        if !changed {
+        if switched.is_empty() {
             return Ok(Some((h, rounds)));
         }
+        kept = Some(graph);
     }
-}
-
-/// The strongly connected components of the policy's graph on `states`.
-fn policy_sccs(model: &DecisionModel, states: &[u32], local: &[u32], policy: &[u32]) -> Sccs {
-    tarjan(states.len(), |v, out| {
-        successors(model, states, local, policy, v, out)
-    })
-}
-
-/// The local successors of local state `v` under the policy.
-fn successors(
-    model: &DecisionModel,
-    states: &[u32],
-    local: &[u32],
-    policy: &[u32],
-    v: u32,
-    out: &mut Vec<u32>,
-) {
-    let s = states[v as usize] as usize;
-    out.extend(
-        model
-            .branches(policy[s] as usize)
-            .filter(|&(_, p)| p > 0.0)
-            .map(|(t, _)| local[t as usize]),
-    );
 }
 
 /// Makes the policy unichain: when its chain on the MEC has several bottom components (or one
 /// where time never passes), evaluates each and steers every state to the best. Returns the
 /// local index of a Markovian state of the remaining bottom component, and the components of
-/// the policy's graph.
+/// the policy's graph (`graph`, the components of `policy` on entry, or new ones after
+/// steering).
 fn make_unichain(
-    model: &DecisionModel,
     rewards: &Rewards,
     mecs: &Mecs,
-    states: &[u32],
-    local: &[u32],
+    g: Graph<'_>,
     max: bool,
     policy: &mut [u32],
-) -> Result<(usize, Sccs), DecisionError> {
-    let sccs = policy_sccs(model, states, local, policy);
-    let bottom = sccs.bottom(|v, out| successors(model, states, local, policy, v, out));
-    let members = sccs.members();
+    graph: PolicyGraph,
+) -> Result<(usize, PolicyGraph), DecisionError> {
+    let (model, states) = (g.model, g.states);
     let markovian = |comp: &[u32]| {
         comp.iter()
             .copied()
             .find(|&v| model.kind(states[v as usize] as usize) == Kind::Markovian)
     };
-    let bottoms: Vec<usize> = (0..sccs.count).filter(|&c| bottom[c]).collect();
-    if let [only] = bottoms[..]
-        && let Some(r) = markovian(&members[only])
+    let bottoms = |graph: &PolicyGraph| -> Vec<usize> {
+        (0..graph.comps.sccs.count)
+            .filter(|&c| graph.bottom[c])
+            .collect()
+    };
+    if let [only] = bottoms(&graph)[..]
+        && let Some(r) = markovian(&graph.comps.members[only])
     {
-        return Ok((r as usize, sccs));
+        return Ok((r as usize, graph));
     }
+    // The bottom components are taken in a fresh search's order, so that a tie between
+    // equal gains goes the same way whatever the earlier rounds split.
+    let graph = if graph.fresh {
+        graph
+    } else {
+        PolicyGraph::compute(states.len(), |v, out| g.successors(policy, v, out))
+    };
+    let members = &graph.comps.members;
+    let bottoms = bottoms(&graph);
     // Several bottom components: the gain of each (timeless ones are worst).
     let better = |a: f64, b: f64| if max { a > b } else { a < b };
     let mut best: Option<(f64, usize, u32)> = None;
@@ -200,17 +200,17 @@ fn make_unichain(
         }
         let r_sub = sub_local[states[r as usize] as usize] as usize;
         // A bottom component is one component of its own graph.
-        let one = Sccs {
+        let one = Components::new(Sccs {
             count: 1,
             component: vec![0; comp.len()],
-        };
+        });
         let x = evaluate(model, rewards, &comp, &sub_local, policy, r_sub, &one)?;
         for &s in &comp {
             sub_local[s as usize] = u32::MAX;
         }
-        let g = x[r_sub];
-        if best.is_none_or(|(b, _, _)| better(g, b)) {
-            best = Some((g, c, r));
+        let gain = x[r_sub];
+        if best.is_none_or(|(b, _, _)| better(gain, b)) {
+            best = Some((gain, c, r));
         }
     }
     let Some((_, c, r)) = best else {
@@ -223,7 +223,7 @@ fn make_unichain(
         target[states[v as usize] as usize] = true;
     }
     steer(model, &mecs.inside, states, &mut target, policy);
-    Ok((r as usize, policy_sccs(model, states, local, policy)))
+    Ok((r as usize, PolicyGraph::compute(states.len(), |v, out| g.successors(policy, v, out))))
 }
 
 /// Steers every state of `states` not in `target` towards it, almost surely: a backward
@@ -288,7 +288,7 @@ pub(super) fn steer(
 }
 
 /// The gain and bias of the policy on `states` (closed under it), `h(reference) = 0`: the
-/// local solution vector, whose entry `reference` is the gain. `sccs`: the components of the
+/// local solution vector, whose entry `reference` is the gain. `comps`: the components of the
 /// policy's graph on `states`.
 ///
 /// The equations follow the policy's graph, so they are solved one strongly connected
@@ -308,25 +308,18 @@ fn evaluate(
     local: &[u32],
     policy: &[u32],
     reference: usize,
-    sccs: &Sccs,
+    comps: &Components,
 ) -> Result<Vec<f64>, DecisionError> {
     let k = states.len();
-    let members = sccs.members();
-    let mut pos = vec![0usize; k];
-    for comp in &members {
-        for (i, &v) in comp.iter().enumerate() {
-            pos[v as usize] = i;
-        }
-    }
     let ev = Evaluation {
         model,
         rewards,
         states,
         local,
         policy,
-        sccs,
-        members,
-        pos,
+        sccs: &comps.sccs,
+        members: &comps.members,
+        pos: &comps.pos,
     };
     // The bias (h(reference) = 0) and the gain.
     let mut h = vec![0.0f64; k];
@@ -358,8 +351,9 @@ struct Evaluation<'a> {
     local: &'a [u32],
     policy: &'a [u32],
     sccs: &'a Sccs,
-    members: Members,
-    pos: Vec<usize>,
+    members: &'a Members,
+    /// Each local state's index in its component.
+    pos: &'a [u32],
 }
 
 impl Evaluation<'_> {
@@ -380,9 +374,9 @@ impl Evaluation<'_> {
 
     /// The reference's component: the bias of its states into `h` and the gain.
     fn bottom(&self, reference: usize, h: &mut [f64]) -> Result<f64, DecisionError> {
-        let (pos, local) = (&self.pos, self.local);
+        let (pos, local) = (self.pos, self.local);
         let bottom = &self.members[self.sccs.component[reference] as usize];
-        let rp = pos[reference];
+        let rp = pos[reference] as usize;
         let at = |i: usize| if i > rp { i - 1 } else { i };
         let m = bottom.len() - 1;
         let mut triplets: Vec<(usize, usize, f64)> = Vec::new();
@@ -404,7 +398,7 @@ impl Evaluation<'_> {
                 if j == reference {
                     continue;
                 }
-                let entry = (at(pos[j]), -scale * p);
+                let entry = (at(pos[j] as usize), -scale * p);
                 if i == rp {
                     ref_row.push(entry);
                 } else {
@@ -447,10 +441,10 @@ impl Evaluation<'_> {
             for (t, p) in self.model.branches(c) {
                 let j = self.local[t as usize] as usize;
                 if self.sccs.component[j] as usize == ci {
-                    if self.pos[j] == i {
+                    if self.pos[j] as usize == i {
                         diag -= scale * p;
                     } else {
-                        triplets.push((i, self.pos[j], -scale * p));
+                        triplets.push((i, self.pos[j] as usize, -scale * p));
                     }
                 } else {
                     r += scale * p * h[j];

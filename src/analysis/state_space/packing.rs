@@ -193,6 +193,11 @@ impl MarkingStore {
         }
     }
 
+    /// Heap bytes held: the packed words and the hash index (gone after the search).
+    pub(crate) fn heap_bytes(&self) -> usize {
+        self.words.capacity() * 8 + self.index.capacity() * std::mem::size_of::<(u64, u32)>()
+    }
+
     /// Number of markings stored.
     #[inline]
     pub(crate) fn len(&self) -> usize {

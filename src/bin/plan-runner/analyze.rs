@@ -1,10 +1,11 @@
-//! `plan-runner analyze FILE [--steady] [--transient T1,A:B:STEP,..] [--json]
+//! `plan-runner analyze FILE [--steady] [--transient T1,A:B:STEP,..] [--states-only] [--json]
 //! [--export-prism PREFIX] [--max-states N] [--prob EXPR] [--query Q] [--csv FILE]
 //! [--plot FILE.svg]`: state space and properties, steady state (limiting distribution for
 //! non-ergodic nets), transient measures (as a table and a plot over time), queries in
 //! Storm's syntax, PRISM export. FILE is a net (the bare net) or a plan (its net under its
 //! policy, with its reward rates: `gspn::analysis::under_policy`); the output says which.
 
+mod census;
 mod queries;
 pub(crate) mod series;
 
@@ -19,7 +20,7 @@ use gspn::analysis::invariants::{Invariants, p_invariants, t_invariants};
 use gspn::analysis::measures::{
     Measures, Solver, SolverOptions, TransientOptions, TransientPoint, bad_time,
 };
-use gspn::analysis::properties::Properties;
+use gspn::analysis::properties::{DeadMarking, Properties};
 use gspn::analysis::report::{
     MeasuresReport, QueryAnswer, Report, StateSpaceReport, transition_names,
 };
@@ -46,6 +47,12 @@ pub(crate) struct Args {
     /// Transient measures at these times (comma-separated; `A:B:STEP` is A, A+STEP, … ≤ B).
     #[arg(long, value_name = "T1,A:B:STEP,..", value_delimiter = ',')]
     transient: Vec<String>,
+    /// Only the state space's counts (markings, arcs), place bounds and dead markings: the
+    /// cheapest question, answered by a search that stores no arc (no CTMC, no solve, no
+    /// liveness or reversibility). Not with --steady, --transient, --prob, --query, --csv,
+    /// --plot or --export-prism.
+    #[arg(long)]
+    states_only: bool,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -105,6 +112,9 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
                 .into(),
         )
         .into());
+    }
+    if args.states_only {
+        return census::main(&args, &plan, regime);
     }
     let queries = queries::parse(&plan, &args.query)?;
     let predicates = args
@@ -377,33 +387,7 @@ fn print_state_space(
         p.max_tokens_per_marking,
         yes(p.reversible)
     );
-    if p.dead_markings.is_empty() {
-        println!("deadlock-free: yes");
-    } else {
-        println!(
-            "deadlock-free: no — {} dead marking(s):",
-            p.dead_markings.len()
-        );
-        for d in p.dead_markings.iter().take(10) {
-            let path: Vec<&str> = d
-                .path
-                .iter()
-                .map(|&t| net.transition(t).name.as_str())
-                .collect();
-            println!(
-                "  {}  after {}",
-                net.format_marking(&d.marking),
-                if path.is_empty() {
-                    "nothing".into()
-                } else {
-                    path.join(" ")
-                }
-            );
-        }
-        if p.dead_markings.len() > 10 {
-            println!("  … and {} more", p.dead_markings.len() - 10);
-        }
-    }
+    print_dead_markings(net, &p.dead_markings);
     let live = transition_names(net, &p.live_transitions());
     let dead = transition_names(net, &p.dead_transitions());
     println!(
@@ -424,6 +408,38 @@ fn print_state_space(
         },
         tinv.vectors.len()
     );
+}
+
+/// Whether the net is deadlock-free, and the first ten dead markings with a shortest firing
+/// sequence to each.
+fn print_dead_markings(net: &Net, dead: &[DeadMarking]) {
+    if dead.is_empty() {
+        println!("deadlock-free: yes");
+    } else {
+        println!(
+            "deadlock-free: no — {} dead marking(s):",
+            dead.len()
+        );
+        for d in dead.iter().take(10) {
+            let path: Vec<&str> = d
+                .path
+                .iter()
+                .map(|&t| net.transition(t).name.as_str())
+                .collect();
+            println!(
+                "  {}  after {}",
+                net.format_marking(&d.marking),
+                if path.is_empty() {
+                    "nothing".into()
+                } else {
+                    path.join(" ")
+                }
+            );
+        }
+        if dead.len() > 10 {
+            println!("  … and {} more", dead.len() - 10);
+        }
+    }
 }
 
 fn print_measures(net: &Net, m: &Measures, wait: bool) {

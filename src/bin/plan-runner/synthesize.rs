@@ -1,7 +1,7 @@
 //! `plan-runner synthesize FILE --objective OBJ [--goal EXPR] [--discount RATE] [--gamma G]
 //! [--rewards FILE] [--wait true|false] [--precision P] [--max-states N] [--out FILE]
-//! [--compact] [--json] [--export-drn FILE] [--sweep robots=A..B]`: the optimal policy of a
-//! GSPN with rewards (see docs/synthesis.md).
+//! [--rules-json FILE] [--compact] [--json] [--export-drn FILE] [--sweep robots=A..B]`: the
+//! optimal policy of a GSPN with rewards (see docs/synthesis.md).
 
 use std::fmt::Write as _;
 use std::io::IsTerminal;
@@ -84,10 +84,17 @@ pub(crate) struct Args {
     /// per marking.
     #[arg(long)]
     compact: bool,
-    /// Print JSON instead of text.
+    /// Write the exact policy rules as JSON: `{"net_hash": H, "rules": [{"marking":
+    /// {PLACE: TOKENS, ...}, "choose": TRANSITION}, ...]}`, one rule per decision marking
+    /// that fires a transition (places with no token left out).
+    #[arg(long, value_name = "FILE")]
+    rules_json: Option<PathBuf>,
+    /// Print the summary as JSON instead of text (value, sizes, timings, rule counts; the
+    /// rules themselves go to --out or --rules-json).
     #[arg(long)]
     json: bool,
-    /// Write the model in Storm's DRN format.
+    /// Write the model in Storm's DRN format. With --sweep, one file per robot count:
+    /// `-nN` before the extension (`model.drn` gives `model-n3.drn` for 3 robots).
     #[arg(long, value_name = "FILE")]
     export_drn: Option<PathBuf>,
     /// Solve for each robot count: `robots=1..10` scales the initial tokens of the places
@@ -283,6 +290,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     let monitor = Arc::new(Monitor::new());
     cancel_on_interrupt(&monitor)?;
     if let Some(sweep) = &args.sweep {
+        refuse_policy_outputs_in_sweep(&args)?;
         return run_sweep(
             &args,
             net,
@@ -315,13 +323,6 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         fires: table,
         waits,
     } = s.model.policy_table(&s.solution.policy);
-    let exact: Vec<Rule> = table
-        .iter()
-        .map(|(m, t)| Rule {
-            pattern: Pattern::Exact(m.clone()),
-            choose: vec![(*t, 1.0)],
-        })
-        .collect();
     let compressed = compress(&table);
     check("compressing the policy")?;
     let policy = Synthesised {
@@ -329,12 +330,16 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         shown: shown(&goal, &s.solution),
         table: &table,
         waits,
-        exact: &exact,
         compressed: &compressed,
     };
     if let Some(out) = &args.out {
         let text = policy.file(&args, &input, out)?;
         std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
+    }
+    if let Some(path) = &args.rules_json {
+        policy
+            .write_rules_json(net, path)
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     if args.json {
         println!(
@@ -347,6 +352,28 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `--sweep` solves several models and writes no policy: the options that write one are
+/// refused (exit code 2) rather than silently ignored.
+fn refuse_policy_outputs_in_sweep(args: &Args) -> anyhow::Result<()> {
+    let given: Vec<&str> = [
+        (args.out.is_some(), "--out"),
+        (args.rules_json.is_some(), "--rules-json"),
+        (args.compact, "--compact"),
+    ]
+    .into_iter()
+    .filter_map(|(on, name)| on.then_some(name))
+    .collect();
+    if given.is_empty() {
+        return Ok(());
+    }
+    Err(BadInput(format!(
+        "--sweep writes no policy, so {} would write nothing: synthesize one robot count \
+         without --sweep to get its rules (--export-drn writes one model per robot count)",
+        given.join(" and ")
+    ))
+    .into())
+}
+
 /// A solved model with its policy as rules, ready to be written and reported.
 struct Synthesised<'a> {
     s: &'a Solved,
@@ -356,7 +383,6 @@ struct Synthesised<'a> {
     table: &'a [(Vec<u32>, gspn::net::TransitionId)],
     /// Decision markings that choose WAIT.
     waits: usize,
-    exact: &'a [Rule],
     compressed: &'a [Rule],
 }
 
@@ -387,7 +413,7 @@ impl Synthesised<'_> {
             text,
             "# {} decision markings; {} exact rules, {} compressed rules{}",
             self.table.len() + self.waits,
-            self.exact.len(),
+            self.table.len(),
             self.compressed.len(),
             if args.compact { " (written here)" } else { "" }
         );
@@ -405,34 +431,54 @@ impl Synthesised<'_> {
             }
             Some(plan_text) => text.push_str(&rebase_plan(&args.file, plan_text, dir)?),
         }
-        text.push_str(&rules_toml(
-            net,
-            if args.compact {
-                self.compressed
-            } else {
-                self.exact
-            },
-        ));
+        if args.compact {
+            text.push_str(&rules_toml(net, self.compressed));
+        } else {
+            // One exact rule per decision marking, built only here: the table holds the same.
+            let exact: Vec<Rule> = self
+                .table
+                .iter()
+                .map(|(m, t)| Rule {
+                    pattern: Pattern::Exact(m.clone()),
+                    choose: vec![(*t, 1.0)],
+                })
+                .collect();
+            text.push_str(&rules_toml(net, &exact));
+        }
         Ok(text)
     }
 
-    /// `--json`: the value, the model's size, the timings and the exact rules.
+    /// `--rules-json FILE`: the exact rules, streamed one at a time (a model of a million
+    /// decision markings would otherwise hold its whole JSON tree in memory).
+    fn write_rules_json(&self, net: &Net, path: &Path) -> anyhow::Result<()> {
+        use std::io::Write as _;
+        let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+        write!(
+            w,
+            "{{\"net_hash\": {},\n\"rules\": [",
+            serde_json::to_string(&gspn::runtime::journal::net_hash(net))?
+        )?;
+        for (i, (m, t)) in self.table.iter().enumerate() {
+            let marking: serde_json::Map<String, serde_json::Value> = m
+                .iter()
+                .enumerate()
+                .filter(|&(_, &k)| k > 0)
+                .map(|(p, &k)| (net.places()[p].name.clone(), json!(k)))
+                .collect();
+            let rule = json!({ "marking": marking, "choose": net.transition(*t).name });
+            let sep = if i == 0 { "\n" } else { ",\n" };
+            write!(w, "{sep}{}", serde_json::to_string(&rule)?)?;
+        }
+        writeln!(w, "\n]}}")?;
+        w.flush()?;
+        Ok(())
+    }
+
+    /// `--json`: the value, the model's size, the timings and the rule counts (the rules
+    /// themselves go to `--out` or `--rules-json`).
     fn json(&self, args: &Args, net: &Net) -> serde_json::Value {
         let (s, sol) = (self.s, &self.s.solution);
         let (value, lower, upper) = self.shown;
-        let rules: Vec<serde_json::Value> = self
-            .table
-            .iter()
-            .map(|(m, t)| {
-                let marking: serde_json::Map<String, serde_json::Value> = m
-                    .iter()
-                    .enumerate()
-                    .filter(|&(_, &k)| k > 0)
-                    .map(|(i, &k)| (net.places()[i].name.clone(), json!(k)))
-                    .collect();
-                json!({ "marking": marking, "choose": net.transition(*t).name })
-            })
-            .collect();
         json!({
             "objective": args.objective,
             "value": finite(value),
@@ -448,7 +494,9 @@ impl Synthesised<'_> {
             "toolbox_states": s.model.toolbox_state_count(),
             "build_s": s.build_s,
             "solve_s": s.solve_s,
-            "rules": rules,
+            "decision_markings": self.table.len() + self.waits,
+            "wait_markings": self.waits,
+            "exact_rules": self.table.len(),
             "compressed_rules": self.compressed.len(),
             "net_hash": gspn::runtime::journal::net_hash(net),
         })
@@ -473,7 +521,7 @@ impl Synthesised<'_> {
         println!(
             "policy: {} decision markings, {} exact rules, {} compressed rules",
             self.table.len() + self.waits,
-            self.exact.len(),
+            self.table.len(),
             self.compressed.len()
         );
         println!("build {:.3} s, solve {:.3} s", s.build_s, s.solve_s);

@@ -48,6 +48,17 @@ pub(super) fn scaled(net: &Net, resource: &[bool], n: usize) -> anyhow::Result<N
         .map_err(|e| anyhow::anyhow!("scaling the initial marking: {e}"))
 }
 
+/// The DRN file of robot count `n` in a sweep: `-nN` before the extension of `--export-drn`'s
+/// path (`model.drn` → `model-n3.drn`; `model` → `model-n3`).
+pub(super) fn drn_for(path: &Path, n: usize) -> PathBuf {
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let name = match path.extension() {
+        Some(ext) => format!("{stem}-n{n}.{}", ext.to_string_lossy()),
+        None => format!("{stem}-n{n}"),
+    };
+    path.with_file_name(name)
+}
+
 pub(super) fn finite(v: f64) -> serde_json::Value {
     if v.is_finite() {
         json!(v)
@@ -80,6 +91,16 @@ pub(super) fn run_sweep(
         let s = synthesize(&net_n, controls, spec, goal, max, args, false, monitor)?;
         let total = t0.elapsed().as_secs_f64();
         let (value, lower, upper) = shown(goal, &s.solution);
+        let drn_file = match &args.export_drn {
+            Some(path) => {
+                let file = drn_for(path, n);
+                let text = drn::to_string(&net_n, &s.model, &[(spec.name.as_str(), &s.rewards)], &[]);
+                std::fs::write(&file, text)
+                    .with_context(|| format!("writing {}", file.display()))?;
+                Some(file)
+            }
+            None => None,
+        };
         if args.json {
             rows.push(json!({
                 "robots": n,
@@ -92,6 +113,7 @@ pub(super) fn run_sweep(
                 "value": finite(value),
                 "lower": finite(lower),
                 "upper": finite(upper),
+                "drn": drn_file.as_ref().map(|f| f.display().to_string()),
             }));
         } else {
             println!(
