@@ -55,7 +55,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "states     {} ({} tangible, {} vanishing)",
             c.reachable, c.tangible, c.vanishing
         );
-        println!("arcs       {} ({} successor pairs)", c.arcs, c.successor_pairs);
+        println!(
+            "arcs       {} ({} successor pairs)",
+            c.arcs, c.successor_pairs
+        );
         println!("dead       {}", c.dead_markings.len());
         println!("read       {read:.3} s");
         println!("seconds    {secs:.3}");

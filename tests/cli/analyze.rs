@@ -281,7 +281,10 @@ fn states_only_gives_the_oracles_counts_without_storing_arcs() {
     let oracle =
         std::fs::read_to_string(fixture("mcc/FMS-PT-00002/StateSpace-oracle-2021.out")).unwrap();
     assert!(oracle.contains("STATE_SPACE STATES 3444 "), "{oracle}");
-    assert!(oracle.contains("STATE_SPACE TRANSITIONS 16311 "), "{oracle}");
+    assert!(
+        oracle.contains("STATE_SPACE TRANSITIONS 16311 "),
+        "{oracle}"
+    );
     let (code, j, err) = analyze(&[f.to_str().unwrap(), "--states-only", "--json"]);
     assert_eq!(code, 0, "{err}");
     let ss = &j["state_space"];
@@ -333,12 +336,26 @@ fn states_only_counts_vanishing_markings_and_refuses_solver_options() {
     let (code, full, err) = analyze(&[f.to_str().unwrap(), "--json"]);
     assert_eq!(code, 0, "{err}");
     let (only, full) = (&only["state_space"], &full["state_space"]);
-    assert_eq!((&only["reachable"], &only["tangible"]), (&Value::from(5), &Value::from(3)));
-    for key in ["vanishing", "successor_pairs", "place_bounds", "dead_markings"] {
+    assert_eq!(
+        (&only["reachable"], &only["tangible"]),
+        (&Value::from(5), &Value::from(3))
+    );
+    for key in [
+        "vanishing",
+        "successor_pairs",
+        "place_bounds",
+        "dead_markings",
+    ] {
         assert_eq!(only[key], full[key], "{key}");
     }
     assert_eq!(only["edges"], Value::Null);
-    let (code, _, err) = analyze(&[f.to_str().unwrap(), "--states-only", "--steady", "--prob", "P1>0"]);
+    let (code, _, err) = analyze(&[
+        f.to_str().unwrap(),
+        "--states-only",
+        "--steady",
+        "--prob",
+        "P1>0",
+    ]);
     assert_eq!(code, 2, "{err}");
     assert!(
         err.contains("--states-only stores no arc and solves nothing: --steady, --prob cannot be answered with it"),

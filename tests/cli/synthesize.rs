@@ -65,8 +65,9 @@ fn the_home_plan_gives_an_optimal_policy_that_loads_back_as_a_plan() {
         rules.len() as u64 + j["wait_markings"].as_u64().unwrap()
     );
     assert!(!rules.is_empty());
-    assert!(rules.iter().all(|r| r["choose"].is_string()
-        && r["marking"].as_object().is_some_and(|m| !m.is_empty())));
+    assert!(rules.iter().all(
+        |r| r["choose"].is_string() && r["marking"].as_object().is_some_and(|m| !m.is_empty())
+    ));
     assert!(j["compressed_rules"].as_u64().unwrap() < rules.len() as u64);
     // The written file is a plan with one exact rule per decision marking, and it loads.
     let text = std::fs::read_to_string(&out).unwrap();

@@ -60,13 +60,7 @@ pub(super) fn build(
         monitor: opts.monitor.clone(),
         ..Options::default()
     };
-    let raw = search(
-        net,
-        &sopts,
-        &sopts.watcher(),
-        controls.wait,
-        Arcs::Store,
-    )?;
+    let raw = search(net, &sopts, &sopts.watcher(), controls.wait, Arcs::Store)?;
     let (class, hybrid) = classify(&raw, controls);
     let numbering = Numbering::new(&class, &hybrid);
     let ctrl = &controls.controllable;

@@ -265,4 +265,3 @@ fn backward_closure(model: &DecisionModel, mut set: Vec<bool>, goal: &[bool]) ->
         }
     }
 }
-

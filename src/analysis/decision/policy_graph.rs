@@ -39,11 +39,7 @@ impl Components {
                 pos[v as usize] = i as u32;
             }
         }
-        Components {
-            sccs,
-            members,
-            pos,
-        }
+        Components { sccs, members, pos }
     }
 
     /// States in the largest component.
@@ -265,11 +261,17 @@ mod tests {
         for _ in 0..200 {
             let n = 2 + rng.below(40) as usize;
             let mut edges: Vec<Vec<u32>> = (0..n)
-                .map(|_| (0..1 + rng.below(2)).map(|_| rng.below(n as u64) as u32).collect())
+                .map(|_| {
+                    (0..1 + rng.below(2))
+                        .map(|_| rng.below(n as u64) as u32)
+                        .collect()
+                })
                 .collect();
             let mut pg = PolicyGraph::compute(n, |v, out| out.extend(&edges[v as usize]));
             for _ in 0..10 {
-                let switched: Vec<u32> = (0..1 + rng.below(3)).map(|_| rng.below(n as u64) as u32).collect();
+                let switched: Vec<u32> = (0..1 + rng.below(3))
+                    .map(|_| rng.below(n as u64) as u32)
+                    .collect();
                 for &v in &switched {
                     edges[v as usize] = (0..1 + rng.below(2))
                         .map(|_| rng.below(n as u64) as u32)
@@ -293,6 +295,9 @@ mod tests {
             }
         }
         // Every case was met: updates in place, splits, and refused merges.
-        assert!(updated > 500 && split > 20 && refused > 100, "{updated} {split} {refused}");
+        assert!(
+            updated > 500 && split > 20 && refused > 100,
+            "{updated} {split} {refused}"
+        );
     }
 }

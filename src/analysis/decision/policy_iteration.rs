@@ -106,7 +106,15 @@ pub(super) fn mec_policy_iteration(
         {
             return Ok(None);
         }
-        let x = evaluate(model, rewards, states, &local, policy, reference, &graph.comps)?;
+        let x = evaluate(
+            model,
+            rewards,
+            states,
+            &local,
+            policy,
+            reference,
+            &graph.comps,
+        )?;
         for (i, &s) in states.iter().enumerate() {
             h[s as usize] = if i == reference { 0.0 } else { x[i] };
         }
@@ -223,7 +231,10 @@ fn make_unichain(
         target[states[v as usize] as usize] = true;
     }
     steer(model, &mecs.inside, states, &mut target, policy);
-    Ok((r as usize, PolicyGraph::compute(states.len(), |v, out| g.successors(policy, v, out))))
+    Ok((
+        r as usize,
+        PolicyGraph::compute(states.len(), |v, out| g.successors(policy, v, out)),
+    ))
 }
 
 /// Steers every state of `states` not in `target` towards it, almost surely: a backward
@@ -323,7 +334,7 @@ fn evaluate(
     };
     // The bias (h(reference) = 0) and the gain.
     let mut h = vec![0.0f64; k];
-    let rc = sccs.component[reference] as usize;
+    let rc = comps.sccs.component[reference] as usize;
     let g = ev.bottom(reference, &mut h)?;
     // The other components, sinks first: every branch leaving one leads to a component
     // numbered below it, already solved.

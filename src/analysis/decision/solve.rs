@@ -19,10 +19,9 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use super::interval::discount_start;
-use super::lra;
 use super::quotient::Quotient;
-use super::{DecisionError, DecisionModel, Kind, Objective, Rewards};
+use super::{DecisionError, DecisionModel, Objective, Rewards};
+use super::{lra, objectives};
 
 /// Relative slack of the bound checks: floating-point sums of probabilities are off by a
 /// few ulps.

@@ -416,10 +416,7 @@ fn print_dead_markings(net: &Net, dead: &[DeadMarking]) {
     if dead.is_empty() {
         println!("deadlock-free: yes");
     } else {
-        println!(
-            "deadlock-free: no — {} dead marking(s):",
-            dead.len()
-        );
+        println!("deadlock-free: no — {} dead marking(s):", dead.len());
         for d in dead.iter().take(10) {
             let path: Vec<&str> = d
                 .path

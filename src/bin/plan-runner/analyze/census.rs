@@ -80,11 +80,7 @@ pub(super) fn main(args: &Args, plan: &Plan, regime: Regime) -> anyhow::Result<E
     );
     println!(
         "state space: {} reachable markings ({} tangible, {} vanishing), {} labelled arcs ({} distinct successor pairs), vanishing markings not eliminated",
-        census.reachable,
-        census.tangible,
-        census.vanishing,
-        census.arcs,
-        census.successor_pairs
+        census.reachable, census.tangible, census.vanishing, census.arcs, census.successor_pairs
     );
     let bounds: Vec<String> = net
         .places()

@@ -94,7 +94,8 @@ pub(super) fn run_sweep(
         let drn_file = match &args.export_drn {
             Some(path) => {
                 let file = drn_for(path, n);
-                let text = drn::to_string(&net_n, &s.model, &[(spec.name.as_str(), &s.rewards)], &[]);
+                let text =
+                    drn::to_string(&net_n, &s.model, &[(spec.name.as_str(), &s.rewards)], &[]);
                 std::fs::write(&file, text)
                     .with_context(|| format!("writing {}", file.display()))?;
                 Some(file)
