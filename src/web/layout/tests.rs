@@ -180,7 +180,15 @@ fn useless_file_positions_give_way_to_a_readable_automatic_layout() {
     let before = quality::measure(&home, &file);
     let (auto, why) = choose(&home, Choice::Default);
     let after = quality::measure(&home, &auto);
-    eprintln!("home-cleaning: file {before:?}, automatic {after:?}, {why:?}");
+    let mixing = quality::group_mixing(&home, &auto);
+    let ungrouped = layered_with(&home, false);
+    eprintln!(
+        "home-cleaning: file {before:?} mixing {:?}, automatic {after:?} mixing {mixing:?}, \
+         without groups {:?} mixing {:?}; {why:?}",
+        quality::group_mixing(&home, &file),
+        quality::measure(&home, &ungrouped),
+        quality::group_mixing(&home, &ungrouped),
+    );
     assert_eq!(auto.source, LayoutSource::Layered);
     assert!(
         why.unwrap()
