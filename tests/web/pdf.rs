@@ -54,7 +54,7 @@ impl Pdf {
             .map(number)
             .collect();
         assert_eq!(media[..2], [0.0, 0.0]);
-        let content = Content::decode(&doc.get_page_content(page_id).unwrap()).unwrap();
+        let content = Content::decode(&doc.get_page_content(page_id)).unwrap();
         Pdf {
             bytes,
             doc,

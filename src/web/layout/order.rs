@@ -76,6 +76,45 @@ pub(super) fn layers(n: usize, dag: &[(usize, usize)]) -> Vec<usize> {
     layer
 }
 
+/// Shortens the arcs of a layering (`layer` of an acyclic graph, each edge going down at
+/// least one layer): a node with more incoming than outgoing edges moves up to just below its
+/// lowest predecessor, one with more outgoing edges down to just above its highest
+/// successor — each move shortens its edges in total, so there are fewer placeholders to
+/// order and cross (a few passes, until nothing moves).
+pub(super) fn tighten(layer: &mut [usize], dag: &[(usize, usize)]) {
+    let n = layer.len();
+    let mut pred: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut succ: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for &(u, v) in dag {
+        if u != v {
+            succ[u].push(v);
+            pred[v].push(u);
+        }
+    }
+    for _ in 0..8 {
+        let mut moved = false;
+        for v in 0..n {
+            let (ins, outs) = (pred[v].len(), succ[v].len());
+            let target = if ins > outs {
+                pred[v].iter().map(|&u| layer[u] + 1).max()
+            } else if outs > ins {
+                succ[v].iter().map(|&w| layer[w]).min().map(|l| l - 1)
+            } else {
+                None
+            };
+            if let Some(t) = target
+                && t != layer[v]
+            {
+                layer[v] = t;
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+}
+
 /// Slots in the order a depth-first walk along the edges meets them (from the marked places
 /// first): the starting order within each layer, which keeps neighbours together.
 pub(super) fn first_seen_order(slots: usize, down: &[Vec<usize>], marked: &[usize]) -> Vec<usize> {
@@ -102,7 +141,8 @@ pub(super) fn first_seen_order(slots: usize, down: &[Vec<usize>], marked: &[usiz
 /// Reorders each layer by the mean position of its neighbours, sweeping down and up, then
 /// swaps neighbours in a layer while that removes crossings (transposes, on nets small
 /// enough); keeps the order with the fewest crossings. (The median instead of the mean drew
-/// more crossings on Peterson and Dekker: docs/viewer.md.) With `band`, a layer is ordered
+/// more crossings on Peterson and Dekker: docs/viewer.md.) Returns the crossings between
+/// neighbouring layers of the order kept. With `band`, a layer is ordered
 /// by each slot's band first (its group's rank, [`group_bands`]), so a group's slots stay
 /// next to each other.
 pub(super) fn order_layers(
@@ -111,7 +151,7 @@ pub(super) fn order_layers(
     down: &[Vec<usize>],
     slots: usize,
     band: Option<&[f64]>,
-) {
+) -> u64 {
     let band_of = |s: usize| band.map_or(0.0, |b| b[s]);
     if band.is_some() {
         for nodes in layers.iter_mut() {
@@ -139,7 +179,7 @@ pub(super) fn order_layers(
         };
         for l in order {
             let nb = if downwards { up } else { down };
-            let mut keyed: Vec<(f64, usize)> = layers[l]
+            let mut keyed: Vec<((f64, f64), usize)> = layers[l]
                 .iter()
                 .map(|&s| {
                     let key = if nb[s].is_empty() {
@@ -166,6 +206,7 @@ pub(super) fn order_layers(
         }
     }
     layers.clone_from_slice(&best);
+    best_crossings
 }
 
 /// Each slot's band for [`order_layers`] from an order found without bands: the groups

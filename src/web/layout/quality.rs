@@ -135,6 +135,7 @@ pub(crate) fn measure(net: &Net, layout: &Layout) -> Quality {
 /// How well `layout` keeps the groups of `net`'s names together ([`super::group`]): the
 /// nodes whose centre lies in the bounding box (of the bodies) of a group they are not in,
 /// counted once per such box, and the number of groups; `None` when the names give none.
+#[cfg(test)]
 pub(crate) fn group_mixing(net: &Net, layout: &Layout) -> Option<(usize, usize)> {
     let names = net.places().iter().map(|p| p.name.as_str());
     let group =
