@@ -100,6 +100,13 @@ async fn whole_svg_size(b: &Browser) -> (f64, f64) {
     (size[0].as_f64().unwrap(), size[1].as_f64().unwrap())
 }
 
+/// Keeps a PDF beside the screenshots, to look at.
+fn keep(name: &str, bytes: &[u8]) {
+    let path = screenshot_path(name);
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    std::fs::write(path, bytes).unwrap();
+}
+
 fn names(net: &Net) -> BTreeSet<String> {
     net.places()
         .iter()
@@ -143,7 +150,7 @@ async fn the_whole_net_exports_as_a_vector_pdf_that_another_reader_parses() {
     for p in net.places() {
         assert!(text.contains(&p.name), "{} not in the extracted text", p.name);
     }
-    std::fs::write(screenshot_path("export-patrol.pdf"), &pdf.bytes).unwrap();
+    keep("export-patrol.pdf", &pdf.bytes);
     b.close().await;
     server.abort();
 }
@@ -180,7 +187,7 @@ async fn a_ten_thousand_place_ring_exports_as_one_pdf_page_with_every_node() {
     let shown: BTreeSet<String> = shown.into_iter().collect();
     let missing: Vec<_> = names(&net).difference(&shown).take(5).cloned().collect();
     assert!(missing.is_empty(), "names not in the PDF: {missing:?}…");
-    std::fs::write(screenshot_path("export-ring-10000.pdf"), &pdf.bytes).unwrap();
+    keep("export-ring-10000.pdf", &pdf.bytes);
     b.close().await;
     server.abort();
 }

@@ -29,7 +29,7 @@ function escapeHtml(s) {
 }
 
 let analysing = false;
-// The last analysis's steady-state throughput per transition (drawn beside the throughput
+// The last analysis's steady-state throughput by transition name (drawn beside the throughput
 // over time), null without one.
 let exactThroughput = null;
 

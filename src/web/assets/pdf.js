@@ -168,8 +168,9 @@ function pdfDrawing(b) {
 function exportPdf() {
   const b = netBounds();
   const [w, h] = [Math.ceil(b.w), Math.ceil(b.h)];
-  // Past PDF_MAX the page is drawn k times smaller and says so with /UserUnit k.
-  const k = Math.max(1, Math.max(w, h) / PDF_MAX);
+  // Past PDF_MAX the page is drawn k times smaller and says so with /UserUnit k (k to the
+  // two decimals it is written with).
+  const k = Math.max(1, Math.ceil((Math.max(w, h) / PDF_MAX) * 100) / 100);
   const s = 1 / k;
   // Net units to the page's: x - x0, and y turned over from the page's top.
   const matrix = [s, 0, 0, -s, -b.x0 * s, (h + b.y0) * s].map((v) => String(Math.round(v * 1e6) / 1e6));

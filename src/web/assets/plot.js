@@ -186,10 +186,8 @@ function tputSeries() {
   if (typeof exactThroughput !== 'undefined' && exactThroughput) {
     const t1 = windows * tput.width;
     for (const name of picked) {
-      const i = transitionIndex(name);
-      if (i >= 0 && Number.isFinite(exactThroughput[i])) {
-        series.push({ name: name + ' (exact)', points: [[0, exactThroughput[i]], [t1, exactThroughput[i]]] });
-      }
+      const v = exactThroughput[name];
+      if (Number.isFinite(v)) series.push({ name: name + ' (exact)', points: [[0, v], [t1, v]] });
     }
   }
   return series.slice(0, CURVE_COLOURS.length);
