@@ -65,7 +65,7 @@ pub mod room;
 pub(crate) mod view;
 
 #[cfg(feature = "sim")]
-pub use action::{Navigator, SimAction};
+pub use action::{DriveError, Navigator, SimAction};
 #[cfg(feature = "sim")]
 pub use actor::{GotoError, RobotStart, World, WorldHandle};
 #[cfg(feature = "sim")]

@@ -202,7 +202,10 @@ impl DdsConfig {
     /// Applies `--ros-args`: the namespace, the node's name, and `-p` parameters, which
     /// override the plan's `[ros2]` keys of the same names (`domain_id`, `heartbeat`,
     /// `lost_after`, `startup`, `service_mapping`, `rosout`).
-    pub fn apply_ros_args(&mut self, a: &super::names::RosArgs) -> Result<(), String> {
+    pub fn apply_ros_args(
+        &mut self,
+        a: &super::names::RosArgs,
+    ) -> Result<(), super::names::RosArgsError> {
         if let Some(ns) = &a.namespace {
             self.namespace.clone_from(ns);
         }
@@ -210,7 +213,11 @@ impl DdsConfig {
             self.node_name = Some(n.clone());
         }
         for (k, v) in &a.params {
-            let bad = |why: &str| format!("--ros-args: -p `{k}:={v}`: {why}");
+            let bad = |why: &str| super::names::RosArgsError::Parameter {
+                key: k.clone(),
+                value: v.clone(),
+                reason: why.to_string(),
+            };
             let seconds = || {
                 v.parse::<f64>()
                     .ok()

@@ -126,16 +126,6 @@ impl FiringPublisher {
         self.firings.get_subscription_count(node)
     }
 
-    fn marking_msg(&self, seq: u64, time: f64, tokens: &[u32]) -> Marking {
-        Marking {
-            header: Header::now(""),
-            model_time: time,
-            seq,
-            places: self.net.places().iter().map(|p| p.name.clone()).collect(),
-            tokens: tokens.to_vec(),
-        }
-    }
-
     /// Waits (at most `limit`) until every matched subscriber has acknowledged every firing
     /// and marking published; false if some had not by then.
     pub async fn acknowledged(&self, limit: std::time::Duration) -> bool {
@@ -148,64 +138,106 @@ impl FiringPublisher {
     }
 
     /// Publishes the initial marking, then every firing of `events` until the run is over.
-    pub async fn run(&self, mut events: Events) -> Published {
-        let mut out = Published::default();
-        let initial = self.net.initial_marking();
-        if self
-            .marking
-            .async_publish(self.marking_msg(0, 0.0, &initial))
-            .await
-            .is_err()
-        {
-            out.errors += 1;
+    pub async fn run(&self, events: Events) -> Published {
+        publish_run(&self.net, events, self).await
+    }
+}
+
+impl RunSink for FiringPublisher {
+    async fn send(&self, m: RunMessage) -> bool {
+        match m {
+            RunMessage::Marking(m) => self.marking.async_publish(m).await.is_ok(),
+            RunMessage::Firing(f) => self.firings.async_publish(f).await.is_ok(),
+            RunMessage::Drift(d) => self.drift.async_publish(d).await.is_ok(),
         }
-        while let Some(r) = events.recv().await {
-            let e = match r {
-                Received::Event(e) => e,
-                Received::Lagged(n) => {
-                    tracing::error!("firing publisher fell behind: {n} events lost");
-                    out.lagged += n;
-                    continue;
-                }
-            };
-            if let EventKind::Drift(d) = &e.kind {
-                let msg = drift_message(&self.net, e.time, d);
-                if self.drift.async_publish(msg).await.is_err() {
-                    out.errors += 1;
-                }
+    }
+}
+
+/// A message of the run's topics, whatever the transport (DDS here, Zenoh in
+/// `crate::zenoh`).
+pub(crate) enum RunMessage {
+    /// On `/gspn/marking`.
+    Marking(Marking),
+    /// On `/gspn/firings`.
+    Firing(Firing),
+    /// On `/gspn/drift`.
+    Drift(msgs::Drift),
+}
+
+/// Where [`publish_run`] sends the run's messages; `false`: that one was not sent.
+pub(crate) trait RunSink {
+    async fn send(&self, m: RunMessage) -> bool;
+}
+
+fn marking_msg(net: &Net, seq: u64, time: f64, tokens: &[u32]) -> Marking {
+    Marking {
+        header: Header::now(""),
+        model_time: time,
+        seq,
+        places: net.places().iter().map(|p| p.name.clone()).collect(),
+        tokens: tokens.to_vec(),
+    }
+}
+
+/// The run's topics from its events, the one home of their content: the initial marking
+/// (seq 0), then per firing a `Firing` (seq 1, 2, … without gaps) and the marking after it,
+/// and every drift of the live monitor, until the run is over.
+pub(crate) async fn publish_run(net: &Net, mut events: Events, sink: &impl RunSink) -> Published {
+    let mut out = Published::default();
+    let initial = net.initial_marking();
+    let mut sent = |ok: bool| out.errors += u64::from(!ok);
+    sent(
+        sink.send(RunMessage::Marking(marking_msg(net, 0, 0.0, &initial)))
+            .await,
+    );
+    let mut firings = 0;
+    let mut lagged = 0;
+    while let Some(r) = events.recv().await {
+        let e = match r {
+            Received::Event(e) => e,
+            Received::Lagged(n) => {
+                tracing::error!("firing publisher fell behind: {n} events lost");
+                lagged += n;
                 continue;
             }
-            let EventKind::Fired {
-                transition,
-                marking,
-                robots,
-                ..
-            } = e.kind
-            else {
-                continue;
-            };
-            out.firings += 1;
-            let msg = Firing {
-                header: Header::now(""),
-                model_time: e.time,
-                seq: out.firings,
-                transition: self.net.transition(transition).name.clone(),
-                marking: marking.to_vec(),
-                robots: robots.iter().map(|r| r.to_string()).collect(),
-            };
-            if self.firings.async_publish(msg).await.is_err() {
-                out.errors += 1;
-            }
-            if self
-                .marking
-                .async_publish(self.marking_msg(out.firings, e.time, &marking))
-                .await
-                .is_err()
-            {
-                out.errors += 1;
-            }
+        };
+        if let EventKind::Drift(d) = &e.kind {
+            sent(
+                sink.send(RunMessage::Drift(drift_message(net, e.time, d)))
+                    .await,
+            );
+            continue;
         }
-        out
+        let EventKind::Fired {
+            transition,
+            marking,
+            robots,
+            ..
+        } = e.kind
+        else {
+            continue;
+        };
+        firings += 1;
+        let msg = Firing {
+            header: Header::now(""),
+            model_time: e.time,
+            seq: firings,
+            transition: net.transition(transition).name.clone(),
+            marking: marking.to_vec(),
+            robots: robots.iter().map(|r| r.to_string()).collect(),
+        };
+        sent(sink.send(RunMessage::Firing(msg)).await);
+        sent(
+            sink.send(RunMessage::Marking(marking_msg(
+                net, firings, e.time, &marking,
+            )))
+            .await,
+        );
+    }
+    Published {
+        firings,
+        lagged,
+        ..out
     }
 }
 

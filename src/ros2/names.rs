@@ -62,11 +62,69 @@ fn is_token(s: &str) -> bool {
         && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
+/// Why `--ros-args` was refused, naming the offending argument.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RosArgsError {
+    /// A flag other than `-r`/`--remap`, `-p`/`--param`.
+    #[error(
+        "--ros-args: `{0}` is not supported (use -r __ns:=/NS, -r __node:=NAME, -p KEY:=VALUE)"
+    )]
+    Unsupported(String),
+    /// `-r` or `-p` last, without its rule.
+    #[error("--ros-args: {0} needs FROM:=TO")]
+    MissingRule(String),
+    /// A rule without `:=`.
+    #[error("--ros-args: {flag} `{rule}`: expected FROM:=TO")]
+    NotARule {
+        /// The flag.
+        flag: String,
+        /// The rule as written.
+        rule: String,
+    },
+    /// `-p NAME:=…` with a name that is no ROS 2 token.
+    #[error("--ros-args: -p `{rule}`: `{name}` is not a parameter name")]
+    ParameterName {
+        /// The rule as written.
+        rule: String,
+        /// The name.
+        name: String,
+    },
+    /// `-r __ns:=…` with a namespace that is not absolute or not made of tokens.
+    #[error(
+        "--ros-args: -r `{0}`: a namespace is absolute, `/` and tokens (letters, digits, underscores)"
+    )]
+    Namespace(String),
+    /// `-r __node:=…` with a name that is no ROS 2 token.
+    #[error("--ros-args: -r `{rule}`: `{name}` is not a node name")]
+    NodeName {
+        /// The rule as written.
+        rule: String,
+        /// The name.
+        name: String,
+    },
+    /// A remap of anything but `__ns` and `__node`.
+    #[error(
+        "--ros-args: -r `{0}`: only __ns and __node can be remapped (gspn's topics follow the namespace)"
+    )]
+    Remap(String),
+    /// A `-p` parameter that is unknown or whose value does not fit it.
+    #[error("--ros-args: -p `{key}:={value}`: {reason}")]
+    Parameter {
+        /// The parameter's name.
+        key: String,
+        /// Its value as written.
+        value: String,
+        /// What was expected.
+        reason: String,
+    },
+}
+
 impl RosArgs {
     /// Parses the arguments after `--ros-args` (up to a `--`): `-r`/`--remap FROM:=TO` with
     /// FROM `__ns` or `__node`, `-p`/`--param NAME:=VALUE`. Anything else is refused, naming
     /// it.
-    pub fn parse(args: &[String]) -> Result<RosArgs, String> {
+    pub fn parse(args: &[String]) -> Result<RosArgs, RosArgsError> {
         let mut out = RosArgs::default();
         let mut it = args.iter();
         while let Some(flag) = it.next() {
@@ -76,23 +134,23 @@ impl RosArgs {
             let kind = match flag.as_str() {
                 "-r" | "--remap" => "remap",
                 "-p" | "--param" => "param",
-                other => {
-                    return Err(format!(
-                        "--ros-args: `{other}` is not supported (use -r __ns:=/NS, -r __node:=NAME, -p KEY:=VALUE)"
-                    ));
-                }
+                other => return Err(RosArgsError::Unsupported(other.to_string())),
             };
             let Some(rule) = it.next() else {
-                return Err(format!("--ros-args: {flag} needs FROM:=TO"));
+                return Err(RosArgsError::MissingRule(flag.clone()));
             };
             let Some((from, to)) = rule.split_once(":=") else {
-                return Err(format!("--ros-args: {flag} `{rule}`: expected FROM:=TO"));
+                return Err(RosArgsError::NotARule {
+                    flag: flag.clone(),
+                    rule: rule.clone(),
+                });
             };
             if kind == "param" {
                 if !is_token(from) {
-                    return Err(format!(
-                        "--ros-args: -p `{rule}`: `{from}` is not a parameter name"
-                    ));
+                    return Err(RosArgsError::ParameterName {
+                        rule: rule.clone(),
+                        name: from.to_string(),
+                    });
                 }
                 out.params.push((from.to_string(), to.to_string()));
                 continue;
@@ -103,25 +161,20 @@ impl RosArgs {
                     let ok =
                         to.starts_with('/') && (ns.is_empty() || ns[1..].split('/').all(is_token));
                     if !ok {
-                        return Err(format!(
-                            "--ros-args: -r `{rule}`: a namespace is absolute, `/` and tokens (letters, digits, underscores)"
-                        ));
+                        return Err(RosArgsError::Namespace(rule.clone()));
                     }
                     out.namespace = Some(ns.to_string());
                 }
                 "__node" | "__name" => {
                     if !is_token(to) {
-                        return Err(format!(
-                            "--ros-args: -r `{rule}`: `{to}` is not a node name"
-                        ));
+                        return Err(RosArgsError::NodeName {
+                            rule: rule.clone(),
+                            name: to.to_string(),
+                        });
                     }
                     out.node = Some(to.to_string());
                 }
-                _ => {
-                    return Err(format!(
-                        "--ros-args: -r `{rule}`: only __ns and __node can be remapped (gspn's topics follow the namespace)"
-                    ));
-                }
+                _ => return Err(RosArgsError::Remap(rule.clone())),
             }
         }
         Ok(out)
@@ -173,7 +226,7 @@ mod tests {
 
     #[test]
     fn what_ros_args_cannot_mean_is_refused_naming_it() {
-        let e = |s: &str| RosArgs::parse(&args(s)).unwrap_err();
+        let e = |s: &str| RosArgs::parse(&args(s)).unwrap_err().to_string();
         assert_eq!(
             e("-r __ns:=fleet_a"),
             "--ros-args: -r `__ns:=fleet_a`: a namespace is absolute, `/` and tokens (letters, digits, underscores)"

@@ -7,6 +7,10 @@
 //! - Simulated robots (`run --robots N --ros2`, feature `sim`, [`sim`]): every `goto L` of
 //!   the built-in actions goes as a goal to `L`'s pose, and the world serves the action for
 //!   each robot and publishes its pose as `geometry_msgs/PoseStamped` on `/<robot>/pose`.
+//! - The same plan on real robots (`run --robots N --nav2`): the same goals go to robots
+//!   that run Nav2; a mirror world (`crate::world::World::spawn_mirror`) keeps the queues
+//!   and draws of the built-in actions and shows each robot at its feedback's pose.
+//!   `plan-runner sim-nav2` serves simulated robots as such a fleet from a process of its own.
 //!
 //! ```text
 //! ros2 place (navigate_to_pose) ─┐
@@ -36,10 +40,57 @@ use super::msgs::nav2::{
 #[cfg(feature = "sim")]
 mod sim;
 #[cfg(feature = "sim")]
-pub use sim::{AT_LOCATION, Nav2Navigator, SimNav2};
+pub use sim::{AT_LOCATION, Nav2Goals, Nav2Navigator, SimNav2};
 
 /// How long a cancel request may take.
 const CANCEL_WAIT: Duration = Duration::from_secs(1);
+
+/// Why a `NavigateToPose` goal did not end with the robot there.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Nav2Error {
+    /// The goal request could not be sent or was not answered (DDS).
+    #[error("/{robot}/{ACTION}: sending the goal: {reason}")]
+    Send {
+        /// The robot.
+        robot: String,
+        /// ros2-client's error.
+        reason: String,
+    },
+    /// The server refused the goal.
+    #[error("/{robot}/{ACTION}: goal rejected")]
+    Rejected {
+        /// The robot.
+        robot: String,
+    },
+    /// The result request failed (DDS).
+    #[error("/{robot}/{ACTION}: result: {reason}")]
+    Result {
+        /// The robot.
+        robot: String,
+        /// ros2-client's error.
+        reason: String,
+    },
+    /// The feedback stream ended before the result came.
+    #[error("/{robot}/{ACTION}: feedback ended")]
+    FeedbackEnded {
+        /// The robot.
+        robot: String,
+    },
+    /// The goal ended other than succeeded: Nav2's status, error code and message.
+    #[error("Nav2 {status}: error {code} {message}")]
+    Ended {
+        /// The goal's final status (`Aborted`, `Canceled`, …).
+        status: String,
+        /// Nav2's `error_code`.
+        code: u16,
+        /// Nav2's `error_msg`.
+        message: String,
+    },
+    /// The step was given up and the goal cancelled.
+    #[error("cancelled")]
+    Cancelled,
+}
 
 /// A `NavigateToPose` action client.
 pub type Nav2Client =
@@ -133,14 +184,16 @@ impl Drop for CancelOnDrop {
 /// says it arrived (`SUCCEEDED`), else why not (rejected, aborted with its error code and
 /// message, cancelled). When `stop` resolves first, the goal is cancelled (the cancel
 /// request answered, or [`CANCEL_WAIT`]) and the answer is `Err("cancelled")`; dropping the
-/// future cancels the goal too, in a task of its own. One goal at a time per client
+/// future cancels the goal too, in a task of its own. Each feedback's `current_pose` goes
+/// to `on_pose` (a mirror world shows the robot there). One goal at a time per client
 /// (ros2-client's calls drop responses meant for a concurrent call).
 pub async fn navigate(
     client: Arc<Nav2Client>,
     robot: &str,
     pose: PoseStamped,
     stop: impl std::future::Future<Output = ()>,
-) -> Result<(), String> {
+    mut on_pose: impl FnMut(&PoseStamped),
+) -> Result<(), Nav2Error> {
     let goal = NavigateToPoseGoal {
         pose,
         behavior_tree: String::new(),
@@ -148,34 +201,49 @@ pub async fn navigate(
     let (id, response) = client
         .async_send_goal(goal)
         .await
-        .map_err(|e| format!("/{robot}/{ACTION}: sending the goal: {e:?}"))?;
+        .map_err(|e| Nav2Error::Send {
+            robot: robot.to_string(),
+            reason: format!("{e:?}"),
+        })?;
     if !response.accepted {
-        return Err(format!("/{robot}/{ACTION}: goal rejected"));
+        return Err(Nav2Error::Rejected {
+            robot: robot.to_string(),
+        });
     }
     let mut guard = CancelOnDrop {
         client: Arc::clone(&client),
         goal: Some(id),
     };
-    // Feedback is drained so the reader does not fill up; the result says it all.
-    let feedback = client.feedback_stream(id).for_each(|_| async {});
+    // Feedback is read for the pose and so the reader does not fill up; the result says
+    // whether the robot arrived.
+    let feedback = client.feedback_stream(id).for_each(|f| {
+        if let Ok(f) = f {
+            on_pose(&f.current_pose);
+        }
+        async {}
+    });
     let result = client.async_request_result(id);
     tokio::pin!(feedback);
     let (status, result) = tokio::select! {
-        r = result => r.map_err(|e| format!("/{robot}/{ACTION}: result: {e:?}"))?,
-        _ = &mut feedback => return Err(format!("/{robot}/{ACTION}: feedback ended")),
+        r = result => r.map_err(|e| Nav2Error::Result {
+            robot: robot.to_string(),
+            reason: format!("{e:?}"),
+        })?,
+        _ = &mut feedback => return Err(Nav2Error::FeedbackEnded { robot: robot.to_string() }),
         _ = stop => {
             let cancel = client.async_cancel_goal(id, ros2_client::builtin_interfaces::Time::ZERO);
             let _ = tokio::time::timeout(CANCEL_WAIT, cancel).await;
             guard.goal = None;
-            return Err("cancelled".into());
+            return Err(Nav2Error::Cancelled);
         }
     };
     guard.goal = None;
     match status {
         GoalStatusEnum::Succeeded => Ok(()),
-        other => Err(format!(
-            "Nav2 {other:?}: error {} {}",
-            result.error_code, result.error_msg
-        )),
+        other => Err(Nav2Error::Ended {
+            status: format!("{other:?}"),
+            code: result.error_code,
+            message: result.error_msg,
+        }),
     }
 }

@@ -49,7 +49,19 @@ enum Call {
     Cancel(GoalId, Reply<CancelGoalResponse>),
 }
 
-type Reply<T> = oneshot::Sender<Result<T, String>>;
+type Reply<T> = oneshot::Sender<Result<T, LinkError>>;
+
+/// Why a call through a [`RobotLink`] got no answer.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LinkError {
+    /// The request could not be written (ros2-client's error).
+    #[error("{0}")]
+    Send(String),
+    /// The link's task has ended (the run is stopping).
+    #[error("the link's task has ended")]
+    Ended,
+}
 
 /// Calls waiting for their response, by request id (callers that gave up are dropped on the
 /// next insert).
@@ -78,7 +90,7 @@ async fn send<Req: Message + 'static, Resp: Message + 'static, T>(
     match client.async_send_request(req).await {
         Ok(id) => pending.insert(id, reply),
         Err(e) => {
-            let _ = reply.send(Err(format!("{e:?}")));
+            let _ = reply.send(Err(LinkError::Send(format!("{e:?}"))));
         }
     }
 }
@@ -186,20 +198,17 @@ impl RobotLink {
         client.cancel_client().wait_for_service(node).await;
     }
 
-    async fn call<T>(&self, make: impl FnOnce(Reply<T>) -> Call) -> Result<T, String> {
+    async fn call<T>(&self, make: impl FnOnce(Reply<T>) -> Call) -> Result<T, LinkError> {
         let (tx, rx) = oneshot::channel();
-        self.calls
-            .send(make(tx))
-            .map_err(|_| "the link's task has ended".to_string())?;
-        rx.await
-            .map_err(|_| "the link's task has ended".to_string())?
+        self.calls.send(make(tx)).map_err(|_| LinkError::Ended)?;
+        rx.await.map_err(|_| LinkError::Ended)?
     }
 
     /// Sends `goal`; the goal's id and the server's response.
     pub async fn send_goal(
         &self,
         goal: ExecPlaceGoal,
-    ) -> Result<(GoalId, SendGoalResponse), String> {
+    ) -> Result<(GoalId, SendGoalResponse), LinkError> {
         self.call(|r| Call::Goal(goal, r)).await
     }
 
@@ -207,12 +216,12 @@ impl RobotLink {
     pub async fn request_result(
         &self,
         id: GoalId,
-    ) -> Result<(GoalStatusEnum, ExecPlaceResult), String> {
+    ) -> Result<(GoalStatusEnum, ExecPlaceResult), LinkError> {
         self.call(|r| Call::Result(id, r)).await
     }
 
     /// Asks the robot to cancel goal `id`.
-    pub async fn cancel_goal(&self, id: GoalId) -> Result<CancelGoalResponse, String> {
+    pub async fn cancel_goal(&self, id: GoalId) -> Result<CancelGoalResponse, LinkError> {
         self.call(|r| Call::Cancel(id, r)).await
     }
 }
@@ -438,7 +447,7 @@ async fn nav2_exec(
         return Outcome::Failed(lost(now));
     }
     tokio::select! {
-        r = navigate(client, &robot, pose, ctx.cancel.cancelled()) => match r {
+        r = navigate(client, &robot, pose, ctx.cancel.cancelled(), |_| {}) => match r {
             Ok(()) => Outcome::Decide,
             Err(_) if ctx.cancel.is_cancelled() => Outcome::Cancelled,
             Err(e) => Outcome::Failed(format!("robot `{robot}`: {e}")),

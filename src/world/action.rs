@@ -37,8 +37,12 @@ pub trait Navigator: Send + Sync + std::fmt::Debug {
         &self,
         robot: Arc<str>,
         location: usize,
-    ) -> std::pin::Pin<Box<dyn std::future::Future<Output = Result<(), String>> + Send>>;
+    ) -> std::pin::Pin<Box<dyn std::future::Future<Output = Result<(), DriveError>> + Send>>;
 }
+
+/// Why a [`Navigator`]'s drive did not arrive, with its cause (e.g.
+/// `crate::ros2::nav2::Nav2Error`).
+pub type DriveError = Box<dyn std::error::Error + Send + Sync>;
 
 /// A built-in robot program bound to a world.
 #[derive(Clone, Debug)]
@@ -128,7 +132,7 @@ impl Action for SimAction {
                         tokio::select! {
                             r = drive => match r {
                                 Ok(()) => Outcome::Decide,
-                                Err(e) => return Outcome::Failed(e),
+                                Err(e) => return Outcome::Failed(e.to_string()),
                             },
                             _ = ctx.cancel.cancelled() => return Outcome::Cancelled,
                         }

@@ -11,11 +11,12 @@ use rustc_hash::FxHashMap;
 use tokio::sync::{oneshot, watch};
 use tokio::time::Instant;
 
+use super::action::DriveError;
 use super::map::Map;
 use super::queue::Queues;
 use super::room::{Room, Vec2};
 use super::{MapView, RobotView, SimMetrics, WorldView};
-use messages::{GetMetrics, Goto, Hold};
+use messages::{Arrived, GetMetrics, Goto, Hold, SetPose};
 
 use crate::sample::{self, Rng};
 
@@ -38,7 +39,11 @@ pub enum GotoError {
     NoPath(String, String),
     /// No robot of that name in the world.
     UnknownRobot(String),
+    /// The world was stopped.
+    Gone,
 }
+
+impl std::error::Error for GotoError {}
 
 impl std::fmt::Display for GotoError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -46,6 +51,7 @@ impl std::fmt::Display for GotoError {
             GotoError::Stuck(x, y) => write!(f, "stuck at ({x:.2}, {y:.2})"),
             GotoError::NoPath(a, b) => write!(f, "no path from `{a}` to `{b}` on the map"),
             GotoError::UnknownRobot(r) => write!(f, "no robot `{r}` in the world"),
+            GotoError::Gone => write!(f, "the world is gone"),
         }
     }
 }
@@ -85,6 +91,9 @@ pub struct World {
     map_view: Arc<MapView>,
     view_every: u64,
     active: bool,
+    /// The robots drive themselves (real robots, `run --nav2`): no physics steps; a robot's
+    /// pose and its arrival come from outside ([`WorldHandle::mirror_goto`]).
+    mirror: bool,
 }
 
 impl std::fmt::Debug for World {
@@ -146,7 +155,7 @@ impl WorldHandle {
     /// Drives `robot` to the back of `location`'s queue, as a `goto` step does (its agent
     /// unchanged): what a simulated robot's Nav2 server (`crate::ros2::nav2`) does with a
     /// goal. `Err`: why it did not arrive, or that the world is gone.
-    pub async fn drive(&self, robot: Arc<str>, location: usize) -> Result<(), String> {
+    pub async fn drive(&self, robot: Arc<str>, location: usize) -> Result<(), GotoError> {
         let (reply, rx) = oneshot::channel();
         let goto = Goto {
             robot,
@@ -155,16 +164,46 @@ impl WorldHandle {
             reply,
         };
         if self.actor.tell(goto).try_send().is_err() {
-            return Err("the world is gone".into());
+            return Err(GotoError::Gone);
         }
-        match rx.await {
-            Ok(r) => r.map_err(|e| e.to_string()),
-            Err(_) => Err("the world is gone".into()),
-        }
+        rx.await.unwrap_or(Err(GotoError::Gone))
     }
 
     pub(crate) fn actor(&self) -> &ActorRef<World> {
         &self.actor
+    }
+
+    /// In a mirror world ([`World::spawn_mirror`]): `robot` has set out for `location`
+    /// and `drive` takes it there (a Nav2 goal to a real robot). The world keeps the queues as
+    /// a `goto` would — the robot leaves its location's queue when it sets out and joins the
+    /// back of `location`'s — and counts the arrival when `drive` succeeds. `Err`: why
+    /// `drive` did not arrive, or that the world is gone.
+    pub async fn mirror_goto(
+        &self,
+        robot: Arc<str>,
+        location: usize,
+        drive: impl std::future::Future<Output = Result<(), DriveError>>,
+    ) -> Result<(), DriveError> {
+        let (reply, rx) = oneshot::channel();
+        let goto = Goto {
+            robot: Arc::clone(&robot),
+            agent: None,
+            location,
+            reply,
+        };
+        if self.actor.tell(goto).try_send().is_err() {
+            return Err(GotoError::Gone.into());
+        }
+        drive.await?;
+        if self.actor.tell(Arrived { robot }).try_send().is_err() {
+            return Err(GotoError::Gone.into());
+        }
+        Ok(rx.await.unwrap_or(Err(GotoError::Gone))?)
+    }
+
+    /// In a mirror world: `robot` is at `(x, y)` (frame `map`), e.g. from Nav2's feedback.
+    pub fn set_pose(&self, robot: Arc<str>, x: f64, y: f64) {
+        let _ = self.actor.tell(SetPose { robot, x, y }).try_send();
     }
 }
 
@@ -173,6 +212,30 @@ impl World {
     /// locations' queues in this order. `time_scale` as the runtime's (0 = virtual time);
     /// `seed` seeds every robot's draws (one stream per robot).
     pub fn spawn(map: Arc<Map>, robots: &[RobotStart], time_scale: f64, seed: u64) -> WorldHandle {
+        World::spawn_as(map, robots, time_scale, seed, false)
+    }
+
+    /// A world whose robots drive themselves (real robots running Nav2, `run --nav2`): it
+    /// steps no physics and keeps what the built-in actions need — the locations' queues,
+    /// each robot's draws, the turns — with the poses and arrivals it is told
+    /// ([`WorldHandle::mirror_goto`], [`WorldHandle::set_pose`]). Robots start in the
+    /// queues of their start locations, as in [`World::spawn`].
+    pub fn spawn_mirror(
+        map: Arc<Map>,
+        robots: &[RobotStart],
+        time_scale: f64,
+        seed: u64,
+    ) -> WorldHandle {
+        World::spawn_as(map, robots, time_scale, seed, true)
+    }
+
+    fn spawn_as(
+        map: Arc<Map>,
+        robots: &[RobotStart],
+        time_scale: f64,
+        seed: u64,
+        mirror: bool,
+    ) -> WorldHandle {
         let mut queues = Queues::new(&map);
         for (r, s) in robots.iter().enumerate() {
             queues.join(s.location, r);
@@ -237,6 +300,7 @@ impl World {
             .0,
             map_view,
             active: false,
+            mirror,
         };
         let first = w.view();
         let (tx, rx) = watch::channel(first);
@@ -297,7 +361,7 @@ impl World {
     }
 
     fn wake(&mut self) {
-        if !self.active {
+        if !self.active && !self.mirror {
             self.active = true;
             self.next_tick = Instant::now() + self.tick_len;
         }
@@ -401,6 +465,28 @@ impl World {
         rb.goto = Some(m.reply);
         rb.best = f32::INFINITY;
         self.retarget(m.location);
+    }
+
+    /// A mirror world's robot reports its pose.
+    fn set_pose(&mut self, m: SetPose) {
+        let Some(&r) = self.names.get(&m.robot) else {
+            return;
+        };
+        let p = Vec2::new(m.x as f32, m.y as f32);
+        let b = &mut self.room.bodies[r];
+        b.pos = p;
+        b.target = p;
+        b.waypoints.clear();
+        self.publish();
+    }
+
+    /// A mirror world's robot has arrived where its `goto` went.
+    fn arrived(&mut self, robot: &str) {
+        if let Some(&r) = self.names.get(robot)
+            && self.robots[r].goto.is_some()
+        {
+            self.arrive(r);
+        }
     }
 
     fn arrive(&mut self, r: usize) {

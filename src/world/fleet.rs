@@ -156,7 +156,20 @@ impl Fleet {
     /// net's initial tokens in robot places) and spawns the world. Call inside a tokio
     /// runtime (with a paused clock for virtual time faster than real time).
     pub fn new(plan: impl Into<FleetPlan>, robots: Option<usize>) -> Result<Fleet, FleetError> {
-        let FleetPlan { run, map } = plan.into();
+        Fleet::build(plan.into(), robots, false)
+    }
+
+    /// The same for robots that drive themselves — real robots running Nav2 (`run --nav2`,
+    /// see `crate::ros2::nav2`): the world is a mirror ([`World::spawn_mirror`]) that keeps
+    /// the queues, draws and turns of the built-in actions and the poses it is told. Give
+    /// the fleet its navigator with [`Fleet::navigate_with`]: without one, a `goto` never
+    /// arrives.
+    pub fn mirror(plan: impl Into<FleetPlan>, robots: Option<usize>) -> Result<Fleet, FleetError> {
+        Fleet::build(plan.into(), robots, true)
+    }
+
+    fn build(plan: FleetPlan, robots: Option<usize>, mirror: bool) -> Result<Fleet, FleetError> {
+        let FleetPlan { run, map } = plan;
         let map = Arc::new(map.ok_or(FleetError::NoMap)?);
         let robot = robot_places(&run, &map)?;
         let net = run.net();
@@ -215,7 +228,12 @@ impl Fleet {
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_nanos() as u64)
         });
-        let world = World::spawn(Arc::clone(&map), &starts, run.time_scale_value(), seed);
+        let spawn = if mirror {
+            World::spawn_mirror
+        } else {
+            World::spawn
+        };
+        let world = spawn(Arc::clone(&map), &starts, run.time_scale_value(), seed);
         let mut names: Vec<String> = net
             .place_ids()
             .filter_map(|p| match run.role_of(p) {

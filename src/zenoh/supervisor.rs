@@ -33,10 +33,10 @@ use super::robot::declare_token;
 use super::wire::{self, Source};
 use super::{ZenohConfig, ZenohError};
 use crate::net::Net;
-use crate::ros2::firings::{Published, drift_message};
-use crate::ros2::msgs::{Firing, Header, Marking, RunState};
+use crate::ros2::firings::{Published, RunMessage, RunSink, publish_run};
+use crate::ros2::msgs::RunState;
 use crate::ros2::settings::{NAV2_SERVER, ROS2_ACTION, Ros2Settings};
-use crate::runtime::{EventKind, Events, Received, RuntimeBuilder};
+use crate::runtime::{Events, RuntimeBuilder};
 
 /// A publisher and its rmw_zenoh attachment (GID, sequence numbers).
 struct TopicPublisher {
@@ -76,69 +76,20 @@ struct RunTopics {
 }
 
 impl RunTopics {
-    fn marking_msg(&self, seq: u64, time: f64, tokens: &[u32]) -> Marking {
-        Marking {
-            header: Header::now(""),
-            model_time: time,
-            seq,
-            places: self.net.places().iter().map(|p| p.name.clone()).collect(),
-            tokens: tokens.to_vec(),
-        }
-    }
-
     /// Publishes the initial marking, then every firing of `events` until the run is over
     /// (the same messages as the DDS publisher).
-    async fn run(&self, mut events: Events) -> Published {
-        let mut out = Published::default();
-        let initial = self.net.initial_marking();
-        if !self.marking.put(&self.marking_msg(0, 0.0, &initial)).await {
-            out.errors += 1;
+    async fn run(&self, events: Events) -> Published {
+        publish_run(&self.net, events, self).await
+    }
+}
+
+impl RunSink for RunTopics {
+    async fn send(&self, m: RunMessage) -> bool {
+        match m {
+            RunMessage::Marking(m) => self.marking.put(&m).await,
+            RunMessage::Firing(f) => self.firings.put(&f).await,
+            RunMessage::Drift(d) => self.drift.put(&d).await,
         }
-        while let Some(r) = events.recv().await {
-            let e = match r {
-                Received::Event(e) => e,
-                Received::Lagged(n) => {
-                    tracing::error!("firing publisher fell behind: {n} events lost");
-                    out.lagged += n;
-                    continue;
-                }
-            };
-            if let EventKind::Drift(d) = &e.kind {
-                if !self.drift.put(&drift_message(&self.net, e.time, d)).await {
-                    out.errors += 1;
-                }
-                continue;
-            }
-            let EventKind::Fired {
-                transition,
-                marking,
-                robots,
-                ..
-            } = e.kind
-            else {
-                continue;
-            };
-            out.firings += 1;
-            let msg = Firing {
-                header: Header::now(""),
-                model_time: e.time,
-                seq: out.firings,
-                transition: self.net.transition(transition).name.clone(),
-                marking: marking.to_vec(),
-                robots: robots.iter().map(|r| r.to_string()).collect(),
-            };
-            if !self.firings.put(&msg).await {
-                out.errors += 1;
-            }
-            if !self
-                .marking
-                .put(&self.marking_msg(out.firings, e.time, &marking))
-                .await
-            {
-                out.errors += 1;
-            }
-        }
-        out
     }
 }
 

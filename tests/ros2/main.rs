@@ -27,5 +27,6 @@ mod netns;
 mod python_robot;
 mod rosout;
 mod runs_recorded_to_mcap;
+mod same_plan_on_nav2_robots;
 mod security;
 mod two_plans_in_two_namespaces;

@@ -14,8 +14,6 @@ use std::path::Path;
 use std::process::Stdio;
 use std::time::Duration;
 
-use gspn::io::ReadOptions;
-use gspn::plan::read_plan;
 use support::{CYCLONE_CONFIG, domain, finish, python, repo, supervisor_with};
 use tokio::io::{AsyncBufReadExt, AsyncReadExt, BufReader};
 
@@ -85,21 +83,7 @@ async fn the_patrol_on_4_simulated_robots_goes_through_navigate_to_pose_over_dds
     let summary: serde_json::Value = serde_json::from_str(&out).expect("a JSON summary");
     assert_eq!(summary["firings"], 60, "{out}");
     assert_eq!(summary["errors"].as_array().map(Vec::len), Some(0), "{out}");
-    let nav2 = &summary["nav2"];
-    let goals = nav2["goals"].as_u64().expect("nav2 goals counted");
-    assert!(goals >= 4, "every robot drives at least once: {nav2}");
-    assert_eq!(
-        (&nav2["aborted"], &nav2["rejected"]),
-        (&0.into(), &0.into()),
-        "{nav2}"
-    );
-    // Goals still driving when the run stopped are cancelled (one per robot at most).
-    let (ok, cancelled) = (
-        nav2["succeeded"].as_u64().unwrap(),
-        nav2["cancelled"].as_u64().unwrap(),
-    );
-    assert_eq!(ok + cancelled, goals, "{nav2}");
-    assert!(cancelled <= 4, "{nav2}");
+    let goals = support::assert_nav2_goals(&summary, 4);
     assert!(
         log.contains("Nav2 NavigateToPose served for 4 simulated robot(s)"),
         "{log}"
@@ -126,15 +110,7 @@ async fn the_patrol_on_4_simulated_robots_goes_through_navigate_to_pose_over_dds
         "geometry_msgs::msg::dds_::PoseStamped_"
     );
 
-    let plan = read_plan(Path::new(&repo(PATROL)), &ReadOptions::default()).unwrap();
-    let map = plan.map.expect("the patrol has a map");
-    let patrol: Vec<(f64, f64)> = ["L1", "L2", "L3", "L4"]
-        .iter()
-        .map(|l| {
-            let i = map.location(l).unwrap();
-            (map.locations[i].x, map.locations[i].y)
-        })
-        .collect();
+    let patrol = support::patrol_locations();
     let mut seen_goals = 0;
     for r in robots {
         let o = &seen["robots"][r];

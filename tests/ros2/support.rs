@@ -24,11 +24,12 @@ pub fn repo(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
-/// A DDS domain for test `k` (< 20) of this process: tests in parallel (and other test
-/// processes on the machine) do not hear each other.
+/// A DDS domain for test `k` (< 22) of this process: tests in parallel (and other test
+/// processes on the machine) do not hear each other. At most 10 + 9 × 22 + 21 = 229
+/// (DDS domains end at 232).
 pub fn domain(k: u16) -> u16 {
-    assert!(k < 20, "test domain index {k} ≥ 20");
-    10 + (std::process::id() % 10) as u16 * 20 + k
+    assert!(k < 22, "test domain index {k} ≥ 22");
+    10 + (std::process::id() % 10) as u16 * 22 + k
 }
 
 /// A process whose stderr goes to a file in `dir`, killed when dropped.
@@ -96,6 +97,12 @@ fn spawn(
         child,
         log,
     }
+}
+
+/// `plan-runner ARGS…`, its stderr in `dir/NAME.log`.
+pub fn plan_runner(dir: &Path, name: &str, args: &[&str]) -> Proc {
+    let args: Vec<String> = args.iter().map(|s| s.to_string()).collect();
+    command(dir, name, &args, false)
 }
 
 /// `plan-runner robot --id ID --plan PLAN --ros2-domain D`.
@@ -377,4 +384,39 @@ pub async fn assert_leaves(r: Proc, limit: Duration, says: &str) {
     let text = std::fs::read_to_string(log).unwrap_or_default();
     assert_eq!(code, Some(0), "{name}: {text}");
     assert!(text.contains(says), "{name}: {text}");
+}
+
+/// Checks a run summary's `nav2` section: at least `robots` goals (every robot drove), none
+/// aborted or rejected, the rest succeeded or — still driving when the run stopped —
+/// cancelled, one per robot at most. The number of goals.
+pub fn assert_nav2_goals(summary: &serde_json::Value, robots: u64) -> u64 {
+    let nav2 = &summary["nav2"];
+    let goals = nav2["goals"].as_u64().expect("nav2 goals counted");
+    assert!(goals >= robots, "every robot drives at least once: {nav2}");
+    assert_eq!(
+        (&nav2["aborted"], &nav2["rejected"]),
+        (&0.into(), &0.into()),
+        "{nav2}"
+    );
+    let (ok, cancelled) = (
+        nav2["succeeded"].as_u64().unwrap(),
+        nav2["cancelled"].as_u64().unwrap(),
+    );
+    assert_eq!(ok + cancelled, goals, "{nav2}");
+    assert!(cancelled <= robots, "{nav2}");
+    goals
+}
+
+/// The temperature patrol's (plans/temperature-patrol) locations L1–L4 on its map.
+pub fn patrol_locations() -> Vec<(f64, f64)> {
+    let path = repo("plans/temperature-patrol/plan.toml");
+    let plan = gspn::plan::read_plan(&path, &gspn::io::ReadOptions::default()).unwrap();
+    let map = plan.map.expect("the patrol has a map");
+    ["L1", "L2", "L3", "L4"]
+        .iter()
+        .map(|l| {
+            let i = map.location(l).unwrap();
+            (map.locations[i].x, map.locations[i].y)
+        })
+        .collect()
 }

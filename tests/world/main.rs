@@ -5,4 +5,5 @@
 mod support;
 
 mod map;
+mod mirror;
 mod patrol;

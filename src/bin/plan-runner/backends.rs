@@ -87,10 +87,7 @@ pub(crate) fn tokio_runtime(plan: &Plan) -> std::io::Result<tokio::runtime::Runt
             .build();
     }
     let _ = plan;
-    tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
+    crate::common::two_threads()
 }
 
 /// The run's builder and its backends, in order: the simulated world (a plan with a map)
@@ -119,7 +116,7 @@ pub(crate) async fn setup(
     #[cfg(feature = "sim")]
     if plan.map.is_some() {
         #[cfg(feature = "ros2")]
-        let nav2 = match args.ros2.ros2 {
+        let nav2 = match args.ros2.ros2 || args.ros2.nav2 {
             true => Some(crate::ros2::sim_config(
                 &plan,
                 &args.ros2,
@@ -127,10 +124,22 @@ pub(crate) async fn setup(
             )?),
             false => None,
         };
-        let fleet =
-            gspn::world::Fleet::new(plan, args.robots).map_err(|e| BadInput(e.to_string()))?;
+        #[cfg(feature = "ros2")]
+        let mirror = args.ros2.nav2;
+        #[cfg(not(feature = "ros2"))]
+        let mirror = false;
+        let fleet = match mirror {
+            true => gspn::world::Fleet::mirror(plan, args.robots),
+            false => gspn::world::Fleet::new(plan, args.robots),
+        }
+        .map_err(|e| BadInput(e.to_string()))?;
         #[cfg(feature = "ros2")]
         let fleet = match nav2 {
+            Some(cfg) if mirror => {
+                let (fleet, goals) = crate::ros2::real_nav2(fleet, &cfg).await?;
+                backends.push(goals);
+                fleet
+            }
             Some(cfg) => {
                 let (fleet, servers) = crate::ros2::sim_nav2(fleet, &cfg).await?;
                 backends.push(servers);

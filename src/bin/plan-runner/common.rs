@@ -195,3 +195,12 @@ pub(crate) fn open_checked(path: &Path, args: &NetArgs) -> anyhow::Result<gspn::
     }
     Ok(opened)
 }
+
+/// The tokio runtime of the long-running commands (a run, a robot, a fleet, a router, the
+/// viewer): two worker threads, for the machine's two cores and no more.
+pub(crate) fn two_threads() -> std::io::Result<tokio::runtime::Runtime> {
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+}

@@ -65,6 +65,11 @@ enum Command {
     /// with net-timed local actions, a heartbeat, the firings (feature `ros2`).
     #[cfg(feature = "ros2")]
     Robot(ros2::RobotArgs),
+    /// Simulated robots of a plan's map serving Nav2's NavigateToPose over DDS, in a process
+    /// of their own: a stand-in for a real Nav2 fleet that `run --nav2` drives (features
+    /// `ros2` and `sim`).
+    #[cfg(all(feature = "ros2", feature = "sim"))]
+    SimNav2(ros2::SimNav2Args),
     /// Host many robots of a plan in one process over Zenoh (feature `zenoh`): each serves
     /// its ExecPlace action and declares its own liveliness token, as `robot --zenoh` does.
     #[cfg(feature = "zenoh")]
@@ -94,6 +99,8 @@ fn main() -> ExitCode {
         Command::Replay(a) => replay::main(a),
         #[cfg(feature = "ros2")]
         Command::Robot(a) => ros2::robot(a),
+        #[cfg(all(feature = "ros2", feature = "sim"))]
+        Command::SimNav2(a) => ros2::sim_nav2_main(a),
         #[cfg(feature = "zenoh")]
         Command::Fleet(a) => zenoh::fleet(a),
         #[cfg(feature = "zenoh")]

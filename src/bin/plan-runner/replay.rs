@@ -200,10 +200,7 @@ fn viewer(
         .map_err(|e| BadInput(format!("{}: {e}", path.display())))?;
     warn_torn(path, torn.as_ref());
     let mut signals = crate::common::StopSignals::new()?;
-    let rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()?;
+    let rt = crate::common::two_threads()?;
     let served = rt.block_on(async {
         let listener = tokio::net::TcpListener::bind(addr)
             .await

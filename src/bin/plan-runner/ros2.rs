@@ -19,6 +19,11 @@ use gspn::runtime::{
 
 use crate::common::{BadInput, NetArgs};
 
+#[cfg(feature = "sim")]
+mod sim_nav2;
+#[cfg(feature = "sim")]
+pub(crate) use sim_nav2::{SimNav2Args, main as sim_nav2_main};
+
 /// DDS flags (override the plan's `[ros2]` table and the `GSPN_ROS2_*` environment).
 #[derive(clap::Args, Debug, Clone, Default)]
 pub(crate) struct DdsArgs {
@@ -50,7 +55,8 @@ pub(crate) struct DdsArgs {
 impl DdsArgs {
     /// What `--ros-args` says.
     fn ros(&self) -> anyhow::Result<RosArgs> {
-        Ok(RosArgs::parse(self.ros_args.as_deref().unwrap_or_default()).map_err(BadInput)?)
+        Ok(RosArgs::parse(self.ros_args.as_deref().unwrap_or_default())
+            .map_err(|e| BadInput(e.to_string()))?)
     }
 }
 
@@ -69,7 +75,8 @@ impl DdsArgs {
                 .map_err(|why| BadInput(format!("--ros2-networks `{n}`: {why}")))?;
         }
         c.rosout |= self.ros2_rosout;
-        c.apply_ros_args(&self.ros()?).map_err(BadInput)?;
+        c.apply_ros_args(&self.ros()?)
+            .map_err(|e| BadInput(e.to_string()))?;
         c.bind_address().map_err(|e| BadInput(e.to_string()))?;
         // The supervisor, the robots and a viewer or two on one host: any start order.
         Ok(c.for_fleet(robots(plan).len() + 2))
@@ -99,8 +106,18 @@ pub(crate) struct RunArgs {
     /// (geometry_msgs/PoseStamped, frame `map`). Needs a time scale > 0 (DDS is on the wall
     /// clock).
     #[cfg(feature = "sim")]
-    #[arg(long)]
+    #[arg(long, conflicts_with = "nav2")]
     pub(crate) ros2: bool,
+    /// The plan's robots are real robots running Nav2 (feature `sim`): the same plan as
+    /// with `--robots N` — every `goto L` of its built-in actions becomes a NavigateToPose
+    /// goal to L's pose at /<robot>/navigate_to_pose, and nothing is simulated. The queues,
+    /// turns and draws of the built-in actions are kept by a mirror of the map that shows
+    /// each robot where Nav2's feedback says it is. Robots are r1..rN (`--robots N`) or the
+    /// plan's `robots`, starting at the locations the net's initial marking puts them.
+    /// Needs a time scale > 0. `plan-runner sim-nav2` stands in for such a fleet.
+    #[cfg(feature = "sim")]
+    #[arg(long)]
+    pub(crate) nav2: bool,
 }
 
 /// Refuses a plan with ros2 places the supervisor cannot run: no robots to send goals to,
@@ -133,19 +150,21 @@ pub(crate) fn check_plan(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
 /// virtual time (DDS runs on the wall clock, so the world must too).
 #[cfg(feature = "sim")]
 pub(crate) fn check_sim_nav2(plan: &Plan, args: &RunArgs) -> anyhow::Result<()> {
-    if !args.ros2 {
-        return Ok(());
-    }
+    let flag = match (args.ros2, args.nav2) {
+        (true, _) => "--ros2 serves Nav2 for simulated robots",
+        (_, true) => "--nav2 sends the built-in actions' `goto`s to Nav2 robots",
+        _ => return Ok(()),
+    };
     if plan.map.is_none() {
         return Err(BadInput(format!(
-            "{}: --ros2 serves Nav2 for simulated robots: the plan needs a [map] (see docs/ros2.md, \"Nav2\")",
+            "{}: {flag}: the plan needs a [map] (see docs/ros2.md, \"Nav2\")",
             plan.path.display()
         ))
         .into());
     }
     if plan.time_scale.unwrap_or(0.0) == 0.0 {
         return Err(BadInput(format!(
-            "{}: --ros2 with time scale 0 (virtual time): DDS runs on the wall clock, so the \
+            "{}: {flag}, with time scale 0 (virtual time): DDS runs on the wall clock, so the \
              world must too; give --time-scale X > 0 (1 = real time, 0.05 = 20x faster)",
             plan.path.display()
         ))
@@ -171,6 +190,29 @@ pub(crate) async fn sim_nav2(
     );
     let nav = Nav2Navigator::connect(&robots, std::sync::Arc::clone(&fleet.map), cfg).await?;
     Ok((fleet.navigate_with(std::sync::Arc::new(nav)), servers))
+}
+
+/// Links `fleet` (a mirror, [`gspn::world::Fleet::mirror`]) to its real robots' Nav2
+/// servers (`--nav2`): every `goto` becomes a NavigateToPose goal and the mirror follows
+/// the feedback. Returns the fleet and the backend that counts the goals.
+#[cfg(feature = "sim")]
+pub(crate) async fn real_nav2(
+    fleet: gspn::world::Fleet,
+    cfg: &DdsConfig,
+) -> anyhow::Result<(gspn::world::Fleet, gspn::ros2::nav2::Nav2Goals)> {
+    use gspn::ros2::nav2::Nav2Navigator;
+    let robots = fleet.world.robots().to_vec();
+    eprintln!(
+        "ros2: domain {}, waiting for Nav2 (NavigateToPose) on robot(s) {}",
+        cfg.domain_id,
+        robots.join(", ")
+    );
+    let nav = Nav2Navigator::connect(&robots, std::sync::Arc::clone(&fleet.map), cfg)
+        .await?
+        .mirroring(fleet.world.clone());
+    eprintln!("ros2: Nav2 ready on {} robot(s)", robots.len());
+    let goals = nav.goals();
+    Ok((fleet.navigate_with(std::sync::Arc::new(nav)), goals))
 }
 
 /// The DDS settings of a run with simulated robots served over ROS 2 (`--ros2`).
@@ -383,11 +425,7 @@ pub(crate) fn robot(args: RobotArgs) -> anyhow::Result<ExitCode> {
         latency_log: args.latency_log.clone(),
         stay: args.stay,
     };
-    let rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .context("starting tokio")?;
+    let rt = crate::common::two_threads().context("starting tokio")?;
     let stats = rt.block_on(async {
         eprintln!(
             "robot {}: serving on domain {} ({} ros2 places)",

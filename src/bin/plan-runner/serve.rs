@@ -104,10 +104,7 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
         None => state,
     };
     let mut signals = StopSignals::new()?;
-    let rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()?;
+    let rt = crate::common::two_threads()?;
     let served = rt.block_on(async {
         let listener = tokio::net::TcpListener::bind(args.addr)
             .await

@@ -216,11 +216,7 @@ pub(crate) fn serve_robots(
         .into());
     }
     let cfg = config(plan, endpoint)?;
-    let rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .context("starting tokio")?;
+    let rt = crate::common::two_threads().context("starting tokio")?;
     let n = opts.ids.len();
     let stats: FleetStats = rt.block_on(async {
         let session = gspn::zenoh::client(endpoint).await?;
@@ -386,11 +382,7 @@ pub(crate) fn router(args: RouterArgs) -> anyhow::Result<ExitCode> {
             return Err(BadInput(format!("--lease {s}: must be in 0.001..=3600 seconds")).into());
         }
     };
-    let rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .context("starting tokio")?;
+    let rt = crate::common::two_threads().context("starting tokio")?;
     rt.block_on(async {
         let session = gspn::zenoh::router(&listen, &args.connect, lease).await?;
         eprintln!(

@@ -71,8 +71,10 @@ impl NavigateToPoseResult {
     pub const TIMEOUT: u16 = 9003;
 }
 
-/// `NavigateToPose` feedback: where the robot is and how far it has left.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// `NavigateToPose` feedback: where the robot is and how far it has left. It reads the
+/// feedback of every distribution: Jazzy's and Kilted's end after `distance_remaining` (the
+/// two tracking errors then read as 0).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct NavigateToPoseFeedback {
     /// The robot's pose now.
     pub current_pose: PoseStamped,
@@ -91,7 +93,98 @@ pub struct NavigateToPoseFeedback {
 }
 impl Message for NavigateToPoseFeedback {}
 
+impl<'de> Deserialize<'de> for NavigateToPoseFeedback {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::{Error, SeqAccess, Visitor};
+        struct Fields;
+        impl<'de> Visitor<'de> for Fields {
+            type Value = NavigateToPoseFeedback;
+
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("NavigateToPose feedback")
+            }
+
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+                fn next<'de, A: SeqAccess<'de>, T: Deserialize<'de>>(
+                    seq: &mut A,
+                    k: usize,
+                ) -> Result<T, A::Error> {
+                    seq.next_element()?
+                        .ok_or_else(|| A::Error::invalid_length(k, &"7 fields"))
+                }
+                let current_pose = next(&mut seq, 0)?;
+                let navigation_time = next(&mut seq, 1)?;
+                let estimated_time_remaining = next(&mut seq, 2)?;
+                let number_of_recoveries = next(&mut seq, 3)?;
+                let distance_remaining = next(&mut seq, 4)?;
+                // New in Lyrical: a Jazzy or Kilted message ends here (the CDR reader then
+                // fails for want of bytes, which means "absent").
+                let mut newer = || seq.next_element::<f32>().ok().flatten().unwrap_or(0.0);
+                let position_tracking_error = newer();
+                let heading_tracking_error = newer();
+                Ok(NavigateToPoseFeedback {
+                    current_pose,
+                    navigation_time,
+                    estimated_time_remaining,
+                    number_of_recoveries,
+                    distance_remaining,
+                    position_tracking_error,
+                    heading_tracking_error,
+                })
+            }
+        }
+        const FIELDS: &[&str] = &[
+            "current_pose",
+            "navigation_time",
+            "estimated_time_remaining",
+            "number_of_recoveries",
+            "distance_remaining",
+            "position_tracking_error",
+            "heading_tracking_error",
+        ];
+        d.deserialize_struct("NavigateToPoseFeedback", FIELDS, Fields)
+    }
+}
+
 /// The action type `nav2_msgs/action/NavigateToPose`.
 pub fn navigate_to_pose_type() -> ActionTypeName {
     ActionTypeName::new(PACKAGE, "NavigateToPose")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use byteorder::LittleEndian;
+    use rustdds::cdr_encoding::{from_bytes, to_vec};
+
+    #[test]
+    fn feedback_of_jazzy_and_kilted_reads_without_the_tracking_errors() {
+        let full = NavigateToPoseFeedback {
+            current_pose: PoseStamped::on_map(3.25, -1.5, 0.0),
+            navigation_time: Duration { sec: 4, nanosec: 5 },
+            estimated_time_remaining: Duration { sec: 6, nanosec: 7 },
+            number_of_recoveries: 2,
+            distance_remaining: 8.5,
+            position_tracking_error: 0.25,
+            heading_tracking_error: 0.125,
+        };
+        let bytes = to_vec::<_, LittleEndian>(&full).unwrap();
+        let (back, _) = from_bytes::<NavigateToPoseFeedback, LittleEndian>(&bytes).unwrap();
+        assert_eq!(back, full);
+        // Jazzy/Kilted: the same bytes without the last two float32.
+        let short = &bytes[..bytes.len() - 8];
+        let (old, _) = from_bytes::<NavigateToPoseFeedback, LittleEndian>(short).unwrap();
+        assert_eq!(
+            old,
+            NavigateToPoseFeedback {
+                position_tracking_error: 0.0,
+                heading_tracking_error: 0.0,
+                ..full.clone()
+            }
+        );
+        // Shorter than Jazzy's is refused.
+        assert!(
+            from_bytes::<NavigateToPoseFeedback, LittleEndian>(&bytes[..bytes.len() - 12]).is_err()
+        );
+    }
 }

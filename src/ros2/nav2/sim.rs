@@ -13,7 +13,9 @@ use ros2_client::Node;
 use ros2_client::action::{AsyncActionServer, GoalEndStatus};
 use tokio::task::JoinHandle;
 
-use super::{Nav2Client, client, feedback_qos, navigate, robot_name, server_qos, wait_for_server};
+use super::{
+    Nav2Client, Nav2Error, client, feedback_qos, navigate, robot_name, server_qos, wait_for_server,
+};
 use crate::ros2::Ros2Error;
 use crate::ros2::config::DdsConfig;
 use crate::ros2::msgs::PoseStamped;
@@ -24,7 +26,7 @@ use crate::ros2::msgs::nav2::{
 };
 use crate::runtime::{Backend, BackendFuture, Section, Summary};
 use crate::world::map::Map;
-use crate::world::{Navigator, WorldHandle, WorldView};
+use crate::world::{DriveError, Navigator, WorldHandle, WorldView};
 
 /// A goal pose this close to a location (m) means that location.
 pub const AT_LOCATION: f64 = 0.5;
@@ -100,43 +102,103 @@ impl Backend for SimNav2 {
     }
 
     fn finish<'a>(&'a mut self, _summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
-        Box::pin(async move {
-            let c = &self.counts;
-            let n = |a: &AtomicU64| a.load(Ordering::SeqCst);
-            // The run's last drives were given up when it stopped: their cancel requests
-            // are on their way. Wait (a little) for them to be answered and counted.
-            let settled = async {
-                while n(&c.succeeded) + n(&c.aborted) + n(&c.cancelled) + n(&c.rejected)
-                    < n(&c.goals)
-                {
-                    tokio::time::sleep(Duration::from_millis(20)).await;
-                }
-            };
-            if tokio::time::timeout(SETTLE, settled).await.is_err() {
-                tracing::warn!("nav2: goals still driving {SETTLE:?} after the run stopped");
-            }
-            let json = serde_json::json!({
-                "goals": n(&c.goals),
-                "succeeded": n(&c.succeeded),
-                "aborted": n(&c.aborted),
-                "cancelled": n(&c.cancelled),
-                "rejected": n(&c.rejected),
-            });
-            let text = format!(
-                "nav2: {} NavigateToPose goals ({} succeeded, {} aborted, {} cancelled, {} rejected)",
-                n(&c.goals),
-                n(&c.succeeded),
-                n(&c.aborted),
-                n(&c.cancelled),
-                n(&c.rejected)
-            );
-            Some(Section::new(json, text))
-        })
+        Box::pin(async move { Some(self.counts.section().await) })
     }
 
     fn stop(&mut self) {
         for t in &self.tasks {
             t.abort();
+        }
+    }
+}
+
+impl Counts {
+    /// The `nav2` summary section, once every goal has ended (or [`SETTLE`] passed).
+    async fn section(&self) -> Section {
+        let n = |a: &AtomicU64| a.load(Ordering::SeqCst);
+        // The run's last drives were given up when it stopped: their cancel requests are on
+        // their way. Wait (a little) for them to be answered and counted.
+        let settled = async {
+            while n(&self.succeeded) + n(&self.aborted) + n(&self.cancelled) + n(&self.rejected)
+                < n(&self.goals)
+            {
+                tokio::time::sleep(Duration::from_millis(20)).await;
+            }
+        };
+        if tokio::time::timeout(SETTLE, settled).await.is_err() {
+            tracing::warn!("nav2: goals still driving {SETTLE:?} after the run stopped");
+        }
+        let json = serde_json::json!({
+            "goals": n(&self.goals),
+            "succeeded": n(&self.succeeded),
+            "aborted": n(&self.aborted),
+            "cancelled": n(&self.cancelled),
+            "rejected": n(&self.rejected),
+        });
+        let text = format!(
+            "nav2: {} NavigateToPose goals ({} succeeded, {} aborted, {} cancelled, {} rejected)",
+            n(&self.goals),
+            n(&self.succeeded),
+            n(&self.aborted),
+            n(&self.cancelled),
+            n(&self.rejected)
+        );
+        Section::new(json, text)
+    }
+}
+
+/// The goals a [`Nav2Navigator`] sent and how they ended, as the run's `nav2` summary
+/// section (the same as [`SimNav2`]'s, counted on the client's side): the backend of a run
+/// on real Nav2 robots (`run --nav2`).
+#[derive(Debug)]
+pub struct Nav2Goals {
+    counts: Arc<Counts>,
+}
+
+impl Backend for Nav2Goals {
+    fn name(&self) -> &'static str {
+        "nav2"
+    }
+
+    fn finish<'a>(&'a mut self, _summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
+        Box::pin(async move { Some(self.counts.section().await) })
+    }
+}
+
+/// Counts one goal: sent when made, its end when [`Tally::end`] is called, cancelled when
+/// dropped first (the step was given up).
+struct Tally {
+    counts: Arc<Counts>,
+    ended: bool,
+}
+
+impl Tally {
+    fn new(counts: Arc<Counts>) -> Tally {
+        counts.goals.fetch_add(1, Ordering::SeqCst);
+        Tally {
+            counts,
+            ended: false,
+        }
+    }
+
+    fn end(mut self, r: Result<(), &Nav2Error>) {
+        self.ended = true;
+        let c = &self.counts;
+        let ended = match r {
+            Ok(()) => &c.succeeded,
+            Err(Nav2Error::Rejected { .. }) => &c.rejected,
+            Err(Nav2Error::Cancelled) => &c.cancelled,
+            Err(Nav2Error::Ended { status, .. }) if status == "Canceled" => &c.cancelled,
+            Err(_) => &c.aborted,
+        };
+        ended.fetch_add(1, Ordering::SeqCst);
+    }
+}
+
+impl Drop for Tally {
+    fn drop(&mut self) {
+        if !self.ended {
+            self.counts.cancelled.fetch_add(1, Ordering::SeqCst);
         }
     }
 }
@@ -310,7 +372,7 @@ async fn run_goal(
                 Ok(()) => (GoalEndStatus::Succeeded, NavigateToPoseResult::default()),
                 Err(e) => (GoalEndStatus::Aborted, NavigateToPoseResult {
                     error_code: NavigateToPoseResult::UNKNOWN,
-                    error_msg: e,
+                    error_msg: e.to_string(),
                 }),
             },
             _ = &mut cancelled => break (GoalEndStatus::Canceled, NavigateToPoseResult::default()),
@@ -352,6 +414,10 @@ async fn run_goal(
 pub struct Nav2Navigator {
     map: Arc<Map>,
     clients: Vec<(Arc<str>, Arc<Nav2Client>)>,
+    /// The mirror world of robots that drive themselves (`run --nav2`), told each robot's
+    /// departures, arrivals and feedback poses.
+    mirror: Option<WorldHandle>,
+    counts: Arc<Counts>,
     /// The node the clients belong to (its spinner runs in `_spin`).
     _node: std::sync::Mutex<Node>,
     _spin: AbortOnDrop,
@@ -406,9 +472,28 @@ impl Nav2Navigator {
         Ok(Nav2Navigator {
             map,
             clients,
+            mirror: None,
+            counts: Arc::default(),
             _node: std::sync::Mutex::new(node),
             _spin: spin,
         })
+    }
+
+    /// The same navigator for robots that drive themselves (real robots running Nav2):
+    /// `world` (a [`crate::world::World::spawn_mirror`]) learns where each robot sets out
+    /// for, where its feedback says it is and when it arrived.
+    pub fn mirroring(self, world: WorldHandle) -> Nav2Navigator {
+        Nav2Navigator {
+            mirror: Some(world),
+            ..self
+        }
+    }
+
+    /// The goals sent so far and how they ended, as the run's `nav2` summary section.
+    pub fn goals(&self) -> Nav2Goals {
+        Nav2Goals {
+            counts: Arc::clone(&self.counts),
+        }
     }
 
     fn client(&self, robot: &str) -> Option<Arc<Nav2Client>> {
@@ -424,15 +509,32 @@ impl Navigator for Nav2Navigator {
         &self,
         robot: Arc<str>,
         location: usize,
-    ) -> std::pin::Pin<Box<dyn std::future::Future<Output = Result<(), String>> + Send>> {
+    ) -> std::pin::Pin<Box<dyn std::future::Future<Output = Result<(), DriveError>> + Send>> {
         let client = self.client(&robot);
         let pose = location_pose(&self.map, location);
+        let mirror = self.mirror.clone();
+        let counts = Arc::clone(&self.counts);
         Box::pin(async move {
             let Some(client) = client else {
-                return Err(format!("no Nav2 client for robot `{robot}`"));
+                return Err(format!("no Nav2 client for robot `{robot}`").into());
+            };
+            let tally = Tally::new(counts);
+            let at = |p: &PoseStamped| {
+                if let Some(world) = &mirror {
+                    let (x, y) = (p.pose.position.x, p.pose.position.y);
+                    world.set_pose(Arc::clone(&robot), x, y);
+                }
             };
             // The step gives the drive up by dropping it (the guard cancels the goal).
-            navigate(client, &robot, pose, std::future::pending()).await
+            let drive = async {
+                let r = navigate(client, &robot, pose, std::future::pending(), at).await;
+                tally.end(r.as_ref().map(|_| ()));
+                r.map_err(DriveError::from)
+            };
+            match &mirror {
+                Some(world) => world.mirror_goto(Arc::clone(&robot), location, drive).await,
+                None => drive.await,
+            }
         })
     }
 }

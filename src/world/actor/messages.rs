@@ -37,6 +37,20 @@ pub(crate) struct Hold {
     pub(crate) reply: oneshot::Sender<(f64, Option<TransitionId>)>,
 }
 
+/// A mirror world's robot has arrived where its [`Goto`] went.
+#[derive(Debug)]
+pub(crate) struct Arrived {
+    pub(crate) robot: Arc<str>,
+}
+
+/// A mirror world's robot is at `(x, y)`.
+#[derive(Debug)]
+pub(crate) struct SetPose {
+    pub(crate) robot: Arc<str>,
+    pub(crate) x: f64,
+    pub(crate) y: f64,
+}
+
 /// Ask for the metrics so far.
 #[derive(Debug)]
 pub(crate) struct GetMetrics;
@@ -79,5 +93,21 @@ impl Message<GetMetrics> for World {
 
     async fn handle(&mut self, _: GetMetrics, _: &mut Context<Self, Self::Reply>) -> SimMetrics {
         self.metrics()
+    }
+}
+
+impl Message<Arrived> for World {
+    type Reply = ();
+
+    async fn handle(&mut self, m: Arrived, _: &mut Context<Self, Self::Reply>) {
+        self.arrived(&m.robot);
+    }
+}
+
+impl Message<SetPose> for World {
+    type Reply = ();
+
+    async fn handle(&mut self, m: SetPose, _: &mut Context<Self, Self::Reply>) {
+        self.set_pose(m);
     }
 }
