@@ -185,7 +185,8 @@ impl LiveRun {
                                 ..
                             } => {
                                 s.firings += 1;
-                                s.throughput.fired(e.time, &net.transition(*transition).name);
+                                s.throughput
+                                    .fired(e.time, &net.transition(*transition).name);
                                 s.tokens.copy_from_slice(marking.as_slice());
                                 let kept = (HISTORY_CELLS / marking.len().max(1)).max(1);
                                 if s.history.len() >= kept {

@@ -128,7 +128,11 @@ async fn the_whole_net_exports_as_a_vector_pdf_that_another_reader_parses() {
     assert!(pdf.bytes.starts_with(b"%PDF-1.6\n"));
     assert!(pdf.bytes.ends_with(b"%%EOF\n"));
     assert_eq!(pdf.user_unit, 1.0);
-    assert_eq!(pdf.size, whole_svg_size(&b).await, "the page is the whole net");
+    assert_eq!(
+        pdf.size,
+        whole_svg_size(&b).await,
+        "the page is the whole net"
+    );
     let ops = pdf.operators();
     let inhibitors = net
         .arcs()
@@ -148,7 +152,11 @@ async fn the_whole_net_exports_as_a_vector_pdf_that_another_reader_parses() {
     // lopdf's own text extraction (fonts and encodings) finds the names too.
     let text = pdf.doc.extract_text(&[1]).unwrap();
     for p in net.places() {
-        assert!(text.contains(&p.name), "{} not in the extracted text", p.name);
+        assert!(
+            text.contains(&p.name),
+            "{} not in the extracted text",
+            p.name
+        );
     }
     keep("export-patrol.pdf", &pdf.bytes);
     b.close().await;
@@ -163,14 +171,25 @@ async fn a_ten_thousand_place_ring_exports_as_one_pdf_page_with_every_node() {
     let b = Browser::start(1280, 800).await;
     open(&b, addr).await;
     let on_canvas = b
-        .js("return getComputedStyle(document.getElementById('net-canvas')).display;", vec![])
+        .js(
+            "return getComputedStyle(document.getElementById('net-canvas')).display;",
+            vec![],
+        )
         .await;
     assert_eq!(on_canvas, "block");
     let pdf = Pdf::of(&b).await;
     let (w, h) = whole_svg_size(&b).await;
     // The page's size in the net's units is the whole net's (to the two decimals written).
-    assert!((pdf.size.0 - w).abs() < 0.01 * pdf.user_unit, "{:?} vs {w}", pdf.size);
-    assert!((pdf.size.1 - h).abs() < 0.01 * pdf.user_unit, "{:?} vs {h}", pdf.size);
+    assert!(
+        (pdf.size.0 - w).abs() < 0.01 * pdf.user_unit,
+        "{:?} vs {w}",
+        pdf.size
+    );
+    assert!(
+        (pdf.size.1 - h).abs() < 0.01 * pdf.user_unit,
+        "{:?} vs {h}",
+        pdf.size
+    );
     assert_eq!(
         pdf.user_unit > 1.0,
         w.max(h) > 14_400.0,

@@ -33,8 +33,11 @@ fn frames(firings: usize) -> Vec<Frame> {
     out
 }
 
-/// The CSV as rows of (time, cells).
-fn rows(csv: &str) -> (Vec<String>, Vec<(f64, Vec<Option<f64>>)>) {
+/// A CSV row: its time and its cells (`None`: empty).
+type Row = (f64, Vec<Option<f64>>);
+
+/// The CSV's header and rows.
+fn rows(csv: &str) -> (Vec<String>, Vec<Row>) {
     let mut lines = csv.lines();
     let head: Vec<String> = lines
         .next()
@@ -92,12 +95,18 @@ async fn a_replay_draws_firings_per_window_beside_the_exact_throughput() {
         for (c, name) in ["t0", "t1"].iter().enumerate() {
             let want = f64::from(counts.get(&(name.to_string(), k)).copied().unwrap_or(0)) / width;
             let got = cells[c].unwrap();
-            assert!((got - want).abs() < 1e-9, "{name} window {k}: {got} vs {want}");
+            assert!(
+                (got - want).abs() < 1e-9,
+                "{name} window {k}: {got} vs {want}"
+            );
         }
     }
     // Every firing in some window: 300 of each.
     for c in 0..2 {
-        let total: f64 = body.iter().map(|(_, cells)| cells[c].unwrap() * width).sum();
+        let total: f64 = body
+            .iter()
+            .map(|(_, cells)| cells[c].unwrap() * width)
+            .sum();
         assert!((total - 300.0).abs() < 1e-9, "{total}");
     }
     // The readout under the pointer: every curve's value at its time.

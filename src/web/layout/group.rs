@@ -65,7 +65,14 @@ mod tests {
     #[test]
     fn locations_and_robots_are_found_in_the_names() {
         let names = [
-            "L1", "Mop_L1", "Go_L1_L2", "L2", "Mop_L2", "p3:Decide_L2", "Wait_r1", "Done_r1",
+            "L1",
+            "Mop_L1",
+            "Go_L1_L2",
+            "L2",
+            "Mop_L2",
+            "p3:Decide_L2",
+            "Wait_r1",
+            "Done_r1",
             "start",
         ];
         let g = groups(names.iter().copied()).unwrap();

@@ -243,7 +243,11 @@ pub(super) fn group_bands(
             if group[s].is_some() {
                 continue;
             }
-            let known: Vec<f64> = up[s].iter().chain(&down[s]).filter_map(|&o| band[o]).collect();
+            let known: Vec<f64> = up[s]
+                .iter()
+                .chain(&down[s])
+                .filter_map(|&o| band[o])
+                .collect();
             if !known.is_empty() {
                 band[s] = Some(known.iter().sum::<f64>() / known.len() as f64);
             }

@@ -161,7 +161,9 @@ pub(crate) fn group_mixing(net: &Net, layout: &Layout) -> Option<(usize, usize)>
             body.iter()
                 .zip(&group)
                 .filter(|(b, h)| {
-                    **h != Some(g) && (bx[0]..=bx[2]).contains(&b.x) && (bx[1]..=bx[3]).contains(&b.y)
+                    **h != Some(g)
+                        && (bx[0]..=bx[2]).contains(&b.x)
+                        && (bx[1]..=bx[3]).contains(&b.y)
                 })
                 .count()
         })

@@ -237,7 +237,11 @@ fn locations_stay_together() {
             quality::measure(&patrol, l).crossings,
         )
     };
-    eprintln!("patrol: grouped {:?}, without groups {:?}", measured(&grouped), measured(&free));
+    eprintln!(
+        "patrol: grouped {:?}, without groups {:?}",
+        measured(&grouped),
+        measured(&free)
+    );
     assert_eq!(measured(&grouped), ((13, 4), 15));
     assert_eq!(measured(&free), ((27, 4), 19));
 
