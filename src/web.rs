@@ -93,6 +93,7 @@ mod report;
 mod server;
 mod session;
 mod stays;
+mod throughput;
 
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
@@ -182,6 +183,11 @@ pub const ASSETS: &[Asset] = &[
         path: "/share.js",
         mime: "text/javascript; charset=utf-8",
         body: include_str!("web/assets/share.js"),
+    },
+    Asset {
+        path: "/pdf.js",
+        mime: "text/javascript; charset=utf-8",
+        body: include_str!("web/assets/pdf.js"),
     },
     Asset {
         path: "/navigate.js",

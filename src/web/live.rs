@@ -22,6 +22,7 @@ use crate::web::WebState;
 use crate::web::api::net_json;
 use crate::web::limits::{WS_BUFFER, WS_MAX_INCOMING, WS_SEND_TIMEOUT};
 use crate::web::stays::RobotStays;
+use crate::web::throughput::Throughput;
 
 /// Shortest time between two snapshots sent to one browser.
 pub const FRAME: Duration = Duration::from_millis(50);
@@ -66,6 +67,8 @@ struct Snapshot {
     /// [`HISTORY_CELLS`]), and each robot's stays: what a page that joins late is sent first.
     history: VecDeque<(f64, Vec<u32>)>,
     stays: RobotStays,
+    /// Firings per transition per window of model time since the start.
+    throughput: Throughput,
 }
 
 impl LiveRun {
@@ -86,6 +89,7 @@ impl LiveRun {
                     lagged: 0,
                     log: VecDeque::new(),
                     history: VecDeque::new(),
+                    throughput: Throughput::default(),
                     stays: RobotStays::default(),
                 }),
                 version,
@@ -175,8 +179,14 @@ impl LiveRun {
                         s.time = s.time.max(e.time);
                         s.stays.push(&e);
                         match &e.kind {
-                            EventKind::Fired { marking, .. } => {
+                            EventKind::Fired {
+                                marking,
+                                transition,
+                                ..
+                            } => {
                                 s.firings += 1;
+                                s.throughput
+                                    .fired(e.time, &net.transition(*transition).name);
                                 s.tokens.copy_from_slice(marking.as_slice());
                                 let kept = (HISTORY_CELLS / marking.len().max(1)).max(1);
                                 if s.history.len() >= kept {
@@ -211,8 +221,10 @@ impl LiveRun {
         self.inner.version.send_modify(|v| *v += 1);
     }
 
-    /// `{"type": "history", "frames": [{time, tokens}], "robots": [{robot, stays}]}`: the
-    /// initial marking and the marking after each firing kept, each robot's stays so far.
+    /// `{"type": "history", "frames": [{time, tokens}], "robots": [{robot, stays}],
+    /// "throughput": {width, counts}, "after": seq}`: the initial marking and the marking
+    /// after each firing kept, each robot's stays so far, the firings per transition per
+    /// window of model time up to event `after`.
     fn history_json(&self) -> Value {
         let net = self.net();
         let s = self.snapshot();
@@ -226,7 +238,15 @@ impl LiveRun {
                     .map(|(t, m)| json!({ "time": t, "tokens": m })),
             )
             .collect();
-        json!({ "type": "history", "frames": frames, "robots": s.stays.json(net) })
+        // The last event the counts include: the page counts the log's firings after it.
+        let after = s.log.back().and_then(|v| v.get("seq")).cloned();
+        json!({
+            "type": "history",
+            "frames": frames,
+            "robots": s.stays.json(net),
+            "throughput": s.throughput,
+            "after": after,
+        })
     }
 
     /// The snapshot as JSON, with the log entries after `after_seq` (all kept ones if `None`).

@@ -24,6 +24,7 @@ use serde_json::{Value, json};
 
 use super::conform::ReplayRows;
 use super::stays::RobotStays;
+use super::throughput::Throughput;
 use super::{WebState, api};
 use crate::net::Net;
 use crate::runtime::journal::{
@@ -142,8 +143,20 @@ impl Replay {
         let end = last(frames.last().map(|f| f.time)).max(last(poses.last().map(|p| p.0)));
         let starts: Vec<f64> = frames.iter().step_by(WINDOW).map(|f| f.time).collect();
         let firings = frames.len().saturating_sub(1);
+        let mut throughput = Throughput::default();
+        for f in &frames {
+            if let Some(name) = &f.transition {
+                throughput.fired(f.time, name);
+            }
+        }
+        let panels = Panels {
+            world: world.as_ref(),
+            conform,
+            robots: &robots,
+            throughput: &throughput,
+        };
         Replay {
-            outline: outline(firings, end, &starts, world.as_ref(), conform, &robots),
+            outline: outline(firings, end, &starts, panels),
             firings,
             starts,
             world: world.is_some(),
@@ -161,6 +174,7 @@ impl Replay {
         let net = journal.net().clone();
         let mut table = ReplayRows::new(&net, net.initial_marking().into_vec());
         let mut stays = RobotStays::default();
+        let mut throughput = Throughput::default();
         let mut marks = vec![Mark {
             firing: (journal.line_start(), journal.line() + 1),
             pose: None,
@@ -180,6 +194,7 @@ impl Replay {
                             starts.push(f.time);
                         }
                         table.fired(f.time, f.transition, f.marking);
+                        throughput.fired(f.time, &net.transition(f.transition).name);
                     }
                     stays.push(&e);
                 }
@@ -195,15 +210,15 @@ impl Replay {
             file_end = journal.offset();
         }
         let torn = journal.torn().cloned();
+        let robots = stays.raw_json(&net);
+        let panels = Panels {
+            world: world.as_ref(),
+            conform: table.finish(),
+            robots: &robots,
+            throughput: &throughput,
+        };
         let replay = Replay {
-            outline: outline(
-                firings,
-                end,
-                &starts,
-                world.as_ref(),
-                table.finish(),
-                &stays.raw_json(&net),
-            ),
+            outline: outline(firings, end, &starts, panels),
             firings,
             starts,
             world: world.is_some(),
@@ -272,35 +287,34 @@ fn world_of(map: &Record, robots: &[String]) -> Value {
     })
 }
 
-/// `GET /api/replay`'s answer (see [`outline_route`]).
-fn outline(
-    firings: usize,
-    end: f64,
-    starts: &[f64],
-    world: Option<&Value>,
+/// What the panels show for the whole run, in `GET /api/replay`'s answer.
+#[derive(Serialize)]
+struct Panels<'a> {
+    robots: &'a RawValue,
+    throughput: &'a Throughput,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    world: Option<&'a Value>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     conform: Option<Box<RawValue>>,
-    robots: &RawValue,
-) -> axum::body::Bytes {
+}
+
+/// `GET /api/replay`'s answer (see [`outline_route`]).
+fn outline(firings: usize, end: f64, starts: &[f64], panels: Panels<'_>) -> axum::body::Bytes {
     #[derive(Serialize)]
     struct Outline<'a> {
         firings: usize,
         end: f64,
         window: usize,
         starts: &'a [f64],
-        robots: &'a RawValue,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        world: Option<&'a Value>,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        conform: Option<Box<RawValue>>,
+        #[serde(flatten)]
+        panels: Panels<'a>,
     }
     let v = Outline {
         firings,
         end,
         window: WINDOW,
         starts,
-        robots,
-        world,
-        conform,
+        panels,
     };
     serde_json::to_vec(&v).unwrap_or_default().into()
 }
@@ -391,8 +405,10 @@ fn read_window(
 
 /// `GET /api/replay`: the run's outline — `{"firings", "end", "window": frames per window,
 /// "starts": [each window's first time], "robots": [{robot, stays: [{t0, t1, place,
-/// agent}]}], "world"?: {map, radius, robots}, "conform"?: [{time, rows}]}` (404 without a
-/// recording; `conform`: the monitor's table of transitions' rates along the run).
+/// agent}]}], "throughput": {width, counts: {transition: [firings per window]}}, "world"?:
+/// {map, radius, robots}, "conform"?: [{time, rows}]}` (404 without a recording; `conform`:
+/// the monitor's table of transitions' rates along the run; `throughput`: see
+/// [`Throughput`]).
 pub(crate) async fn outline_route(State(state): State<WebState>) -> Response {
     match state.inner.replay.get() {
         Some(r) => (

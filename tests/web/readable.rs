@@ -105,6 +105,35 @@ return { nodes: nodes.length, labels: labels.length, overlaps, crossings, throug
          params: labels.filter((l) => l.param).map((l) => l.name) };
 "#;
 
+/// The home-cleaning plan's locations kept together: each node's location by its name (the
+/// first `L<k>` part after the first, or the name itself: `Go_L1_L2` and `L1` are `L1`'s),
+/// the bounding box of each location's node bodies on the screen, and how many nodes of
+/// other locations have their centre inside one (counted per box). Returns `{groups,
+/// foreign, boxes}`.
+const LOCATION_MIXING: &str = r#"
+const groupOf = (name) => {
+  const parts = name.split(/[^A-Za-z0-9]+/);
+  return parts.length === 1 ? parts[0] : parts.slice(1).find((p) => /^L[0-9]+$/.test(p));
+};
+const nodes = [...document.querySelectorAll('#nodes .node')].map((g) => {
+  const r = (g.querySelector('circle.body') || g.querySelector('rect')).getBoundingClientRect();
+  const name = g.getAttribute('data-place') || g.getAttribute('data-transition');
+  return { group: groupOf(name), r, cx: (r.left + r.right) / 2, cy: (r.top + r.bottom) / 2 };
+});
+const boxes = {};
+for (const n of nodes) {
+  if (!n.group) continue;
+  const b = boxes[n.group] || (boxes[n.group] = { x0: Infinity, y0: Infinity, x1: -Infinity, y1: -Infinity });
+  b.x0 = Math.min(b.x0, n.r.left); b.y0 = Math.min(b.y0, n.r.top);
+  b.x1 = Math.max(b.x1, n.r.right); b.y1 = Math.max(b.y1, n.r.bottom);
+}
+let foreign = 0;
+for (const [g, b] of Object.entries(boxes)) {
+  for (const n of nodes) if (n.group !== g && n.cx >= b.x0 && n.cx <= b.x1 && n.cy >= b.y0 && n.cy <= b.y1) foreign++;
+}
+return { groups: Object.keys(boxes).length, foreign, boxes };
+"#;
+
 fn read(path: &std::path::Path) -> Net {
     read_net(path, &ReadOptions::default()).unwrap().net
 }
@@ -140,6 +169,7 @@ async fn at_1280x800_nets_open_readable() {
     let (addr, server) = start_server(WebState::new(net.clone(), None, 0).with_source(&path)).await;
     open(&b, addr).await;
     let after = geometry(&b).await;
+    let grouped = b.js(LOCATION_MIXING, vec![]).await;
     b.screenshot(&screenshot_path("home-cleaning-1280.png"))
         .await;
     assert_eq!(
@@ -156,18 +186,26 @@ async fn at_1280x800_nets_open_readable() {
     b.wait_js("return net.layout === 'file';", WAIT, "the file's layout")
         .await;
     let before = geometry(&b).await;
+    let file_grouped = b.js(LOCATION_MIXING, vec![]).await;
     b.screenshot(&screenshot_path("home-cleaning-1280-file-layout.png"))
         .await;
     eprintln!(
-        "home-cleaning at 1280x800: file positions {} crossings, {} segments through nodes, {} label overlaps; \
-         automatic {} crossings, {} through nodes, {} label overlaps",
+        "home-cleaning at 1280x800: file positions {} crossings, {} segments through nodes, {} label overlaps, \
+         {} nodes in another location's box; automatic {} crossings, {} through nodes, {} label overlaps, \
+         {} nodes in another location's box",
         before["crossings"],
         before["through"].as_array().unwrap().len(),
         before["labelOverlaps"].as_array().unwrap().len(),
+        file_grouped["foreign"],
         after["crossings"],
         after["through"].as_array().unwrap().len(),
         after["labelOverlaps"].as_array().unwrap().len(),
+        grouped["foreign"],
     );
+    // The three locations, each in a box of its own that no other node enters (58 nodes
+    // are in another location's box at the file's positions).
+    assert_eq!(grouped["groups"], json!(3));
+    assert_eq!(grouped["foreign"], json!(0), "{grouped}");
     assert!(count(&after["crossings"]) <= 40, "{}", after["crossings"]);
     assert_eq!(after["through"], json!([]), "arcs through nodes");
     assert_eq!(after["labelOverlaps"], json!([]), "labels over labels");

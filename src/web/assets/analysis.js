@@ -29,6 +29,9 @@ function escapeHtml(s) {
 }
 
 let analysing = false;
+// The last analysis's steady-state throughput by transition name (drawn beside the throughput
+// over time), null without one.
+let exactThroughput = null;
 
 // The "max states" field starts at the server's limit (`serve --max-states`).
 async function initMaxStates() {
@@ -96,6 +99,8 @@ async function analyse() {
   let html = analysed + '<p>' + a.reachable + ' reachable markings (' + a.tangible + ' tangible, ' +
     a.vanishing + ' vanishing); safe: ' + a.safe + '; reversible: ' + a.reversible +
     '; deadlock-free: ' + a.deadlock_free + '</p>';
+  exactThroughput = a.steady ? a.steady.throughput : null;
+  if (tput.counts.size) drawThroughput();
   if (a.steady) {
     html += bars('mean tokens' + (a.steady.ergodic ? '' : ' (limiting)'), a.steady.mean_tokens, 'tok',
       net.places.map((p) => p.name));

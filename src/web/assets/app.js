@@ -827,6 +827,7 @@ async function main() {
   setupKeys();
   setupResize();
   setupPanes();
+  setupThroughput();
   setupExport();
   setupNavigate();
   for (const [list, box] of [['trace', 'trace-filter'], ['log', 'log-filter']]) {

@@ -66,6 +66,7 @@ function followLive(s) {
     setAgents(i, agents ? Object.entries(agents).map(([k, n]) => k + ' ' + n).join(', ') : '');
   });
   for (const e of s.log) if (e.event === 'fired') flashFired(e);
+  tputLog(s.log);
   scheduleFollowDraw();
 }
 
@@ -177,6 +178,7 @@ function scheduleFollowDraw() {
     if (follow.place >= 0 || follow.robot !== null) describeSelection();
     drawPlot();
     drawGantt();
+    drawThroughput();
   }, 250);
 }
 

@@ -48,6 +48,7 @@ function connectLive() {
       for (const row of msg.robots) {
         follow.segments.set(row.robot, row.stays.map((x) => ({ t0: x.t0, t1: x.t1, place: x.place, state: '' })));
       }
+      tputReset(msg.throughput, msg.after);
       scheduleFollowDraw();
     } else if (msg.type === 'state') {
       const t0 = performance.now();
@@ -120,7 +121,9 @@ async function startReplay() {
     (e.closest('label') || e).classList.add('hidden');
   }
   $('speed').closest('label').classList.add('hidden');
-  const { firings, end, window: size, starts, world, conform, robots } = await api('GET', '/api/replay');
+  const { firings, end, window: size, starts, world, conform, robots, throughput } = await api('GET', '/api/replay');
+  tputReset(throughput);
+  drawThroughput();
   // The last entry of the sorted `ts` at or before t (0 if none).
   const lastAtOrBefore = (ts, t0) => {
     const t = t0 + 1e-12 * Math.max(1, end);

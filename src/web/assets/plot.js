@@ -124,3 +124,115 @@ function plotAnswers(out, q, prob) {
   $('answer-csv').addEventListener('click', () => downloadCsv(series, 'answers.csv'));
   window.gspnAnswers = { csv: () => seriesCsv(series) };
 }
+
+// ---- throughput over time ----------------------------------------------------------------
+
+// Firings per transition per window of model time, by the rule of src/web/throughput.rs: the
+// window is 2^-10 s at first and doubles (pairs of windows merged) whenever a firing comes
+// past TPUT_BINS windows. A replay gets the whole run's counts from the server, a live page
+// its history's and goes on counting the firings of the log (from `after`, the last event
+// the history counted).
+const TPUT_BINS = 128;
+const tput = { width: 1 / 1024, counts: new Map(), after: -1, picked: [] };
+
+// Starts again from the server's counts `t` ({width, counts}), which counted the events up to
+// seq `after`.
+function tputReset(t, after) {
+  tput.width = t ? t.width : 1 / 1024;
+  tput.counts = new Map(Object.entries(t ? t.counts : {}));
+  tput.after = Number.isInteger(after) ? after : -1;
+}
+
+// Counts the firings of a live frame's log not counted yet.
+function tputLog(log) {
+  for (const e of log) {
+    if (e.event !== 'fired' || e.seq <= tput.after || !net.transitions[e.transition]) continue;
+    tput.after = e.seq;
+    tputFired(e.time, net.transitions[e.transition].name);
+  }
+}
+
+function tputFired(t, name) {
+  t = Math.max(0, t);
+  while (t >= tput.width * TPUT_BINS) {
+    tput.width *= 2;
+    for (const [n, row] of tput.counts) {
+      const merged = [];
+      for (let k = 0; k < row.length; k += 2) merged.push(row[k] + (row[k + 1] || 0));
+      tput.counts.set(n, merged);
+    }
+  }
+  const k = Math.floor(t / tput.width);
+  if (!tput.counts.has(name)) tput.counts.set(name, []);
+  const row = tput.counts.get(name);
+  while (row.length <= k) row.push(0);
+  row[k] += 1;
+}
+
+// The picked transitions (by default the three that fired most) as step curves of firings
+// per second in each window, every window up to the last with a firing; beside each, the
+// exact steady-state throughput when the analysis panel has it (`exactThroughput`).
+function tputSeries() {
+  const byTotal = [...tput.counts.entries()].map(([n, row]) => [n, row.reduce((a, b) => a + b, 0)]);
+  byTotal.sort((a, b) => b[1] - a[1] || byId(a[0], b[0]));
+  const picked = tput.picked.length ? tput.picked : byTotal.slice(0, 3).map((e) => e[0]);
+  const windows = Math.max(1, ...[...tput.counts.values()].map((row) => row.length));
+  const series = picked.map((name) => {
+    const row = tput.counts.get(name) || [];
+    const points = [];
+    for (let k = 0; k < windows; k++) points.push([k * tput.width, (row[k] || 0) / tput.width]);
+    return { name, step: true, points };
+  });
+  if (typeof exactThroughput !== 'undefined' && exactThroughput) {
+    const t1 = windows * tput.width;
+    for (const name of picked) {
+      const v = exactThroughput[name];
+      if (Number.isFinite(v)) series.push({ name: name + ' (exact)', points: [[0, v], [t1, v]] });
+    }
+  }
+  return series.slice(0, CURVE_COLOURS.length);
+}
+
+function drawThroughput() {
+  const panel = $('tput-panel');
+  const any = tput.counts.size > 0;
+  panel.classList.toggle('hidden', !any);
+  if (!any) return;
+  const pick = $('tput-pick');
+  if (pick.options.length !== net.transitions.length + 1) {
+    pick.textContent = '';
+    const first = document.createElement('option');
+    first.value = '';
+    first.textContent = 'add or remove a transition…';
+    pick.appendChild(first);
+    for (const t of net.transitions) {
+      const o = document.createElement('option');
+      o.value = o.textContent = t.name;
+      pick.appendChild(o);
+    }
+  }
+  $('tput-width').textContent = 'per ' + fmt(tput.width) + ' s';
+  lineChart($('tput'), tputSeries(), 's');
+}
+
+function setupThroughput() {
+  $('tput-pick').addEventListener('change', (ev) => {
+    const name = ev.target.value;
+    ev.target.value = '';
+    if (!name) return;
+    if (!tput.picked.length) tput.picked = tputSeries().filter((s) => s.step).map((s) => s.name);
+    const k = tput.picked.indexOf(name);
+    if (k >= 0) tput.picked.splice(k, 1);
+    else if (tput.picked.length < CURVE_COLOURS.length) tput.picked.push(name);
+    drawThroughput();
+  });
+  $('tput-csv').addEventListener('click', () => downloadCsv(tputSeries(), 'throughput.csv'));
+  window.gspnThroughput = {
+    csv: () => seriesCsv(tputSeries()),
+    width: () => tput.width,
+    pick: (names) => {
+      tput.picked = names.slice();
+      drawThroughput();
+    },
+  };
+}

@@ -184,7 +184,7 @@ function download(href, name) {
 
 function setupExport() {
   loadStyle();
-  window.gspnExport = { svg: exportSvg, png: exportPng };
+  window.gspnExport = { svg: exportSvg, png: exportPng, pdf: exportPdf };
   // The buttons export the whole net (the view: `gspnExport.svg()`, `.png()`).
   $('export-svg').addEventListener('click', () => {
     const url = URL.createObjectURL(new Blob([exportSvg(true)], { type: 'image/svg+xml' }));
@@ -193,4 +193,5 @@ function setupExport() {
   });
   $('export-png').addEventListener('click', () =>
     exportPng(true).then((url) => download(url, (net ? net.name : 'net') + '.png')).catch((e) => status(e.message)));
+  $('export-pdf').addEventListener('click', downloadPdf);
 }

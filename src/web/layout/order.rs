@@ -76,6 +76,45 @@ pub(super) fn layers(n: usize, dag: &[(usize, usize)]) -> Vec<usize> {
     layer
 }
 
+/// Shortens the arcs of a layering (`layer` of an acyclic graph, each edge going down at
+/// least one layer): a node with more incoming than outgoing edges moves up to just below its
+/// lowest predecessor, one with more outgoing edges down to just above its highest
+/// successor — each move shortens its edges in total, so there are fewer placeholders to
+/// order and cross (a few passes, until nothing moves).
+pub(super) fn tighten(layer: &mut [usize], dag: &[(usize, usize)]) {
+    let n = layer.len();
+    let mut pred: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut succ: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for &(u, v) in dag {
+        if u != v {
+            succ[u].push(v);
+            pred[v].push(u);
+        }
+    }
+    for _ in 0..8 {
+        let mut moved = false;
+        for v in 0..n {
+            let (ins, outs) = (pred[v].len(), succ[v].len());
+            let target = if ins > outs {
+                pred[v].iter().map(|&u| layer[u] + 1).max()
+            } else if outs > ins {
+                succ[v].iter().map(|&w| layer[w]).min().map(|l| l - 1)
+            } else {
+                None
+            };
+            if let Some(t) = target
+                && t != layer[v]
+            {
+                layer[v] = t;
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+}
+
 /// Slots in the order a depth-first walk along the edges meets them (from the marked places
 /// first): the starting order within each layer, which keeps neighbours together.
 pub(super) fn first_seen_order(slots: usize, down: &[Vec<usize>], marked: &[usize]) -> Vec<usize> {
@@ -102,13 +141,23 @@ pub(super) fn first_seen_order(slots: usize, down: &[Vec<usize>], marked: &[usiz
 /// Reorders each layer by the mean position of its neighbours, sweeping down and up, then
 /// swaps neighbours in a layer while that removes crossings (transposes, on nets small
 /// enough); keeps the order with the fewest crossings. (The median instead of the mean drew
-/// more crossings on Peterson and Dekker: docs/viewer.md.)
+/// more crossings on Peterson and Dekker: docs/viewer.md.) Returns the crossings between
+/// neighbouring layers of the order kept. With `band`, a layer is ordered
+/// by each slot's band first (its group's rank, [`group_bands`]), so a group's slots stay
+/// next to each other.
 pub(super) fn order_layers(
     layers: &mut [Vec<usize>],
     up: &[Vec<usize>],
     down: &[Vec<usize>],
     slots: usize,
-) {
+    band: Option<&[f64]>,
+) -> u64 {
+    let band_of = |s: usize| band.map_or(0.0, |b| b[s]);
+    if band.is_some() {
+        for nodes in layers.iter_mut() {
+            nodes.sort_by(|&a, &b| band_of(a).total_cmp(&band_of(b)));
+        }
+    }
     let mut index = vec![0usize; slots];
     let reindex = |layers: &[Vec<usize>], index: &mut [usize]| {
         for nodes in layers {
@@ -130,7 +179,7 @@ pub(super) fn order_layers(
         };
         for l in order {
             let nb = if downwards { up } else { down };
-            let mut keyed: Vec<(f64, usize)> = layers[l]
+            let mut keyed: Vec<((f64, f64), usize)> = layers[l]
                 .iter()
                 .map(|&s| {
                     let key = if nb[s].is_empty() {
@@ -138,17 +187,17 @@ pub(super) fn order_layers(
                     } else {
                         nb[s].iter().map(|&o| index[o] as f64).sum::<f64>() / nb[s].len() as f64
                     };
-                    (key, s)
+                    ((band_of(s), key), s)
                 })
                 .collect();
-            keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
+            keyed.sort_by(|a, b| a.0.0.total_cmp(&b.0.0).then(a.0.1.total_cmp(&b.0.1)));
             layers[l] = keyed.into_iter().map(|(_, s)| s).collect();
             for (i, &s) in layers[l].iter().enumerate() {
                 index[s] = i;
             }
         }
         if slots <= TRANSPOSE_MAX {
-            transpose(layers, up, down, &mut index);
+            transpose(layers, up, down, &mut index, &band_of);
         }
         let c = crossings(layers, down, &index);
         if c < best_crossings {
@@ -157,6 +206,62 @@ pub(super) fn order_layers(
         }
     }
     layers.clone_from_slice(&best);
+    best_crossings
+}
+
+/// Each slot's band for [`order_layers`] from an order found without bands: the groups
+/// ranked by the mean relative position of their slots in their layers; a slot of no group
+/// (a placeholder between groups, a node no name places) takes the mean band of its
+/// neighbours that have one, or else that of the slot before it in its layer.
+pub(super) fn group_bands(
+    layers: &[Vec<usize>],
+    group: &[Option<usize>],
+    up: &[Vec<usize>],
+    down: &[Vec<usize>],
+) -> Vec<f64> {
+    let groups = group.iter().flatten().map(|&g| g + 1).max().unwrap_or(0);
+    let mut sum = vec![(0.0, 0usize); groups];
+    for nodes in layers {
+        for (i, &s) in nodes.iter().enumerate() {
+            if let Some(g) = group[s] {
+                sum[g].0 += (i as f64 + 0.5) / nodes.len() as f64;
+                sum[g].1 += 1;
+            }
+        }
+    }
+    let mut ranked: Vec<usize> = (0..groups).collect();
+    let mean = |g: usize| sum[g].0 / sum[g].1.max(1) as f64;
+    ranked.sort_by(|&a, &b| mean(a).total_cmp(&mean(b)));
+    let mut rank = vec![0.0; groups];
+    for (r, &g) in ranked.iter().enumerate() {
+        rank[g] = r as f64;
+    }
+    let mut band: Vec<Option<f64>> = group.iter().map(|g| g.map(|g| rank[g])).collect();
+    // Placeholders of an arc between two groups sit between their bands.
+    for _ in 0..2 {
+        for s in 0..group.len() {
+            if group[s].is_some() {
+                continue;
+            }
+            let known: Vec<f64> = up[s]
+                .iter()
+                .chain(&down[s])
+                .filter_map(|&o| band[o])
+                .collect();
+            if !known.is_empty() {
+                band[s] = Some(known.iter().sum::<f64>() / known.len() as f64);
+            }
+        }
+    }
+    let mut out = vec![0.0; group.len()];
+    for nodes in layers {
+        let mut before = 0.0;
+        for &s in nodes {
+            before = band[s].unwrap_or(before);
+            out[s] = before;
+        }
+    }
+    out
 }
 
 /// Most slots for which [`transpose`] runs (it looks at every neighbouring pair of a layer,
@@ -170,6 +275,7 @@ fn transpose(
     up: &[Vec<usize>],
     down: &[Vec<usize>],
     index: &mut [usize],
+    band_of: &impl Fn(usize) -> f64,
 ) {
     // Crossings between the edges of `u` and of `v` when `u` is left of `v`.
     let pair = |u: usize, v: usize, index: &[usize]| -> usize {
@@ -186,7 +292,7 @@ fn transpose(
         for nodes in layers.iter_mut() {
             for i in 1..nodes.len() {
                 let (u, v) = (nodes[i - 1], nodes[i]);
-                if pair(v, u, index) < pair(u, v, index) {
+                if band_of(u) == band_of(v) && pair(v, u, index) < pair(u, v, index) {
                     nodes.swap(i - 1, i);
                     index[u] = i;
                     index[v] = i - 1;

@@ -132,6 +132,45 @@ pub(crate) fn measure(net: &Net, layout: &Layout) -> Quality {
     q
 }
 
+/// How well `layout` keeps the groups of `net`'s names together ([`super::group`]): the
+/// nodes whose centre lies in the bounding box (of the bodies) of a group they are not in,
+/// counted once per such box, and the number of groups; `None` when the names give none.
+#[cfg(test)]
+pub(crate) fn group_mixing(net: &Net, layout: &Layout) -> Option<(usize, usize)> {
+    let names = net.places().iter().map(|p| p.name.as_str());
+    let group =
+        super::group::groups(names.chain(net.transitions().iter().map(|t| t.name.as_str())))?;
+    let body = bodies(net, layout, page_scale(layout));
+    let groups = group.iter().flatten().map(|&g| g + 1).max().unwrap_or(0);
+    let mut boxes = vec![[f64::MAX, f64::MAX, f64::MIN, f64::MIN]; groups];
+    for (b, g) in body.iter().zip(&group) {
+        if let Some(g) = *g {
+            let bx = &mut boxes[g];
+            *bx = [
+                bx[0].min(b.x - b.hw),
+                bx[1].min(b.y - b.hh),
+                bx[2].max(b.x + b.hw),
+                bx[3].max(b.y + b.hh),
+            ];
+        }
+    }
+    let foreign = boxes
+        .iter()
+        .enumerate()
+        .map(|(g, bx)| {
+            body.iter()
+                .zip(&group)
+                .filter(|(b, h)| {
+                    **h != Some(g)
+                        && (bx[0]..=bx[2]).contains(&b.x)
+                        && (bx[1]..=bx[3]).contains(&b.y)
+                })
+                .count()
+        })
+        .sum();
+    Some((foreign, groups))
+}
+
 /// Why the file's positions of `net` are not worth drawing, or `None` when they are: most
 /// nodes on a few points (MCC's nets put every node at (100, 100)), nodes on top of each
 /// other, or straight arcs drawn through other nodes (the grid positions of GSPNR's plans).

@@ -180,7 +180,15 @@ fn useless_file_positions_give_way_to_a_readable_automatic_layout() {
     let before = quality::measure(&home, &file);
     let (auto, why) = choose(&home, Choice::Default);
     let after = quality::measure(&home, &auto);
-    eprintln!("home-cleaning: file {before:?}, automatic {after:?}, {why:?}");
+    let mixing = quality::group_mixing(&home, &auto);
+    let ungrouped = layered_with(&home, false);
+    eprintln!(
+        "home-cleaning: file {before:?} mixing {:?}, automatic {after:?} mixing {mixing:?}, \
+         without groups {:?} mixing {:?}; {why:?}",
+        quality::group_mixing(&home, &file),
+        quality::measure(&home, &ungrouped),
+        quality::group_mixing(&home, &ungrouped),
+    );
     assert_eq!(auto.source, LayoutSource::Layered);
     assert!(
         why.unwrap()
@@ -208,4 +216,37 @@ fn useless_file_positions_give_way_to_a_readable_automatic_layout() {
         assert_eq!(l.source, LayoutSource::Layered);
         assert_eq!((q.overlaps, q.through_nodes), (0, 0), "{rel}: {q:?}");
     }
+}
+
+/// Locations kept together: the thesis patrol's `L1`…`L4` (names like `p3:Decide_L2`) drawn
+/// with half as many nodes inside another location's box as without groups, and fewer
+/// crossings; the home-cleaning plan's three locations each in a box of their own (they
+/// were already) with no more crossings than the 40 the browser test allows.
+#[test]
+fn locations_stay_together() {
+    use crate::io::{ReadOptions, read_net};
+    let read = |rel: &str| {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);
+        read_net(&path, &ReadOptions::default()).unwrap().net
+    };
+    let patrol = read("plans/temperature-patrol/temperature_patrol.xml");
+    let (grouped, free) = (layered_with(&patrol, true), layered_with(&patrol, false));
+    let measured = |l: &Layout| {
+        (
+            quality::group_mixing(&patrol, l).unwrap(),
+            quality::measure(&patrol, l).crossings,
+        )
+    };
+    eprintln!(
+        "patrol: grouped {:?}, without groups {:?}",
+        measured(&grouped),
+        measured(&free)
+    );
+    assert_eq!(measured(&grouped), ((13, 4), 15));
+    assert_eq!(measured(&free), ((27, 4), 19));
+
+    let home = read("plans/home-cleaning/net.PNPRO");
+    let l = layered_with(&home, true);
+    assert_eq!(quality::group_mixing(&home, &l), Some((0, 3)));
+    assert!(quality::measure(&home, &l).crossings <= 40);
 }
