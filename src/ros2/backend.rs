@@ -250,14 +250,7 @@ impl Clients {
         cfg: &DdsConfig,
     ) -> Result<Clients, Ros2Error> {
         // Nav2 places go to the robots' own Nav2 (`navigate_to_pose`), the rest to ExecPlace.
-        let mut servers: Vec<&str> = settings
-            .servers
-            .iter()
-            .map(|(_, s)| s.as_str())
-            .filter(|&s| s != NAV2_SERVER)
-            .collect();
-        servers.sort_unstable();
-        servers.dedup();
+        let servers = settings.exec_place_servers();
         let mut nav2 = Vec::new();
         if settings.servers.iter().any(|(_, s)| s == NAV2_SERVER) {
             for robot in robots {

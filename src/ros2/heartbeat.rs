@@ -203,22 +203,30 @@ impl RobotWatch {
     /// Waits until every watched robot is [`Liveness::Alive`]; the robots still missing at
     /// `deadline` are returned as the error.
     pub async fn all_alive(&self, deadline: Duration) -> Result<(), Vec<String>> {
-        let wait = async {
-            for rx in self.states.values() {
-                let mut rx = rx.clone();
-                let _ = rx.wait_for(|s| *s == Liveness::Alive).await;
-            }
-        };
-        if tokio::time::timeout(deadline, wait).await.is_ok() {
-            return Ok(());
-        }
-        let mut missing: Vec<String> = self
-            .states
-            .iter()
-            .filter(|(_, rx)| *rx.borrow() != Liveness::Alive)
-            .map(|(r, _)| r.clone())
-            .collect();
-        missing.sort();
-        Err(missing)
+        all_alive(self.states.iter(), deadline).await
     }
+}
+
+/// Waits until every one of `states` (name, liveness) is [`Liveness::Alive`]; the names
+/// still missing at `deadline`, sorted, are the error. Heartbeats (DDS) and liveliness
+/// tokens (Zenoh) alike.
+pub(crate) async fn all_alive<'a>(
+    states: impl Iterator<Item = (&'a String, &'a watch::Receiver<Liveness>)> + Clone,
+    deadline: Duration,
+) -> Result<(), Vec<String>> {
+    let wait = async {
+        for (_, rx) in states.clone() {
+            let mut rx = rx.clone();
+            let _ = rx.wait_for(|s| *s == Liveness::Alive).await;
+        }
+    };
+    if tokio::time::timeout(deadline, wait).await.is_ok() {
+        return Ok(());
+    }
+    let mut missing: Vec<String> = states
+        .filter(|(_, rx)| *rx.borrow() != Liveness::Alive)
+        .map(|(r, _)| r.clone())
+        .collect();
+    missing.sort();
+    Err(missing)
 }

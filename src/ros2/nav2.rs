@@ -114,8 +114,9 @@ pub(crate) fn status_qos() -> QosProfile {
         .history(History::KeepLast { depth: 1 })
 }
 
-/// The QoS of a `NavigateToPose` server that gspn's clients match: services reliable and
-/// keep-all, feedback keep-last 1, status transient-local.
+/// The QoS of an action server that gspn's clients match — a robot's `ExecPlace`
+/// (`super::robot`) or a simulated `NavigateToPose`: services reliable and keep-all,
+/// feedback keep-last 1, status transient-local.
 pub fn server_qos() -> ActionServerQosPolicies {
     ActionServerQosPolicies {
         goal_service: service_qos(),

@@ -278,19 +278,30 @@ impl RemotePlaces {
     }
 }
 
+/// The server of a `ros2` place and the robot of the agent in it, or why the action cannot
+/// run there (the same for every transport).
+pub(crate) fn server_and_robot<'a>(
+    servers: &'a HashMap<PlaceId, String>,
+    ctx: &ActionContext,
+) -> Result<(&'a String, Arc<str>), String> {
+    let Some(server) = servers.get(&ctx.place) else {
+        return Err(format!("place `{}` is not a ros2 place", ctx.place_name()));
+    };
+    let Some(robot) = ctx.robot.clone() else {
+        return Err(format!(
+            "agent {} in ros2 place `{}` has no robot (give the plan `robots = [...]`)",
+            ctx.agent.0,
+            ctx.place_name()
+        ));
+    };
+    Ok((server, robot))
+}
+
 impl Action for RemotePlaces {
     fn run(&self, ctx: ActionContext) -> ActionFuture {
-        let Some(server) = self.servers.get(&ctx.place) else {
-            let m = format!("place `{}` is not a ros2 place", ctx.place_name());
-            return Box::pin(async move { Outcome::Failed(m) });
-        };
-        let Some(robot) = ctx.robot.clone() else {
-            let m = format!(
-                "agent {} in ros2 place `{}` has no robot (give the plan `robots = [...]`)",
-                ctx.agent.0,
-                ctx.place_name()
-            );
-            return Box::pin(async move { Outcome::Failed(m) });
+        let (server, robot) = match server_and_robot(&self.servers, &ctx) {
+            Ok(it) => it,
+            Err(m) => return Box::pin(async move { Outcome::Failed(m) }),
         };
         if server == NAV2_SERVER {
             let target = self.args.get(&ctx.place).and_then(|a| a.target);

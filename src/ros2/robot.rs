@@ -18,12 +18,9 @@ use std::time::Duration;
 
 use futures::StreamExt;
 use rand::SeedableRng;
-use ros2_client::QosProfile;
 use ros2_client::action::{
-    ActionServerQosPolicies, AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId,
-    NewGoalHandle,
+    AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId, NewGoalHandle,
 };
-use ros2_client::qos::{Durability, History};
 use tokio::sync::oneshot;
 
 use super::config::DdsConfig;
@@ -32,10 +29,13 @@ use super::heartbeat::{Liveness, RobotWatch, SUPERVISOR};
 use super::msgs::{
     ExecPlaceFeedback, ExecPlaceGoal, ExecPlaceResult, RunState, Time, exec_place_type,
 };
-use super::settings::{NAV2_SERVER, Ros2Settings};
+use super::settings::Ros2Settings;
 use super::{Ros2Error, heartbeat};
-use crate::net::{Net, PlaceId, Timing};
-use crate::sample::{self, Rng};
+use crate::net::Net;
+use crate::sample::Rng;
+
+mod decide;
+pub use decide::{Decision, decide, id_hash};
 
 type Server = AsyncActionServer<ExecPlaceGoal, ExecPlaceResult, ExecPlaceFeedback>;
 
@@ -88,68 +88,6 @@ impl std::fmt::Display for Leave {
             }
         }
     }
-}
-
-/// The local decision for one goal: wait this long, then answer this transition.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Decision {
-    /// Seconds to wait.
-    pub delay: f64,
-    /// The transition's name; empty = let the policy decide.
-    pub transition: String,
-}
-
-/// The net-timed decision for place `p`: the race of its exponential outputs, or at once
-/// with no transition when it has an immediate output (or none at all).
-pub fn decide(net: &Net, p: PlaceId, time_scale: f64, rng: &mut Rng) -> Decision {
-    let outputs = net.consumers(p);
-    let mut rates = Vec::new();
-    for &t in outputs {
-        match net.transition(t).timing {
-            Timing::Immediate { .. } => {
-                return Decision {
-                    delay: 0.0,
-                    transition: String::new(),
-                };
-            }
-            Timing::Exponential { rate, .. } => rates.push((t, rate)),
-        }
-    }
-    let total: f64 = rates.iter().map(|&(_, r)| r).sum();
-    if rates.is_empty() || total <= 0.0 {
-        return Decision {
-            delay: 0.0,
-            transition: String::new(),
-        };
-    }
-    let delay = sample::exponential(rng, total) * time_scale;
-    let chosen = sample::pick_weighted(rng, &rates).unwrap_or(rates[rates.len() - 1].0);
-    Decision {
-        delay,
-        transition: net.transition(chosen).name.clone(),
-    }
-}
-
-fn server_qos() -> ActionServerQosPolicies {
-    let service = QosProfile::publisher_default()
-        .durability(Durability::Volatile)
-        .history(History::KeepAll);
-    ActionServerQosPolicies {
-        goal_service: service.clone(),
-        result_service: service.clone(),
-        cancel_service: service,
-        feedback_publisher: QosProfile::publisher_default()
-            .durability(Durability::Volatile)
-            .history(History::KeepLast { depth: 1 }),
-        status_publisher: QosProfile::publisher_default()
-            .durability(Durability::TransientLocal)
-            .history(History::KeepLast { depth: 1 }),
-    }
-}
-
-/// FNV-1a of the robot id, to give each robot its own stream of draws.
-pub fn id_hash(id: &str) -> u64 {
-    crate::sample::fnv::fnv1a(id.as_bytes())
 }
 
 struct Shared {
@@ -215,14 +153,7 @@ pub async fn serve(
         goal_seen: tokio::sync::Notify::new(),
     });
     // Nav2 places' goals go to the robot's Nav2 (`navigate_to_pose`), not to this process.
-    let mut servers: Vec<&str> = settings
-        .servers
-        .iter()
-        .map(|(_, s)| s.as_str())
-        .filter(|&s| s != NAV2_SERVER)
-        .collect();
-    servers.sort_unstable();
-    servers.dedup();
+    let servers = settings.exec_place_servers();
     let mut tasks = Vec::new();
     for s in servers {
         let name = super::names::action(&node, &opts.id, s)?;
@@ -231,7 +162,7 @@ pub async fn serve(
                 cfg.service_mapping,
                 &name,
                 &exec_place_type(),
-                server_qos(),
+                super::nav2::server_qos(),
             )
             .map_err(Ros2Error::dds)?;
         let server = Arc::new(AsyncActionServer::new(server));

@@ -44,6 +44,22 @@ pub struct Ros2Settings {
     pub args: Vec<(PlaceId, PlaceArgs)>,
 }
 
+impl Ros2Settings {
+    /// The ExecPlace servers the plan's `ros2` places name, each once, in name order (Nav2
+    /// places' goals go to a robot's own Nav2, not to an ExecPlace server).
+    pub fn exec_place_servers(&self) -> Vec<&str> {
+        let mut servers: Vec<&str> = self
+            .servers
+            .iter()
+            .map(|(_, s)| s.as_str())
+            .filter(|&s| s != NAV2_SERVER)
+            .collect();
+        servers.sort_unstable();
+        servers.dedup();
+        servers
+    }
+}
+
 /// A `ros2` place's arguments from the plan, sent with every ExecPlace goal.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PlaceArgs {

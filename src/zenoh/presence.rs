@@ -165,22 +165,7 @@ impl Presence {
     /// Waits until every watched node is alive; those still missing at `deadline` are the
     /// error.
     pub async fn all_alive(&self, deadline: Duration) -> Result<(), Vec<String>> {
-        let wait = async {
-            for w in self.states.values() {
-                let mut rx = w.liveness.clone();
-                let _ = rx.wait_for(|s| *s == Liveness::Alive).await;
-            }
-        };
-        if tokio::time::timeout(deadline, wait).await.is_ok() {
-            return Ok(());
-        }
-        let mut missing: Vec<String> = self
-            .states
-            .iter()
-            .filter(|(_, w)| *w.liveness.borrow() != Liveness::Alive)
-            .map(|(r, _)| r.clone())
-            .collect();
-        missing.sort();
-        Err(missing)
+        let states = self.states.iter().map(|(r, w)| (r, &w.liveness));
+        crate::ros2::heartbeat::all_alive(states, deadline).await
     }
 }

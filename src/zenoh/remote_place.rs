@@ -36,7 +36,7 @@ use super::type_hash::TypeError;
 use super::wire::{self, Source, WireError};
 use crate::net::PlaceId;
 use crate::ros2::msgs::{ExecPlaceGoal, Time};
-use crate::ros2::remote_place::{goal, succeeded};
+use crate::ros2::remote_place::{goal, server_and_robot, succeeded};
 use crate::ros2::settings::PlaceArgs;
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
@@ -275,17 +275,9 @@ impl ZenohPlaces {
 
 impl Action for ZenohPlaces {
     fn run(&self, ctx: ActionContext) -> ActionFuture {
-        let Some(server) = self.servers.get(&ctx.place) else {
-            let m = format!("place `{}` is not a ros2 place", ctx.place_name());
-            return Box::pin(async move { Outcome::Failed(m) });
-        };
-        let Some(robot) = ctx.robot.clone() else {
-            let m = format!(
-                "agent {} in ros2 place `{}` has no robot (give the plan `robots = [...]`)",
-                ctx.agent.0,
-                ctx.place_name()
-            );
-            return Box::pin(async move { Outcome::Failed(m) });
+        let (server, robot) = match server_and_robot(&self.servers, &ctx) {
+            Ok(it) => it,
+            Err(m) => return Box::pin(async move { Outcome::Failed(m) }),
         };
         let Some(link) = self.links.get(&(robot.to_string(), server.clone())) else {
             let m = format!("robot `{robot}` has no link to server `{server}`");

@@ -37,7 +37,7 @@ use super::{ZenohConfig, ZenohError};
 use crate::net::Net;
 use crate::ros2::msgs::{ExecPlaceFeedback, ExecPlaceResult, RunState, Time};
 use crate::ros2::robot::{Leave, RobotStats, decide, id_hash};
-use crate::ros2::settings::{NAV2_SERVER, Ros2Settings};
+use crate::ros2::settings::Ros2Settings;
 use crate::sample::Rng;
 
 /// How often a running goal's feedback is published (as the DDS robot does).
@@ -131,14 +131,7 @@ pub async fn serve(
     let d = cfg.domain;
     let net = Arc::new(net.clone());
     // Nav2 places' goals go to a robot's Nav2, not to ExecPlace (and not over Zenoh).
-    let mut servers: Vec<&str> = settings
-        .servers
-        .iter()
-        .map(|(_, s)| s.as_str())
-        .filter(|&s| s != NAV2_SERVER)
-        .collect();
-    servers.sort_unstable();
-    servers.dedup();
+    let servers = settings.exec_place_servers();
     let run = session
         .declare_subscriber(Topic::Run.key(d)?)
         .await
