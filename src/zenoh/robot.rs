@@ -171,31 +171,9 @@ pub async fn serve(
         });
         let mut endpoints = Vec::new();
         for &server in &servers {
-            let s = Arc::new(Server {
-                robot: Arc::clone(&robot),
-                session: session.clone(),
-                goals: Mutex::new(HashMap::new()),
-                feedback: Writer::new(keys::exec_place_topic(
-                    d,
-                    id,
-                    server,
-                    ActionTopic::Feedback,
-                )?),
-                status: Writer::new(keys::exec_place_topic(d, id, server, ActionTopic::Status)?),
-            });
-            for service in ActionService::ALL {
-                let q = session
-                    .declare_queryable(keys::exec_place(d, id, server, service)?)
-                    .await
-                    .map_err(ZenohError::zenoh)?;
-                let s = Arc::clone(&s);
-                tasks.push(tokio::spawn(async move {
-                    while let Ok(query) = q.recv_async().await {
-                        answer(&s, service, query).await;
-                    }
-                }));
-            }
-            endpoints.extend(keys::action_server_tokens(&node, &ids, id, server)?);
+            let (s, keys) =
+                serve_action(session, &node, &ids, id, server, &robot, &mut tasks).await?;
+            endpoints.extend(keys);
             action_servers.push(s);
         }
         endpoints.push(node.endpoint(
@@ -250,6 +228,47 @@ pub async fn serve(
         firings: received.load(Ordering::Relaxed),
         left,
     })
+}
+
+/// Serves robot `id`'s ExecPlace action `server`: its three services as queryables (their
+/// tasks go to `tasks`), its feedback and status writers. The server, and the keys of its
+/// endpoints' liveliness tokens.
+async fn serve_action(
+    session: &Session,
+    node: &NodeKey,
+    ids: &EntityIds,
+    id: &str,
+    server: &str,
+    robot: &Arc<Robot>,
+    tasks: &mut Vec<tokio::task::JoinHandle<()>>,
+) -> Result<(Arc<Server>, Vec<String>), ZenohError> {
+    let d = node.domain;
+    let s = Arc::new(Server {
+        robot: Arc::clone(robot),
+        session: session.clone(),
+        goals: Mutex::new(HashMap::new()),
+        feedback: Writer::new(keys::exec_place_topic(
+            d,
+            id,
+            server,
+            ActionTopic::Feedback,
+        )?),
+        status: Writer::new(keys::exec_place_topic(d, id, server, ActionTopic::Status)?),
+    });
+    for service in ActionService::ALL {
+        let q = session
+            .declare_queryable(keys::exec_place(d, id, server, service)?)
+            .await
+            .map_err(ZenohError::zenoh)?;
+        let s = Arc::clone(&s);
+        tasks.push(tokio::spawn(async move {
+            while let Ok(query) = q.recv_async().await {
+                answer(&s, service, query).await;
+            }
+        }));
+    }
+    let endpoints = keys::action_server_tokens(node, ids, id, server)?;
+    Ok((s, endpoints))
 }
 
 /// Declares the liveliness token `key`.

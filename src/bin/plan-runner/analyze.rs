@@ -373,13 +373,10 @@ fn print_state_space(
         "state space: {} reachable markings ({} tangible, {} vanishing), {} labelled edges ({} distinct successor pairs)",
         p.reachable, p.tangible, p.vanishing, p.edges, p.successor_pairs
     );
-    let bounds: Vec<String> = net
-        .places()
-        .iter()
-        .zip(&p.place_bounds)
-        .map(|(pl, b)| format!("{}≤{b}", pl.name))
-        .collect();
-    println!("bounded: yes; bounds {}", bounds.join(", "));
+    println!(
+        "bounded: yes; bounds {}",
+        crate::common::place_bounds(net, &p.place_bounds)
+    );
     println!(
         "safe: {}; max tokens in a place {}, in a marking {}; reversible: {}",
         yes(p.safe),

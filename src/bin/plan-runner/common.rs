@@ -204,3 +204,22 @@ pub(crate) fn two_threads() -> std::io::Result<tokio::runtime::Runtime> {
         .enable_all()
         .build()
 }
+
+/// The names of the flags among `flags` (given?, name) that were given, in order.
+pub(crate) fn given_flags<'a>(flags: &[(bool, &'a str)]) -> Vec<&'a str> {
+    flags
+        .iter()
+        .filter_map(|&(on, name)| on.then_some(name))
+        .collect()
+}
+
+/// `p1≤1, p2≤3, …`: each place's bound, for the state-space lines of `analyze`.
+pub(crate) fn place_bounds(net: &gspn::net::Net, bounds: &[u32]) -> String {
+    let each: Vec<String> = net
+        .places()
+        .iter()
+        .zip(bounds)
+        .map(|(pl, b)| format!("{}≤{b}", pl.name))
+        .collect();
+    each.join(", ")
+}

@@ -20,6 +20,8 @@ mod run;
 #[cfg(feature = "web")]
 mod serve;
 mod simulate;
+#[cfg(feature = "ros2")]
+mod supervisor_run;
 mod synthesize;
 #[cfg(feature = "zenoh")]
 mod zenoh;

@@ -3,7 +3,6 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Duration;
 
 use anyhow::Context as _;
 use gspn::plan::{Plan, read_plan};
@@ -13,9 +12,6 @@ use gspn::ros2::names::RosArgs;
 use gspn::ros2::robot::{RobotOptions, serve};
 use gspn::ros2::{DdsConfig, Ros2Backend};
 use gspn::runtime::Role;
-use gspn::runtime::{
-    Backend, BackendError, BackendFuture, RuntimeBuilder, Section, Start, Started, Summary,
-};
 
 use crate::common::{BadInput, NetArgs};
 
@@ -281,61 +277,11 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2R
             });
         }
     }
-    Ok(Ros2Run {
-        backend: Some(backend),
-        linger: Duration::from_secs_f64(args.ros2_linger.clamp(0.0, 60.0)),
-    })
+    Ok(Ros2Run::new(backend, args.ros2_linger))
 }
 
-/// The ROS 2 side of `run` as a backend: registers the `ros2` action, publishes the run's
-/// firings and marking, and after the run lingers so subscribers get the last ones.
-#[derive(Debug)]
-pub(crate) struct Ros2Run {
-    backend: Option<Ros2Backend>,
-    linger: Duration,
-}
-
-impl Backend for Ros2Run {
-    fn name(&self) -> &'static str {
-        "ros2"
-    }
-
-    fn attach(&mut self, run: RuntimeBuilder) -> Result<RuntimeBuilder, BackendError> {
-        Ok(match &self.backend {
-            Some(b) => b.attach(run),
-            None => run,
-        })
-    }
-
-    fn observes_events(&self) -> bool {
-        true
-    }
-
-    fn started<'a>(&'a mut self, start: Start<'a>) -> Started<'a> {
-        if let (Some(b), Some(events)) = (&mut self.backend, start.events) {
-            b.publish(events);
-        }
-        Box::pin(async { Ok(()) })
-    }
-
-    /// Tells the robots the run is over (why it stopped), lets the publisher finish and
-    /// lingers; the counts go to stderr.
-    fn finish<'a>(&'a mut self, summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
-        Box::pin(async move {
-            let backend = self.backend.take()?;
-            let stopped = serde_json::to_value(&summary.stopped)
-                .ok()
-                .and_then(|v| v.as_str().map(str::to_string))
-                .unwrap_or_default();
-            let p = backend.finish(self.linger, &stopped).await;
-            eprintln!(
-                "ros2: published {} firings ({} events lost, {} publish errors)",
-                p.firings, p.lagged, p.errors
-            );
-            None
-        })
-    }
-}
+/// The ROS 2 side of `run` over DDS.
+pub(crate) type Ros2Run = crate::supervisor_run::SupervisorRun<Ros2Backend>;
 
 /// Arguments of `robot`.
 #[derive(clap::Args, Debug)]

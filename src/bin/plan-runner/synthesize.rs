@@ -355,14 +355,11 @@ pub(crate) fn main(args: Args) -> anyhow::Result<ExitCode> {
 /// `--sweep` solves several models and writes no policy: the options that write one are
 /// refused (exit code 2) rather than silently ignored.
 fn refuse_policy_outputs_in_sweep(args: &Args) -> anyhow::Result<()> {
-    let given: Vec<&str> = [
+    let given = crate::common::given_flags(&[
         (args.out.is_some(), "--out"),
         (args.rules_json.is_some(), "--rules-json"),
         (args.compact, "--compact"),
-    ]
-    .into_iter()
-    .filter_map(|(on, name)| on.then_some(name))
-    .collect();
+    ]);
     if given.is_empty() {
         return Ok(());
     }

@@ -11,9 +11,6 @@ use anyhow::Context as _;
 use gspn::plan::{Plan, read_plan};
 use gspn::ros2::DdsConfig;
 use gspn::ros2::settings::Transport;
-use gspn::runtime::{
-    Backend, BackendError, BackendFuture, RuntimeBuilder, Section, Start, Started, Summary,
-};
 use gspn::zenoh::keys::valid_robot_id;
 use gspn::zenoh::presence::Liveness;
 use gspn::zenoh::robot::{FleetOptions, FleetStats};
@@ -148,60 +145,11 @@ pub(crate) async fn connect(
             });
         }
     }
-    Ok(ZenohRun {
-        backend: Some(backend),
-        linger: Duration::from_secs_f64(ros2.ros2_linger.clamp(0.0, 60.0)),
-    })
+    Ok(ZenohRun::new(backend, ros2.ros2_linger))
 }
 
-/// The Zenoh side of `run` as a backend (the twin of the DDS one).
-#[derive(Debug)]
-pub(crate) struct ZenohRun {
-    backend: Option<ZenohBackend>,
-    linger: Duration,
-}
-
-impl Backend for ZenohRun {
-    fn name(&self) -> &'static str {
-        "zenoh"
-    }
-
-    fn attach(&mut self, run: RuntimeBuilder) -> Result<RuntimeBuilder, BackendError> {
-        Ok(match &self.backend {
-            Some(b) => b.attach(run),
-            None => run,
-        })
-    }
-
-    fn observes_events(&self) -> bool {
-        true
-    }
-
-    fn started<'a>(&'a mut self, start: Start<'a>) -> Started<'a> {
-        Box::pin(async move {
-            if let (Some(b), Some(events)) = (&mut self.backend, start.events) {
-                b.publish(events).await;
-            }
-            Ok(())
-        })
-    }
-
-    fn finish<'a>(&'a mut self, summary: &'a Summary) -> BackendFuture<'a, Option<Section>> {
-        Box::pin(async move {
-            let backend = self.backend.take()?;
-            let stopped = serde_json::to_value(&summary.stopped)
-                .ok()
-                .and_then(|v| v.as_str().map(str::to_string))
-                .unwrap_or_default();
-            let p = backend.finish(self.linger, &stopped).await;
-            eprintln!(
-                "zenoh: published {} firings ({} events lost, {} publish errors)",
-                p.firings, p.lagged, p.errors
-            );
-            None
-        })
-    }
-}
+/// The Zenoh side of `run`.
+pub(crate) type ZenohRun = crate::supervisor_run::SupervisorRun<ZenohBackend>;
 
 /// Serves robots `opts.ids` of `plan` over Zenoh until the run is over (or Ctrl-C).
 pub(crate) fn serve_robots(

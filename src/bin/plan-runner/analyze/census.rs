@@ -17,7 +17,7 @@ use crate::progress::Spinner;
 
 /// The options that need more than the markings, refused with --states-only.
 fn refuse_solver_options(args: &Args) -> anyhow::Result<()> {
-    let given: Vec<&str> = [
+    let given = crate::common::given_flags(&[
         (args.steady, "--steady"),
         (!args.transient.is_empty(), "--transient"),
         (!args.prob.is_empty(), "--prob"),
@@ -25,10 +25,7 @@ fn refuse_solver_options(args: &Args) -> anyhow::Result<()> {
         (args.csv.is_some(), "--csv"),
         (args.plot.is_some(), "--plot"),
         (args.export_prism.is_some(), "--export-prism"),
-    ]
-    .into_iter()
-    .filter_map(|(on, name)| on.then_some(name))
-    .collect();
+    ]);
     if given.is_empty() {
         return Ok(());
     }
@@ -82,13 +79,10 @@ pub(super) fn main(args: &Args, plan: &Plan, regime: Regime) -> anyhow::Result<E
         "state space: {} reachable markings ({} tangible, {} vanishing), {} labelled arcs ({} distinct successor pairs), vanishing markings not eliminated",
         census.reachable, census.tangible, census.vanishing, census.arcs, census.successor_pairs
     );
-    let bounds: Vec<String> = net
-        .places()
-        .iter()
-        .zip(&census.place_bounds)
-        .map(|(pl, b)| format!("{}≤{b}", pl.name))
-        .collect();
-    println!("bounded: yes; bounds {}", bounds.join(", "));
+    println!(
+        "bounded: yes; bounds {}",
+        crate::common::place_bounds(net, &census.place_bounds)
+    );
     let max_in_place = census.place_bounds.iter().copied().max().unwrap_or(0);
     println!(
         "safe: {}; max tokens in a place {max_in_place}, in a marking {}",
