@@ -15,6 +15,7 @@
 //! request id (ros2-client's own calls drop responses meant for a concurrent call).
 
 use std::collections::{BTreeMap, HashMap};
+use std::future::Future;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -346,33 +347,58 @@ pub fn goal(ctx: &ActionContext, args: Option<&PlaceArgs>) -> ExecPlaceGoal {
     goal
 }
 
-/// Cancels the goal on the robot if the action is dropped before the goal ended (the
-/// runtime's timeout drops it).
-struct GoalGuard {
-    link: Arc<RobotLink>,
-    goal: Mutex<Option<GoalId>>,
+/// A link to a robot's ExecPlace server that can cancel one of its goals (DDS here, Zenoh in
+/// `crate::zenoh::remote_place`).
+pub(crate) trait CancelGoal: Send + Sync + 'static {
+    /// The transport's goal id.
+    type Id: Send + 'static;
+    /// Asks the robot to cancel goal `id` (waiting a bounded time for the answer).
+    fn send_cancel(self: Arc<Self>, id: Self::Id) -> impl Future<Output = ()> + Send;
 }
 
-impl GoalGuard {
-    fn set(&self, g: Option<GoalId>) {
+impl CancelGoal for RobotLink {
+    type Id = GoalId;
+
+    async fn send_cancel(self: Arc<Self>, id: GoalId) {
+        let _ = tokio::time::timeout(CANCEL_WAIT, self.cancel_goal(id)).await;
+    }
+}
+
+/// Cancels the goal on the robot if the action is dropped before the goal ended (the
+/// runtime's timeout drops it).
+pub(crate) struct GoalGuard<L: CancelGoal> {
+    link: Arc<L>,
+    goal: Mutex<Option<L::Id>>,
+}
+
+impl<L: CancelGoal> GoalGuard<L> {
+    /// A guard of `link`'s goals, holding none yet.
+    pub(crate) fn new(link: Arc<L>) -> Self {
+        GoalGuard {
+            link,
+            goal: Mutex::new(None),
+        }
+    }
+
+    /// The goal to cancel if dropped (`None`: nothing to cancel).
+    pub(crate) fn set(&self, g: Option<L::Id>) {
         if let Ok(mut s) = self.goal.lock() {
             *s = g;
         }
     }
-    fn take(&self) -> Option<GoalId> {
+
+    /// The goal held, which the guard then no longer cancels.
+    pub(crate) fn take(&self) -> Option<L::Id> {
         self.goal.lock().ok().and_then(|mut s| s.take())
     }
 }
 
-impl Drop for GoalGuard {
+impl<L: CancelGoal> Drop for GoalGuard<L> {
     fn drop(&mut self) {
-        if let Some(id) = self.take() {
-            let link = Arc::clone(&self.link);
-            if let Ok(rt) = tokio::runtime::Handle::try_current() {
-                rt.spawn(async move {
-                    let _ = tokio::time::timeout(CANCEL_WAIT, link.cancel_goal(id)).await;
-                });
-            }
+        if let Some(id) = self.take()
+            && let Ok(rt) = tokio::runtime::Handle::try_current()
+        {
+            rt.spawn(Arc::clone(&self.link).send_cancel(id));
         }
     }
 }
@@ -394,10 +420,7 @@ async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> 
     if now.is_lost() {
         return Outcome::Failed(lost_msg(now));
     }
-    let guard = GoalGuard {
-        link: Arc::clone(&link),
-        goal: Mutex::new(None),
-    };
+    let guard = GoalGuard::new(Arc::clone(&link));
     let work = async {
         let (id, resp) = link
             .send_goal(goal)

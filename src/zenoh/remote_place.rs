@@ -17,8 +17,8 @@
 //! when the goal ends.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use serde::Serialize;
@@ -36,7 +36,7 @@ use super::type_hash::TypeError;
 use super::wire::{self, Source, WireError};
 use crate::net::PlaceId;
 use crate::ros2::msgs::{ExecPlaceGoal, Time};
-use crate::ros2::remote_place::{goal, server_and_robot, succeeded};
+use crate::ros2::remote_place::{CancelGoal, GoalGuard, goal, server_and_robot, succeeded};
 use crate::ros2::settings::PlaceArgs;
 use crate::runtime::{Action, ActionContext, ActionFuture, Outcome};
 
@@ -288,31 +288,11 @@ impl Action for ZenohPlaces {
     }
 }
 
-/// Cancels the goal on the robot if the action is dropped before the goal ended.
-struct GoalGuard {
-    link: Arc<RobotLink>,
-    goal: Mutex<Option<GoalId>>,
-}
+impl CancelGoal for RobotLink {
+    type Id = GoalId;
 
-impl GoalGuard {
-    fn set(&self, g: Option<GoalId>) {
-        if let Ok(mut s) = self.goal.lock() {
-            *s = g;
-        }
-    }
-    fn take(&self) -> Option<GoalId> {
-        self.goal.lock().ok().and_then(|mut s| s.take())
-    }
-}
-
-impl Drop for GoalGuard {
-    fn drop(&mut self) {
-        if let Some(id) = self.take() {
-            let link = Arc::clone(&self.link);
-            if let Ok(rt) = tokio::runtime::Handle::try_current() {
-                rt.spawn(async move { link.cancel(id).await });
-            }
-        }
+    async fn send_cancel(self: Arc<Self>, id: GoalId) {
+        self.cancel(id).await
     }
 }
 
@@ -329,10 +309,7 @@ async fn exec(link: Arc<RobotLink>, goal: ExecPlaceGoal, ctx: ActionContext) -> 
     if *live.borrow() == Liveness::Lost {
         return Outcome::Failed(lost_msg());
     }
-    let guard = GoalGuard {
-        link: Arc::clone(&link),
-        goal: Mutex::new(None),
-    };
+    let guard = GoalGuard::new(Arc::clone(&link));
     let work = async {
         let (id, accepted) = link
             .send_goal_until_back(&goal)

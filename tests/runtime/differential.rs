@@ -246,7 +246,7 @@ fn priority(net: &Net, t: TransitionId) -> Option<u32> {
 /// transition of higher priority is enabled in the marking before it *and ready* — each of
 /// its input places that runs actions holds enough agents whose action ended (read from the
 /// `action_started` / `action_ended` / `fired` events). Returns the violations.
-fn priority_violations(net: &Net, s: &Spec, events: &[Event]) -> Vec<String> {
+fn priority_violations(net: &Net, resource: &[bool], events: &[Event]) -> Vec<String> {
     let mut m: Vec<u32> = net.initial_marking().to_vec();
     // Agents with an action running (not ready yet), by place.
     let mut running: HashMap<AgentId, usize> = HashMap::new();
@@ -272,8 +272,7 @@ fn priority_violations(net: &Net, s: &Spec, events: &[Event]) -> Vec<String> {
                     for u in net.transition_ids() {
                         let Some(pu) = priority(net, u) else { continue };
                         let ready = net.inputs(u).iter().all(|&(p, w)| {
-                            s.roles[p.index()] == 0
-                                || m[p.index()].saturating_sub(busy[p.index()]) >= w
+                            resource[p.index()] || m[p.index()].saturating_sub(busy[p.index()]) >= w
                         });
                         if pu > pr && net.is_enabled(&m, u) && ready {
                             bad.push(format!(
@@ -289,6 +288,45 @@ fn priority_violations(net: &Net, s: &Spec, events: &[Event]) -> Vec<String> {
             }
             _ => {}
         }
+    }
+    bad
+}
+
+/// Which places of a random net are resources (role 0).
+fn resources(s: &Spec) -> Vec<bool> {
+    s.roles.iter().map(|&r| r == 0).collect()
+}
+
+/// Firings that break the net's firing rule: each must be enabled in the marking before it
+/// and leave the marking [`Net::fire`] gives.
+fn rule_violations(net: &Net, events: &[Event]) -> Vec<String> {
+    let mut m: Vec<u32> = net.initial_marking().to_vec();
+    let mut bad = Vec::new();
+    for e in events {
+        let EventKind::Fired {
+            transition,
+            marking,
+            ..
+        } = &e.kind
+        else {
+            continue;
+        };
+        let name = &net.transition(*transition).name;
+        if !net.is_enabled(&m, *transition) {
+            bad.push(format!(
+                "t={}: {name} fired while not enabled in {m:?}",
+                e.time
+            ));
+        }
+        let mut next = m.clone();
+        let after = marking.to_vec();
+        if net.fire(&mut next, *transition).is_err() || next != after {
+            bad.push(format!(
+                "t={}: {name} left {after:?}, the net says {next:?}",
+                e.time
+            ));
+        }
+        m = after;
     }
     bad
 }
@@ -328,7 +366,7 @@ proptest! {
         let (events, agents, marking) = rt.block_on(events_of(runtime_of(&s, net.clone(), seed), FIRINGS));
         let run = fired(&events);
         prop_assert_eq!(&run, &game, "the run left the token game");
-        let bad = priority_violations(&net, &s, &events);
+        let bad = priority_violations(&net, &resources(&s), &events);
         prop_assert!(bad.is_empty(), "{:?}", bad);
         if run.len() as u64 == FIRINGS {
             let late = started_after_the_end(&events);
@@ -353,7 +391,9 @@ proptest! {
         let rt = two_threads();
         let (a, agents, marking) = rt.block_on(events_of(runtime_of(&s, net.clone(), seed), FIRINGS));
         let (b, _, _) = rt.block_on(events_of(runtime_of(&s, net.clone(), seed), FIRINGS));
-        let bad = priority_violations(&net, &s, &a);
+        let broken = rule_violations(&net, &a);
+        prop_assert!(broken.is_empty(), "{:?}", broken);
+        let bad = priority_violations(&net, &resources(&s), &a);
         prop_assert!(bad.is_empty(), "{:?}", bad);
         if fired(&a).len() as u64 == FIRINGS {
             let late = started_after_the_end(&a);
@@ -612,4 +652,91 @@ fn place_timeouts_are_model_seconds_in_virtual_time() {
         summary.errors,
         ["agent 0 in `c` failed: timed out after 2 model seconds"]
     );
+}
+
+/// Robots that drive themselves (`run --nav2`: a mirror world whose robots arrive when the
+/// robot says so, here a navigator whose legs take 1–8 model seconds drawn from the seed):
+/// the temperature patrol's built-in actions on 1–4 such robots keep the firing rule at every
+/// firing, the priority rule among what is ready, and the same seed gives the same run.
+#[cfg(feature = "sim")]
+mod self_driving {
+    use super::*;
+    use gspn::world::{DriveError, Fleet, Navigator, WorldHandle};
+    use std::pin::Pin;
+    use std::sync::{Arc, Mutex};
+
+    #[derive(Debug)]
+    struct Legs {
+        world: WorldHandle,
+        state: Mutex<u64>,
+    }
+
+    impl Navigator for Legs {
+        fn goto(
+            &self,
+            robot: Arc<str>,
+            location: usize,
+        ) -> Pin<Box<dyn std::future::Future<Output = Result<(), DriveError>> + Send>> {
+            let secs = {
+                let mut x = self.state.lock().unwrap();
+                *x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                1 + (*x >> 33) % 8
+            };
+            let world = self.world.clone();
+            Box::pin(async move {
+                let drive = async {
+                    tokio::time::sleep(Duration::from_secs(secs)).await;
+                    Ok(())
+                };
+                world.mirror_goto(robot, location, drive).await
+            })
+        }
+    }
+
+    fn mirrored(robots: usize, seed: u64) -> (Net, Vec<bool>, Vec<Event>) {
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .start_paused(true)
+            .build()
+            .unwrap();
+        rt.block_on(async {
+            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("plans/temperature-patrol/plan.toml");
+            let mut plan = gspn::plan::read_plan(&path, &Default::default()).unwrap();
+            plan.seed = Some(seed);
+            let fleet = Fleet::mirror(plan, Some(robots)).unwrap();
+            let legs = Legs {
+                world: fleet.world.clone(),
+                state: Mutex::new(seed),
+            };
+            let fleet = fleet.navigate_with(Arc::new(legs));
+            let net = fleet.builder.net().clone();
+            let resource = net
+                .place_ids()
+                .map(|p| matches!(fleet.builder.role_of(p), Some(Role::Resource)))
+                .collect();
+            let (events, _, _) = events_of(fleet.builder, 150).await;
+            fleet.world.stop();
+            (net, resource, events)
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 12, rng_seed: proptest::test_runner::RngSeed::Fixed(25), ..ProptestConfig::default() })]
+        #[test]
+        fn robots_that_drive_themselves_keep_the_firing_rule(robots in 1usize..5, seed in 0u64..1000) {
+            let (net, resource, a) = mirrored(robots, seed);
+            prop_assert_eq!(fired(&a).len(), 150);
+            let broken = rule_violations(&net, &a);
+            prop_assert!(broken.is_empty(), "{:?}", broken);
+            let bad = priority_violations(&net, &resource, &a);
+            prop_assert!(bad.is_empty(), "{:?}", bad);
+            let late = started_after_the_end(&a);
+            prop_assert!(late.is_empty(), "actions started by the last firing: {:?}", late);
+            let (_, _, b) = mirrored(robots, seed);
+            prop_assert_eq!(fired(&a), fired(&b), "the same seed gave two runs");
+        }
+    }
 }

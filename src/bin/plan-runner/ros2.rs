@@ -256,28 +256,46 @@ pub(crate) async fn connect(plan: &Plan, args: &RunArgs) -> anyhow::Result<Ros2R
     .await?;
     eprintln!("ros2: robots ready");
     // Say when a robot is lost or back (the runs' errors say which action it failed).
-    for r in &robots {
-        if let Some(mut live) = backend.presence().liveness(r) {
-            let r = r.clone();
-            let after = cfg.lost_after;
-            live.borrow_and_update();
-            tokio::spawn(async move {
-                while live.changed().await.is_ok() {
-                    match *live.borrow() {
-                        Liveness::Lost => {
-                            eprintln!("ros2: robot `{r}` lost: no heartbeat for {after:?}")
-                        }
-                        Liveness::Gone => eprintln!(
-                            "ros2: robot `{r}` lost: its ExecPlace server left DDS discovery"
-                        ),
-                        Liveness::Alive => eprintln!("ros2: robot `{r}` is back"),
-                        Liveness::Unknown => {}
-                    }
-                }
-            });
-        }
-    }
+    let after = cfg.lost_after;
+    say_liveness(
+        &robots,
+        |r| backend.presence().liveness(r),
+        move |r, l| match l {
+            Liveness::Lost => Some(format!(
+                "ros2: robot `{r}` lost: no heartbeat for {after:?}"
+            )),
+            Liveness::Gone => Some(format!(
+                "ros2: robot `{r}` lost: its ExecPlace server left DDS discovery"
+            )),
+            Liveness::Alive => Some(format!("ros2: robot `{r}` is back")),
+            Liveness::Unknown => None,
+        },
+    );
     Ok(Ros2Run::new(backend, args.ros2_linger))
+}
+
+/// Says on stderr when one of `robots` (its liveness from `liveness`) is lost or back: `say`
+/// words each change for its transport (`None`: nothing to say). DDS and Zenoh alike.
+pub(crate) fn say_liveness(
+    robots: &[String],
+    liveness: impl Fn(&str) -> Option<tokio::sync::watch::Receiver<Liveness>>,
+    say: impl Fn(&str, Liveness) -> Option<String> + Clone + Send + 'static,
+) {
+    for r in robots {
+        let Some(mut live) = liveness(r) else {
+            continue;
+        };
+        let (r, say) = (r.clone(), say.clone());
+        live.borrow_and_update();
+        tokio::spawn(async move {
+            while live.changed().await.is_ok() {
+                let now = *live.borrow();
+                if let Some(line) = say(&r, now) {
+                    eprintln!("{line}");
+                }
+            }
+        });
+    }
 }
 
 /// The ROS 2 side of `run` over DDS.

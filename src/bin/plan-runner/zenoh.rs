@@ -127,24 +127,18 @@ pub(crate) async fn connect(
         "zenoh: robots ready after {:.2} s",
         started.elapsed().as_secs_f64()
     );
-    for r in &robots {
-        if let Some(mut live) = backend.presence().liveness(r) {
-            let r = r.clone();
-            let after = cfg.lost_after;
-            live.borrow_and_update();
-            tokio::spawn(async move {
-                while live.changed().await.is_ok() {
-                    match *live.borrow() {
-                        Liveness::Lost => {
-                            eprintln!("zenoh: robot `{r}` lost: no liveliness token for {after:?}")
-                        }
-                        Liveness::Alive => eprintln!("zenoh: robot `{r}` is back"),
-                        Liveness::Unknown | Liveness::Gone => {}
-                    }
-                }
-            });
-        }
-    }
+    let after = cfg.lost_after;
+    crate::ros2::say_liveness(
+        &robots,
+        |r| backend.presence().liveness(r),
+        move |r, l| match l {
+            Liveness::Lost => Some(format!(
+                "zenoh: robot `{r}` lost: no liveliness token for {after:?}"
+            )),
+            Liveness::Alive => Some(format!("zenoh: robot `{r}` is back")),
+            Liveness::Unknown | Liveness::Gone => None,
+        },
+    );
     Ok(ZenohRun::new(backend, ros2.ros2_linger))
 }
 
